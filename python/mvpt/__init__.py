@@ -1,0 +1,13 @@
+"""mvpt: a physically based renderer for many views of one scene.
+
+    scene = mvpt.load_file("scene.xml", spp=64)     # keyword arguments override <default>s
+    result = mvpt.render(scene, spp=64, seed=1)
+    result.images["0"]      # float32 (H, W, 3) linear RGB of the view with id "0"
+    result.stats            # timing, ray counts, per-view statistics
+"""
+from ._core import SceneError, Scene
+from .api import load_file, load_string, render, RenderResult
+from .output import write_outputs
+
+__all__ = ["SceneError", "Scene", "load_file", "load_string", "render", "RenderResult", "write_outputs"]
+__version__ = "0.1.0"

@@ -1,0 +1,80 @@
+// Piecewise-constant distributions (1D discrete and 2D lat-long style).
+#pragma once
+
+#include "math.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace mvpt {
+
+/// Discrete distribution over n weighted items (its CDF in double precision).
+class DiscreteDistribution {
+public:
+    DiscreteDistribution() = default;
+    explicit DiscreteDistribution(const std::vector<float> &weights) { build(weights); }
+
+    void build(const std::vector<float> &weights) {
+        m_cdf.assign(weights.size() + 1, 0.0);
+        for (size_t i = 0; i < weights.size(); ++i) m_cdf[i + 1] = m_cdf[i] + std::max(0.f, weights[i]);
+        m_sum = m_cdf.back();
+        if (m_sum > 0)
+            for (double &c : m_cdf) c /= m_sum;
+    }
+    size_t size() const { return m_cdf.empty() ? 0 : m_cdf.size() - 1; }
+    double sum() const { return m_sum; }
+    float pmf(size_t i) const { return float(m_cdf[i + 1] - m_cdf[i]); }
+
+    /// Index with probability pmf(i); `u` is rescaled to [0, 1) for reuse.
+    size_t sample(float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
+        auto it = std::upper_bound(m_cdf.begin() + 1, m_cdf.end() - 1, double(u));
+        size_t i = size_t(it - m_cdf.begin()) - 1;
+        // Skip zero-probability items that upper_bound can land on at their boundary.
+        while (i + 1 < size() && m_cdf[i + 1] == m_cdf[i]) ++i;
+        float p = pmf(i);
+        if (pmf_out) *pmf_out = p;
+        if (u_reuse) *u_reuse = p > 0 ? std::min(float((u - m_cdf[i]) / p), OneMinusEpsilon) : 0.f;
+        return i;
+    }
+
+private:
+    std::vector<double> m_cdf;
+    double m_sum = 0;
+};
+
+/// Piecewise-constant 2D density on [0,1]^2 over a w x h grid: marginal over
+/// rows, conditional within each row (pbrt-v4 PiecewiseConstant2D).
+class Distribution2D {
+public:
+    Distribution2D() = default;
+    Distribution2D(const std::vector<float> &values, int w, int h) : m_w(w), m_h(h) {
+        m_rows.resize(h);
+        std::vector<float> row_sums(h);
+        for (int y = 0; y < h; ++y) {
+            std::vector<float> row(values.begin() + size_t(y) * w, values.begin() + size_t(y + 1) * w);
+            m_rows[y].build(row);
+            row_sums[y] = float(m_rows[y].sum());
+        }
+        m_marginal.build(row_sums);
+    }
+    /// Point in [0,1)^2 with density `pdf` (w.r.t. area of the unit square).
+    Vec2f sample(Vec2f u, float *pdf) const {
+        float pm, pc, uy, ux;
+        size_t y = m_marginal.sample(u.y, &pm, &uy);
+        size_t x = m_rows[y].sample(u.x, &pc, &ux);
+        *pdf = pm * pc * float(m_w) * float(m_h);
+        return {(float(x) + ux) / float(m_w), (float(y) + uy) / float(m_h)};
+    }
+    float pdf(Vec2f p) const {
+        int x = std::clamp(int(p.x * m_w), 0, m_w - 1), y = std::clamp(int(p.y * m_h), 0, m_h - 1);
+        return m_marginal.pmf(y) * m_rows[y].pmf(x) * float(m_w) * float(m_h);
+    }
+    bool empty() const { return m_marginal.sum() <= 0; }
+
+private:
+    int m_w = 0, m_h = 0;
+    std::vector<DiscreteDistribution> m_rows;
+    DiscreteDistribution m_marginal;
+};
+
+} // namespace mvpt

@@ -1,0 +1,72 @@
+// Warps from the unit square to common domains, with their densities.
+#pragma once
+
+#include "math.h"
+
+namespace mvpt::warp {
+
+/// Concentric map to the unit disk [Shirley & Chiu 1997]; density 1/pi.
+inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
+    float x = 2.f * u.x - 1.f, y = 2.f * u.y - 1.f;
+    if (x == 0.f && y == 0.f) return {0.f, 0.f};
+    float r, phi;
+    if (std::abs(x) > std::abs(y)) {
+        r = x;
+        phi = (Pi / 4.f) * (y / x);
+    } else {
+        r = y;
+        phi = (Pi / 2.f) - (Pi / 4.f) * (x / y);
+    }
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+/// Cosine-weighted hemisphere around +z; density cos(theta)/pi.
+inline Vec3f square_to_cosine_hemisphere(Vec2f u) {
+    Vec2f p = square_to_uniform_disk_concentric(u);
+    float z = safe_sqrt(1.f - p.x * p.x - p.y * p.y);
+    return {p.x, p.y, z};
+}
+inline float square_to_cosine_hemisphere_pdf(Vec3f v) { return v.z > 0.f ? v.z * InvPi : 0.f; }
+
+inline Vec3f square_to_uniform_sphere(Vec2f u) {
+    float z = 1.f - 2.f * u.y;
+    float r = safe_sqrt(1.f - z * z), phi = 2.f * Pi * u.x;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+inline float square_to_uniform_sphere_pdf() { return InvFourPi; }
+
+inline Vec3f square_to_uniform_hemisphere(Vec2f u) {
+    float z = u.y;
+    float r = safe_sqrt(1.f - z * z), phi = 2.f * Pi * u.x;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+inline float square_to_uniform_hemisphere_pdf(Vec3f v) { return v.z > 0.f ? InvTwoPi : 0.f; }
+
+/// Uniform directions in the cone of half-angle acos(cos_max) around +z.
+inline Vec3f square_to_uniform_cone(Vec2f u, float cos_max) {
+    float cos_t = (1.f - u.y) + u.y * cos_max;
+    float sin_t = safe_sqrt(1.f - cos_t * cos_t), phi = 2.f * Pi * u.x;
+    return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+}
+inline float square_to_uniform_cone_pdf(float cos_max) { return 1.f / (2.f * Pi * (1.f - cos_max)); }
+
+/// Uniform barycentrics (b1, b2) on a triangle [Heitz 2019 low-distortion map].
+inline Vec2f square_to_uniform_triangle(Vec2f u) {
+    float b0, b1;
+    if (u.x < u.y) {
+        b0 = u.x / 2.f;
+        b1 = u.y - b0;
+    } else {
+        b1 = u.y / 2.f;
+        b0 = u.x - b1;
+    }
+    return {b0, b1};
+}
+
+/// Standard normal via Box-Muller, first coordinate only.
+inline float square_to_std_normal(Vec2f u) {
+    float r = std::sqrt(-2.f * std::log(std::max(1.f - u.x, 1e-12f)));
+    return r * std::cos(2.f * Pi * u.y);
+}
+
+} // namespace mvpt::warp

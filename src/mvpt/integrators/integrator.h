@@ -1,0 +1,30 @@
+// Integrator interface: radiance along a camera ray.
+#pragma once
+
+#include "../core/math.h"
+#include "../core/sampler.h"
+#include "../scene/properties.h"
+
+namespace mvpt {
+
+class Scene;
+
+/// Per-thread ray and event counters (summed after a pass).
+struct RayCounters {
+    uint64_t camera_rays = 0, rays = 0, shadow_rays = 0, nonfinite = 0;
+    RayCounters &operator+=(const RayCounters &o) {
+        camera_rays += o.camera_rays; rays += o.rays; shadow_rays += o.shadow_rays; nonfinite += o.nonfinite;
+        return *this;
+    }
+};
+
+/// Sample dimensions of the camera ray; path vertices use blocks after it.
+inline constexpr uint32_t DimFilm = 0, DimLens = 1, DimTime = 2, DimCameraEnd = 3;
+
+class Integrator : public Object {
+public:
+    virtual Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const = 0;
+    virtual std::string name() const = 0;
+};
+
+} // namespace mvpt

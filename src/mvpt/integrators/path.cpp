@@ -1,0 +1,114 @@
+#include "path.h"
+
+#include "../render/bsdf.h"
+#include "../render/light.h"
+#include "../render/shape.h"
+#include "../scene/plugin.h"
+#include "../scene/scene.h"
+
+#include <climits>
+
+namespace mvpt {
+
+float emitter_pdf(const Scene &scene, const Light *light, Point3f ref, const SurfaceInteraction &si_light, Vec3f d) {
+    size_t n = scene.lights().size();
+    if (n == 0 || light->is_delta()) return 0.f;
+    return light->pdf_li(ref, si_light, d) / float(n);
+}
+
+Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &sampler, RayCounters &counters) const {
+    const auto &lights = scene.lights();
+    const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
+    const BsdfContext ctx;
+
+    Spectrum result(0.f), throughput(1.f);
+    float eta = 1.f;
+    Ray ray = camera_ray;
+    SurfaceInteraction prev_si;
+    float prev_bsdf_pdf = 1.f;
+    bool prev_bsdf_delta = true;
+
+    for (uint32_t depth = 0;; ++depth) {
+        sampler.set_dimension(DimCameraEnd + depth * DimsPerVertex);
+        SurfaceInteraction si;
+        ++counters.rays;
+        bool hit = scene.intersect(ray, si);
+
+        // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
+        const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
+        if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
+            Spectrum le = hit ? emitter->eval(si, -ray.d) : emitter->eval_environment(ray.d);
+            if (!le.is_black()) {
+                float w = 1.f;
+                if (!prev_bsdf_delta) w = mis_power(prev_bsdf_pdf, emitter_pdf(scene, emitter, prev_si.p, si, ray.d));
+                result += throughput * le * w;
+            }
+        }
+        if (!hit || depth + 1 >= max_depth) break;
+
+        const Bsdf &bsdf = *si.shape->bsdf;
+        si.wi = si.to_local(-ray.d);
+
+        // ---------------- Next-event estimation ----------------
+        float u_light_select = sampler.next_1d();
+        Vec2f u_light = sampler.next_2d();
+        if (bsdf.has_smooth() && !lights.empty()) {
+            size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
+            const Light &light = *lights[idx];
+            auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
+            if (!weight.is_black()) {
+                weight *= float(lights.size());
+                Vec3f wo = si.to_local(ls.d);
+                Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
+                if (!f.is_black()) {
+                    Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                    ++counters.shadow_rays;
+                    if (!scene.occluded(shadow)) {
+                        float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
+                        result += throughput * f * weight * w;
+                    }
+                }
+            }
+        }
+
+        // ---------------- BSDF sampling ----------------
+        float u_lobe = sampler.next_1d();
+        Vec2f u_dir = sampler.next_2d();
+        auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, u_dir);
+        if (bsdf_weight.is_black()) break;
+        Vec3f wo_world = si.to_world(bs.wo);
+        ray = si.spawn_ray(wo_world);
+        throughput *= bsdf_weight;
+        eta *= bs.eta;
+        prev_si = si;
+        prev_bsdf_pdf = bs.pdf;
+        prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
+
+        // ---------------- Russian roulette ----------------
+        float t_max = throughput.max_value();
+        float u_rr = sampler.next_1d();
+        if (!(t_max > 0.f)) break;
+        if (depth + 1 >= uint32_t(m_cfg.rr_depth)) {
+            float q = std::min(t_max * eta * eta, 0.95f);
+            if (u_rr >= q) break;
+            throughput *= 1.f / q;
+        }
+    }
+    return result;
+}
+
+namespace {
+std::shared_ptr<Object> make_path(const Properties &props, const LoadContext &) {
+    PathConfig cfg;
+    cfg.max_depth = int(props.get_int("max_depth", -1));
+    if (cfg.max_depth < -1) props.fail("max_depth", "max_depth must be -1 (unlimited) or >= 0");
+    cfg.rr_depth = int(props.get_int("rr_depth", 5));
+    if (cfg.rr_depth <= 0) props.fail("rr_depth", "rr_depth must be > 0");
+    cfg.hide_emitters = props.get_bool("hide_emitters", false);
+    return std::make_shared<PathIntegrator>(cfg);
+}
+} // namespace
+
+MVPT_REGISTER_PLUGIN("integrator", "path", make_path);
+
+} // namespace mvpt

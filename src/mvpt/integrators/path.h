@@ -1,0 +1,46 @@
+// Unidirectional path tracer with next-event estimation and MIS (power
+// heuristic), with Mitsuba 3's max_depth / rr_depth / hide_emitters semantics.
+#pragma once
+
+#include "integrator.h"
+
+namespace mvpt {
+
+class Light;
+class Scene;
+struct SurfaceInteraction;
+
+struct PathConfig {
+    /// Longest path in vertices after the camera; -1: unlimited (1: emitters seen directly).
+    int max_depth = -1;
+    /// Depth from which Russian roulette may end a path.
+    int rr_depth = 5;
+    /// Hide emitters seen directly by the camera.
+    bool hide_emitters = false;
+};
+
+/// Sample dimensions consumed per path vertex (light choice, light point, lobe, direction, roulette).
+inline constexpr uint32_t DimsPerVertex = 5;
+
+class PathIntegrator final : public Integrator {
+public:
+    explicit PathIntegrator(const PathConfig &cfg) : m_cfg(cfg) {}
+    Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override;
+    std::string name() const override { return "path"; }
+    const PathConfig &config() const { return m_cfg; }
+
+private:
+    PathConfig m_cfg;
+};
+
+/// Probability density (solid angle, selection included) that NEE picks the
+/// emitter point `si_light` / direction `d` from `ref`.
+float emitter_pdf(const Scene &scene, const Light *light, Point3f ref, const SurfaceInteraction &si_light, Vec3f d);
+
+/// Power heuristic with exponent 2 [Veach 1997, §9.2.4].
+inline float mis_power(float a, float b) {
+    float a2 = a * a, b2 = b * b;
+    return (a2 + b2) > 0.f ? a2 / (a2 + b2) : 0.f;
+}
+
+} // namespace mvpt

@@ -1,0 +1,70 @@
+// BSDF interface. Directions are in the local shading frame (n = +z); `wi`
+// points to the viewer / previous vertex, `wo` to the light / next vertex
+// (Mitsuba's convention). `eval` includes the cosine foreshortening |cos wo|.
+#pragma once
+
+#include "../core/math.h"
+#include "../scene/properties.h"
+#include "interaction.h"
+
+#include <utility>
+
+namespace mvpt {
+
+enum BsdfFlags : uint32_t {
+    BsdfNone = 0,
+    BsdfNull = 1u << 0,
+    BsdfDiffuseReflection = 1u << 1,
+    BsdfDiffuseTransmission = 1u << 2,
+    BsdfGlossyReflection = 1u << 3,
+    BsdfGlossyTransmission = 1u << 4,
+    BsdfDeltaReflection = 1u << 5,
+    BsdfDeltaTransmission = 1u << 6,
+
+    BsdfReflection = BsdfDiffuseReflection | BsdfGlossyReflection | BsdfDeltaReflection,
+    BsdfTransmission = BsdfNull | BsdfDiffuseTransmission | BsdfGlossyTransmission | BsdfDeltaTransmission,
+    BsdfDiffuse = BsdfDiffuseReflection | BsdfDiffuseTransmission,
+    BsdfGlossy = BsdfGlossyReflection | BsdfGlossyTransmission,
+    BsdfSmooth = BsdfDiffuse | BsdfGlossy,
+    BsdfDelta = BsdfNull | BsdfDeltaReflection | BsdfDeltaTransmission,
+};
+
+/// Radiance: paths from the camera (the default); Importance: from lights.
+enum class TransportMode { Radiance, Importance };
+
+struct BsdfContext {
+    TransportMode mode = TransportMode::Radiance;
+};
+
+struct BsdfSample {
+    Vec3f wo;
+    /// Solid-angle density of `wo` (for a delta lobe: its discrete probability).
+    float pdf = 0.f;
+    /// Relative index of refraction along the sampled direction (1 for reflection).
+    float eta = 1.f;
+    /// The single lobe type (a BsdfFlags bit) that produced `wo`.
+    uint32_t sampled_type = BsdfNone;
+};
+
+class Bsdf : public Object {
+public:
+    /// Sample `wo` given `wi`; returns the sample and its weight f*|cos wo|/pdf
+    /// (zero weight when sampling failed).
+    virtual std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
+                                                   float u1, Vec2f u2) const = 0;
+    /// f(wi, wo) |cos wo| for the non-delta lobes.
+    virtual Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const = 0;
+    /// Solid-angle density with which `sample` produces `wo` (non-delta lobes).
+    virtual float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const = 0;
+
+    uint32_t flags() const { return m_flags; }
+    bool has_smooth() const { return (m_flags & BsdfSmooth) != 0; }
+    bool is_purely_delta() const { return m_flags != 0 && (m_flags & BsdfSmooth) == 0; }
+    /// Roughness at `si` for path-reuse heuristics: GGX-equivalent alpha, 1 for diffuse.
+    virtual float roughness(const SurfaceInteraction &) const { return 1.f; }
+
+protected:
+    uint32_t m_flags = BsdfNone;
+};
+
+} // namespace mvpt

@@ -1,0 +1,48 @@
+// A ray's hit on a surface: position, normals, shading frame, uv.
+#pragma once
+
+#include "../core/math.h"
+
+namespace mvpt {
+
+class Shape;
+
+/// Relative offset for leaving a surface (Mitsuba's RayEpsilon scale).
+inline constexpr float RayEpsilon = 89.f * 0x1p-24f;
+inline constexpr float ShadowEpsilon = 10.f * RayEpsilon;
+
+struct SurfaceInteraction {
+    Point3f p;
+    float t = Infinity;
+    /// Geometric normal, oriented by the shape (not flipped towards the ray).
+    Normal3f n;
+    /// Shading frame (its n is the interpolated shading normal).
+    Frame sh_frame;
+    Vec2f uv;
+    /// Direction towards the previous vertex, in the shading frame.
+    Vec3f wi;
+    float time = 0.f;
+    const Shape *shape = nullptr;
+    /// Primitive index inside the shape (triangle index for meshes).
+    uint32_t prim = 0;
+
+    bool is_valid() const { return shape != nullptr; }
+    Vec3f to_local(Vec3f v) const { return sh_frame.to_local(v); }
+    Vec3f to_world(Vec3f v) const { return sh_frame.to_world(v); }
+
+    /// Origin moved off the surface along the geometric normal, on the side of `d`.
+    Point3f offset_p(Vec3f d) const {
+        float mag = (1.f + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)})) * RayEpsilon;
+        return p + n * std::copysign(mag, dot(n, d));
+    }
+    Ray spawn_ray(Vec3f d) const { return Ray{offset_p(d), d, 0.f, Infinity, time}; }
+    /// Shadow ray towards `target` that stops just short of it.
+    Ray spawn_ray_to(Point3f target) const {
+        Point3f o = offset_p(target - p);
+        Vec3f d = target - o;
+        float dist = norm(d);
+        return Ray{o, d / dist, 0.f, dist * (1.f - ShadowEpsilon), time};
+    }
+};
+
+} // namespace mvpt

@@ -1,0 +1,62 @@
+// Emitter interface (Mitsuba's "emitter"): direct-illumination sampling from a
+// reference point, its solid-angle density, and emitted radiance.
+#pragma once
+
+#include "../core/math.h"
+#include "../scene/properties.h"
+#include "interaction.h"
+
+#include <utility>
+
+namespace mvpt {
+
+class Shape;
+
+/// A point on a light chosen from a reference point.
+struct LightSample {
+    Point3f p;
+    Normal3f n;
+    /// Unit direction from the reference point towards the light.
+    Vec3f d;
+    float dist = Infinity;
+    /// Solid-angle density at the reference point (1 for delta lights).
+    float pdf = 0.f;
+    bool delta = false;
+};
+
+enum LightFlags : uint32_t {
+    LightDeltaPosition = 1u << 0,
+    LightDeltaDirection = 1u << 1,
+    LightInfinite = 1u << 2,
+    LightSurface = 1u << 3,
+};
+
+class Light : public Object {
+public:
+    /// Sample a direction towards the light; the weight is L_e / pdf, zero when
+    /// the light cannot be reached (visibility is not tested here).
+    virtual std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float time) const = 0;
+    /// Density of `sample_li` choosing the point `si` (area lights; `si` is the
+    /// hit on the light) or direction `d` (environment lights).
+    virtual float pdf_li(Point3f ref, const SurfaceInteraction &si, Vec3f d) const = 0;
+    /// Radiance leaving surface point `si` in direction `w` (world, pointing away).
+    virtual Spectrum eval(const SurfaceInteraction &, Vec3f) const { return {}; }
+    /// Radiance arriving along a ray that escaped in direction `d` (environment lights).
+    virtual Spectrum eval_environment(Vec3f) const { return {}; }
+    /// Scene extent, for lights placed at infinity.
+    virtual void set_scene_bounds(Point3f center, float radius) { (void)center; (void)radius; }
+    /// Attach an area light to its shape.
+    virtual void set_shape(const Shape *) {}
+    /// The shape an area light is attached to (nullptr for other lights).
+    virtual const Shape *shape() const { return nullptr; }
+
+    uint32_t flags() const { return m_flags; }
+    bool is_delta() const { return (m_flags & (LightDeltaPosition | LightDeltaDirection)) != 0; }
+    bool is_environment() const { return (m_flags & LightInfinite) != 0 && !(m_flags & LightDeltaDirection); }
+    bool is_area() const { return (m_flags & LightSurface) != 0; }
+
+protected:
+    uint32_t m_flags = 0;
+};
+
+} // namespace mvpt

@@ -1,0 +1,74 @@
+// Shape interface: geometry that Embree intersects, plus the area sampling
+// that area lights need.
+#pragma once
+
+#include "../core/math.h"
+#include "../scene/properties.h"
+#include "interaction.h"
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <utility>
+
+namespace mvpt {
+
+class Bsdf;
+class Light;
+
+struct BoundingBox {
+    Point3f min{Infinity, Infinity, Infinity}, max{-Infinity, -Infinity, -Infinity};
+    void expand(Point3f p) { min = vmin(min, p); max = vmax(max, p); }
+    void expand(const BoundingBox &b) { min = vmin(min, b.min); max = vmax(max, b.max); }
+    bool valid() const { return min.x <= max.x; }
+    Point3f center() const { return (min + max) * 0.5f; }
+};
+
+/// A point on a shape's surface chosen by area sampling.
+struct ShapeSample {
+    Point3f p;
+    Normal3f n;
+    Vec2f uv;
+    /// Density w.r.t. surface area.
+    float pdf_a = 0.f;
+};
+
+class Shape : public Object {
+public:
+    /// Add the geometry to `scene`; returns its Embree geometry id.
+    virtual unsigned attach(RTCDevice device, RTCScene scene) = 0;
+    /// Complete a hit: `prim` and barycentrics `b` come from Embree.
+    virtual void fill_interaction(const Ray &ray, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const = 0;
+    virtual float area() const = 0;
+    virtual BoundingBox bounds() const = 0;
+    /// Uniform point on the surface (density 1/area).
+    virtual ShapeSample sample_area(Vec2f u) const = 0;
+    /// A point as seen from `ref`; returns it with its solid-angle density at `ref`
+    /// (0 when degenerate). The default converts area sampling.
+    virtual std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const;
+    /// Density of `sample_solid_angle` for the point `si` on this shape.
+    virtual float pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const;
+
+    std::shared_ptr<Bsdf> bsdf;
+    std::shared_ptr<Light> emitter;
+    std::string id;
+};
+
+/// Convert an area density at `p` (normal `n`) to solid angle seen from `ref`.
+inline float area_to_solid_angle(float pdf_a, Point3f ref, Point3f p, Normal3f n) {
+    Vec3f d = p - ref;
+    float dist2 = squared_norm(d);
+    float cos_t = absdot(n, d) / std::sqrt(dist2);
+    return cos_t > 0.f ? pdf_a * dist2 / cos_t : 0.f;
+}
+
+inline std::pair<ShapeSample, float> Shape::sample_solid_angle(Point3f ref, Vec2f u) const {
+    ShapeSample s = sample_area(u);
+    return {s, area_to_solid_angle(s.pdf_a, ref, s.p, s.n)};
+}
+
+inline float Shape::pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const {
+    return area_to_solid_angle(1.f / area(), ref, si.p, si.n);
+}
+
+} // namespace mvpt

@@ -1,0 +1,126 @@
+#include "mesh.h"
+
+#include "../../core/warp.h"
+
+#include <cstring>
+#include "../bsdf.h"
+#include "../light.h"
+
+namespace mvpt {
+
+TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const std::string &what) : m_data(std::move(data)) {
+    Transform to_world = props.get_transform("to_world");
+    m_flip_normals = props.get_bool("flip_normals", false);
+    bool face_normals = props.get_bool("face_normals", false);
+    if (face_normals) m_data.normals.clear();
+
+    size_t nv = m_data.positions.size();
+    if (m_data.indices.size() % 3 != 0) props.fail("", what + ": index count is not a multiple of 3");
+    for (uint32_t i : m_data.indices)
+        if (i >= nv) props.fail("", what + ": a face refers to vertex " + std::to_string(i) + " but there are only " + std::to_string(nv));
+    if (!m_data.normals.empty() && m_data.normals.size() != nv) props.fail("", what + ": normal count differs from vertex count");
+    if (!m_data.uvs.empty() && m_data.uvs.size() != nv) props.fail("", what + ": uv count differs from vertex count");
+
+    for (auto &p : m_data.positions) {
+        if (!all_finite(p)) props.fail("", what + ": a vertex position is not finite");
+        p = to_world.point(p);
+        m_bounds.expand(p);
+    }
+    for (auto &n : m_data.normals) {
+        Normal3f wn = to_world.normal(n);
+        float l = norm(wn);
+        n = (l > 0.f && std::isfinite(l)) ? wn / l : Normal3f(0.f);
+    }
+    std::vector<float> areas(m_data.triangle_count());
+    for (size_t i = 0; i < areas.size(); ++i) {
+        const Point3f &p0 = m_data.positions[m_data.indices[3 * i]], &p1 = m_data.positions[m_data.indices[3 * i + 1]],
+                      &p2 = m_data.positions[m_data.indices[3 * i + 2]];
+        areas[i] = 0.5f * norm(cross(p1 - p0, p2 - p0));
+        m_area += areas[i];
+    }
+    m_area_distr.build(areas);
+    attach_shape_children(*this, props);
+    if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
+}
+
+unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Embree reads 16 bytes per vertex: pad the buffer by one float.
+    auto *v = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                               m_data.positions.size());
+    std::memcpy(v, m_data.positions.data(), m_data.positions.size() * sizeof(Point3f));
+    auto *idx = (uint32_t *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+                                                    m_data.triangle_count());
+    std::memcpy(idx, m_data.indices.data(), m_data.indices.size() * sizeof(uint32_t));
+    rtcCommitGeometry(g);
+    unsigned id = rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    return id;
+}
+
+void TriangleMesh::fill_interaction(const Ray &, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const {
+    uint32_t i0 = m_data.indices[3 * prim], i1 = m_data.indices[3 * prim + 1], i2 = m_data.indices[3 * prim + 2];
+    const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
+    float b0 = 1.f - b.x - b.y;
+    si.t = t;
+    si.p = p0 * b0 + p1 * b.x + p2 * b.y;
+    Vec3f dp0 = p1 - p0, dp1 = p2 - p0;
+    Normal3f n = normalize(cross(dp0, dp1));
+    if (m_flip_normals) n = -n;
+    si.n = n;
+
+    Vec3f dp_du, dp_dv;
+    bool have_dp = false;
+    if (!m_data.uvs.empty()) {
+        Vec2f uv0 = m_data.uvs[i0], uv1 = m_data.uvs[i1], uv2 = m_data.uvs[i2];
+        si.uv = uv0 * b0 + uv1 * b.x + uv2 * b.y;
+        Vec2f duv0 = uv1 - uv0, duv1 = uv2 - uv0;
+        float det = duv0.x * duv1.y - duv0.y * duv1.x;
+        if (det != 0.f) {
+            float inv = 1.f / det;
+            dp_du = (dp0 * duv1.y - dp1 * duv0.y) * inv;
+            dp_dv = (dp1 * duv0.x - dp0 * duv1.x) * inv;
+            have_dp = all_finite(dp_du) && squared_norm(dp_du) > 0.f;
+        }
+    } else {
+        si.uv = b;
+    }
+
+    Normal3f ns = n;
+    if (!m_data.normals.empty()) {
+        Normal3f s = m_data.normals[i0] * b0 + m_data.normals[i1] * b.x + m_data.normals[i2] * b.y;
+        float l = norm(s);
+        if (l > 0.f) ns = (m_flip_normals ? -s : s) / l;
+    }
+    // Shading frame from dp/du projected onto the tangent plane (Mitsuba's initialize_sh_frame).
+    if (have_dp) {
+        Vec3f s = dp_du - ns * dot(ns, dp_du);
+        float l = norm(s);
+        if (l > 1e-12f) {
+            s = s / l;
+            si.sh_frame = Frame(s, cross(ns, s), ns);
+            return;
+        }
+    }
+    si.sh_frame = Frame(ns);
+}
+
+ShapeSample TriangleMesh::sample_area(Vec2f u) const {
+    float pmf, ux;
+    size_t tri = m_area_distr.sample(u.x, &pmf, &ux);
+    Vec2f b = warp::square_to_uniform_triangle({ux, u.y});
+    uint32_t i0 = m_data.indices[3 * tri], i1 = m_data.indices[3 * tri + 1], i2 = m_data.indices[3 * tri + 2];
+    const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
+    ShapeSample s;
+    s.p = p0 * (1.f - b.x - b.y) + p1 * b.x + p2 * b.y;
+    Normal3f n = normalize(cross(p1 - p0, p2 - p0));
+    s.n = m_flip_normals ? -n : n;
+    if (!m_data.uvs.empty())
+        s.uv = m_data.uvs[i0] * (1.f - b.x - b.y) + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
+    else
+        s.uv = b;
+    s.pdf_a = 1.f / m_area;
+    return s;
+}
+
+} // namespace mvpt

@@ -1,0 +1,180 @@
+#include "renderer.h"
+
+#include "core/warp.h"
+#include "render/camera.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <memory>
+#include <mutex>
+
+namespace mvpt {
+
+namespace {
+constexpr int TileSize = 16;
+
+struct Tile {
+    int view_slot;
+    int x0, y0, x1, y1; // crop-window pixel range
+};
+} // namespace
+
+Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_opts(std::move(opts)) {
+    const auto &cams = scene.cameras();
+    if (m_opts.views.empty())
+        for (int i = 0; i < int(cams.size()); ++i) m_views.push_back(i);
+    else
+        m_views = m_opts.views;
+    for (int v : m_views)
+        if (v < 0 || v >= int(cams.size()))
+            throw std::invalid_argument("view index " + std::to_string(v) + " out of range (the scene has " +
+                                        std::to_string(cams.size()) + " views)");
+    if (m_opts.spp < 0) throw std::invalid_argument("spp must be >= 0");
+    if (!(m_opts.time_budget >= 0.0)) throw std::invalid_argument("time budget must be >= 0");
+    m_films.resize(m_views.size());
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        const FilmDesc &f = cams[m_views[i]]->film;
+        size_t n = size_t(f.crop_width) * f.crop_height;
+        m_films[i].sum.assign(3 * n, 0.0);
+        m_films[i].sum_sq.assign(3 * n, 0.0);
+        m_films[i].count.assign(n, 0);
+    }
+}
+
+void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress) {
+    using clock = std::chrono::steady_clock;
+    const auto &cams = m_scene.cameras();
+    const Integrator &integrator = m_scene.integrator();
+    int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
+    m_stats.threads = threads;
+    tbb::task_arena arena(threads);
+
+    // Target samples per view: the option, or each sensor's sampler, or unbounded under a time budget.
+    std::vector<int> target(m_views.size());
+    int max_target = 0;
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        int t = m_opts.spp > 0 ? m_opts.spp : cams[m_views[i]]->sample_count;
+        if (m_opts.time_budget > 0.0 && m_opts.spp == 0) t = INT32_MAX;
+        target[i] = t;
+        max_target = std::max(max_target, t);
+    }
+
+    std::vector<Tile> all_tiles;
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        const FilmDesc &f = cams[m_views[i]]->film;
+        for (int y = 0; y < f.crop_height; y += TileSize)
+            for (int x = 0; x < f.crop_width; x += TileSize)
+                all_tiles.push_back({int(i), x, y, std::min(x + TileSize, f.crop_width), std::min(y + TileSize, f.crop_height)});
+    }
+
+    tbb::enumerable_thread_specific<RayCounters> counters;
+    std::mutex nonfinite_mutex;
+    auto t_start = clock::now();
+    double last_pass = 0.0;
+
+    for (int pass = 0; pass < max_target; ++pass) {
+        if (cancel.load()) { m_stats.cancelled = true; break; }
+        double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
+        if (pass > 0 && m_opts.time_budget > 0.0 && elapsed + last_pass > m_opts.time_budget) break;
+        auto t_pass = clock::now();
+
+        std::vector<const Tile *> tiles;
+        for (const Tile &t : all_tiles)
+            if (pass < target[t.view_slot]) tiles.push_back(&t);
+
+        arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
+                RayCounters &rc = counters.local();
+                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
+                    const Tile &tile = *tiles[ti];
+                    int view = m_views[tile.view_slot];
+                    const Camera &cam = *cams[view];
+                    const FilmDesc &film = cam.film;
+                    FilmBuffer &fb = m_films[tile.view_slot];
+                    Sampler sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed);
+                    for (int y = tile.y0; y < tile.y1; ++y)
+                        for (int x = tile.x0; x < tile.x1; ++x) {
+                            int px = x + film.crop_x, py = y + film.crop_y;
+                            sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
+                            sampler.set_dimension(DimFilm);
+                            Vec2f u_film = sampler.next_2d();
+                            Vec2f u_lens = sampler.next_2d();
+                            float u_time = sampler.next_1d();
+                            Vec2f offset = film.filter->sample(u_film);
+                            Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
+                            Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
+                            Ray ray = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
+                            ++rc.camera_rays;
+                            Spectrum L = integrator.li(m_scene, ray, sampler, rc);
+                            size_t pi = size_t(y) * film.crop_width + x;
+                            if (!L.is_finite()) {
+                                ++rc.nonfinite;
+                                std::lock_guard<std::mutex> lock(nonfinite_mutex);
+                                if (m_stats.nonfinite_view < 0) {
+                                    m_stats.nonfinite_view = view; m_stats.nonfinite_x = px;
+                                    m_stats.nonfinite_y = py; m_stats.nonfinite_sample = pass;
+                                }
+                                L = Spectrum(0.f);
+                            }
+                            for (int c = 0; c < 3; ++c) {
+                                fb.sum[3 * pi + c] += L[c];
+                                fb.sum_sq[3 * pi + c] += double(L[c]) * L[c];
+                            }
+                            ++fb.count[pi];
+                        }
+                }
+            });
+        });
+        last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
+        m_stats.passes = pass + 1;
+        m_stats.samples = 0;
+        for (auto &fb : m_films)
+            for (uint32_t c : fb.count) m_stats.samples += c;
+        if (progress) {
+            RenderProgress p;
+            p.pass = pass + 1;
+            p.elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
+            p.samples = m_stats.samples;
+            p.fraction = m_opts.time_budget > 0.0 ? std::min(1.0, p.elapsed / m_opts.time_budget)
+                                                  : double(pass + 1) / double(max_target);
+            progress(p);
+        }
+    }
+    m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
+    for (const RayCounters &c : counters) m_stats.counters += c;
+    develop();
+}
+
+void Renderer::develop() {
+    const auto &cams = m_scene.cameras();
+    m_results.clear();
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        const Camera &cam = *cams[m_views[i]];
+        const FilmBuffer &fb = m_films[i];
+        ViewResult r;
+        r.id = cam.id;
+        r.width = cam.film.crop_width;
+        r.height = cam.film.crop_height;
+        size_t n = size_t(r.width) * r.height;
+        r.rgb.resize(3 * n);
+        r.variance.resize(3 * n);
+        r.sample_count = fb.count;
+        for (size_t p = 0; p < n; ++p) {
+            double k = fb.count[p];
+            r.samples += fb.count[p];
+            for (int c = 0; c < 3; ++c) {
+                double mean = k > 0 ? fb.sum[3 * p + c] / k : 0.0;
+                double var = k > 1 ? std::max(0.0, (fb.sum_sq[3 * p + c] - k * mean * mean) / (k * (k - 1))) : 0.0;
+                r.rgb[3 * p + c] = float(mean);
+                r.variance[3 * p + c] = float(var);
+            }
+        }
+        m_results.push_back(std::move(r));
+    }
+}
+
+} // namespace mvpt

@@ -1,0 +1,86 @@
+// Drives a render: progressive passes over all views, each pass one sample
+// per pixel, parallel over tiles; stops at a sample count, a time budget or
+// a cancel request (at a pass boundary).
+#pragma once
+
+#include "integrators/integrator.h"
+#include "scene/scene.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mvpt {
+
+struct RenderOptions {
+    /// Samples per pixel; 0 uses each sensor's sampler `sample_count`.
+    int spp = 0;
+    /// Wall-clock budget in seconds (0: none). Passes stop when the next one
+    /// would end past the budget; at least one pass always runs.
+    double time_budget = 0.0;
+    /// Overrides the sensors' sampler seeds when set.
+    std::optional<uint32_t> seed;
+    /// Worker threads; 0 uses every core.
+    int threads = 0;
+    /// Indices of the views to render; empty renders all.
+    std::vector<int> views;
+};
+
+/// Result of one view: crop-window-sized images, row-major, y down.
+struct ViewResult {
+    std::string id;
+    int width = 0, height = 0;
+    std::vector<float> rgb;      ///< mean radiance, 3 floats per pixel
+    std::vector<float> variance; ///< variance of the pixel mean, 3 floats per pixel
+    std::vector<uint32_t> sample_count;
+    uint64_t samples = 0;
+    uint64_t nonfinite = 0;
+};
+
+struct RenderStats {
+    double seconds = 0.0;
+    int passes = 0;
+    bool cancelled = false;
+    uint64_t samples = 0;
+    RayCounters counters;
+    /// First non-finite sample, for replay: view, x, y, sample index (-1 if none).
+    int64_t nonfinite_view = -1, nonfinite_x = -1, nonfinite_y = -1, nonfinite_sample = -1;
+    int threads = 0;
+};
+
+struct RenderProgress {
+    int pass = 0;
+    double fraction = 0.0; ///< of the spp or time budget
+    double elapsed = 0.0;
+    uint64_t samples = 0;
+};
+
+class Renderer {
+public:
+    Renderer(const Scene &scene, RenderOptions opts);
+    /// Run to completion, cancellation, or budget; `progress` is called after each pass.
+    void render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress = {});
+
+    const std::vector<ViewResult> &results() const { return m_results; }
+    const RenderStats &stats() const { return m_stats; }
+    const std::vector<int> &views() const { return m_views; }
+
+private:
+    struct FilmBuffer {
+        std::vector<double> sum, sum_sq;
+        std::vector<uint32_t> count;
+    };
+    void develop();
+
+    const Scene &m_scene;
+    RenderOptions m_opts;
+    std::vector<int> m_views;
+    std::vector<FilmBuffer> m_films;
+    std::vector<ViewResult> m_results;
+    RenderStats m_stats;
+};
+
+} // namespace mvpt

@@ -1,0 +1,33 @@
+// Triangle mesh data as read from files, before it becomes a shape.
+#pragma once
+
+#include "../core/error.h"
+#include "../core/math.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace mvpt {
+
+struct MeshData {
+    std::vector<Point3f> positions;
+    /// Per-vertex shading normals (empty, or one per position).
+    std::vector<Normal3f> normals;
+    /// Per-vertex texture coordinates (empty, or one per position).
+    std::vector<Vec2f> uvs;
+    /// Three vertex indices per triangle.
+    std::vector<uint32_t> indices;
+
+    size_t triangle_count() const { return indices.size() / 3; }
+};
+
+/// Wavefront OBJ (polygons are fan-triangulated); errors name `loc` and the file.
+MeshData read_obj(const std::filesystem::path &path, const FileLoc &loc);
+/// Stanford PLY, ASCII or binary (little/big endian).
+MeshData read_ply(const std::filesystem::path &path, const FileLoc &loc);
+/// Mitsuba's zlib-compressed `.serialized` format; `shape_index` picks the mesh.
+MeshData read_serialized(const std::filesystem::path &path, int shape_index, const FileLoc &loc);
+
+} // namespace mvpt

@@ -1,0 +1,64 @@
+// OBJ files through tinyobjloader, re-indexed so that each distinct
+// (position, normal, uv) triple becomes one vertex.
+#include "mesh_data.h"
+
+#include <tiny_obj_loader.h>
+
+#include <map>
+#include <tuple>
+
+namespace mvpt {
+
+MeshData read_obj(const std::filesystem::path &path, const FileLoc &loc) {
+    tinyobj::ObjReaderConfig cfg;
+    cfg.triangulate = true;
+    cfg.vertex_color = false;
+    cfg.mtl_search_path = ""; // materials come from the scene file
+    tinyobj::ObjReader reader;
+    if (!reader.ParseFromFile(path.string(), cfg)) {
+        std::string err = reader.Error();
+        while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
+        throw SceneError(loc, "cannot read OBJ file '" + path.string() + "': " + (err.empty() ? "parse error" : err));
+    }
+    const auto &attrib = reader.GetAttrib();
+    MeshData mesh;
+    std::map<std::tuple<int, int, int>, uint32_t> remap;
+    bool any_normals = !attrib.normals.empty(), any_uvs = !attrib.texcoords.empty();
+    size_t nv = attrib.vertices.size() / 3;
+    for (const auto &shape : reader.GetShapes()) {
+        for (const auto &idx : shape.mesh.indices) {
+            if (idx.vertex_index < 0 || size_t(idx.vertex_index) >= nv)
+                throw SceneError(loc, "OBJ file '" + path.string() + "' has a face with an invalid vertex index");
+            auto key = std::make_tuple(idx.vertex_index, any_normals ? idx.normal_index : -1,
+                                       any_uvs ? idx.texcoord_index : -1);
+            auto it = remap.find(key);
+            if (it == remap.end()) {
+                uint32_t id = uint32_t(mesh.positions.size());
+                const float *v = &attrib.vertices[3 * size_t(idx.vertex_index)];
+                mesh.positions.push_back({v[0], v[1], v[2]});
+                if (any_normals) {
+                    Normal3f n(0.f);
+                    if (idx.normal_index >= 0) {
+                        const float *nn = &attrib.normals[3 * size_t(idx.normal_index)];
+                        n = {nn[0], nn[1], nn[2]};
+                    }
+                    mesh.normals.push_back(n);
+                }
+                if (any_uvs) {
+                    Vec2f uv(0.f, 0.f);
+                    if (idx.texcoord_index >= 0) {
+                        const float *t = &attrib.texcoords[2 * size_t(idx.texcoord_index)];
+                        uv = {t[0], t[1]};
+                    }
+                    mesh.uvs.push_back(uv);
+                }
+                it = remap.emplace(key, id).first;
+            }
+            mesh.indices.push_back(it->second);
+        }
+    }
+    if (mesh.indices.empty()) throw SceneError(loc, "OBJ file '" + path.string() + "' contains no faces");
+    return mesh;
+}
+
+} // namespace mvpt

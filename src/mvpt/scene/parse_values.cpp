@@ -1,0 +1,227 @@
+#include "parse_values.h"
+
+#include "xml_parser.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+namespace mvpt {
+
+void check_attrs(const XmlAttrs &attrs, std::initializer_list<const char *> allowed, const std::string &tag,
+                 const FileLoc &loc) {
+    for (auto &[name, value] : attrs) {
+        bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char *a) { return name == a; });
+        if (!ok) {
+            std::string list;
+            for (const char *a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+            throw SceneError(loc, "<" + tag + "> has an unknown attribute '" + name + "' (expected: " + list + ")");
+        }
+    }
+}
+
+std::string required(const XmlAttrs &attrs, const std::string &name, const std::string &tag, const FileLoc &loc) {
+    for (auto &a : attrs)
+        if (a.first == name) return a.second;
+    throw SceneError(loc, "<" + tag + "> is missing its '" + name + "' attribute");
+}
+
+namespace {
+std::string trim(const std::string &s) {
+    size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
+    return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
+}
+} // namespace
+
+double parse_float(const std::string &s_, const FileLoc &loc, const std::string &what) {
+    std::string s = trim(s_);
+    char *end = nullptr;
+    errno = 0;
+    double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || *end != '\0') throw SceneError(loc, what + ": expected a number, got '" + s_ + "'");
+    if (!std::isfinite(v) || errno == ERANGE) throw SceneError(loc, what + ": expected a finite number, got '" + s_ + "'");
+    return v;
+}
+
+int64_t parse_int(const std::string &s_, const FileLoc &loc, const std::string &what) {
+    std::string s = trim(s_);
+    char *end = nullptr;
+    errno = 0;
+    long long v = std::strtoll(s.c_str(), &end, 10);
+    if (s.empty() || *end != '\0' || errno == ERANGE)
+        throw SceneError(loc, what + ": expected an integer, got '" + s_ + "'");
+    return v;
+}
+
+std::vector<double> parse_float_list(const std::string &s, const FileLoc &loc, const std::string &what) {
+    std::vector<double> r;
+    std::string tok;
+    auto flush = [&] {
+        if (!tok.empty()) r.push_back(parse_float(tok, loc, what));
+        tok.clear();
+    };
+    for (char c : s) {
+        if (c == ',' || c == ' ' || c == '\t' || c == '\n' || c == '\r') flush();
+        else tok += c;
+    }
+    flush();
+    return r;
+}
+
+namespace {
+
+Vec3f parse_xyz(const XmlNode &n, const std::string &what, float def) {
+    if (const std::string *v = n.attr("value")) {
+        if (n.attr("x") || n.attr("y") || n.attr("z"))
+            throw SceneError(n.loc, "<" + n.tag + "> takes either 'value' or x/y/z attributes, not both");
+        auto l = parse_float_list(*v, n.loc, what);
+        if (l.size() == 1) return Vec3f(float(l[0]));
+        if (l.size() != 3) throw SceneError(n.loc, what + ": expected 3 numbers, got " + std::to_string(l.size()));
+        return {float(l[0]), float(l[1]), float(l[2])};
+    }
+    Vec3f r(def);
+    const char *names[3] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i)
+        if (const std::string *a = n.attr(names[i])) r[i] = float(parse_float(*a, n.loc, what));
+    return r;
+}
+
+Vec3f parse_vec3_attr(const XmlNode &n, const char *attr, const std::string &what) {
+    const std::string *v = n.attr(attr);
+    if (!v) throw SceneError(n.loc, "<" + n.tag + "> is missing its '" + attr + "' attribute");
+    auto l = parse_float_list(*v, n.loc, what + " '" + attr + "'");
+    if (l.size() != 3) throw SceneError(n.loc, what + " '" + attr + "': expected 3 numbers");
+    return {float(l[0]), float(l[1]), float(l[2])};
+}
+
+/// Compose the operations inside a <transform>; each one applies after the previous.
+Transform parse_transform_ops(const XmlNode &node) {
+    Transform t;
+    for (auto &op : node.children) {
+        const std::string &tag = op.tag;
+        Transform m;
+        if (tag == "translate") {
+            check_attrs(op.attrs, {"x", "y", "z", "value"}, tag, op.loc);
+            m = Transform::translate(parse_xyz(op, "<translate>", 0.f));
+        } else if (tag == "scale") {
+            check_attrs(op.attrs, {"x", "y", "z", "value"}, tag, op.loc);
+            Vec3f s = parse_xyz(op, "<scale>", 1.f);
+            if (s.x == 0 || s.y == 0 || s.z == 0) throw SceneError(op.loc, "<scale> by zero makes the transform singular");
+            m = Transform::scale(s);
+        } else if (tag == "rotate") {
+            check_attrs(op.attrs, {"x", "y", "z", "value", "angle"}, tag, op.loc);
+            Vec3f axis = parse_xyz(op, "<rotate> axis", 0.f);
+            if (squared_norm(axis) == 0) throw SceneError(op.loc, "<rotate> needs a non-zero axis (x, y, z)");
+            float angle = float(parse_float(required(op.attrs, "angle", tag, op.loc), op.loc, "<rotate> angle"));
+            m = Transform::rotate(axis, angle);
+        } else if (tag == "matrix") {
+            check_attrs(op.attrs, {"value"}, tag, op.loc);
+            auto l = parse_float_list(required(op.attrs, "value", tag, op.loc), op.loc, "<matrix>");
+            Matrix4 mm;
+            if (l.size() == 16) {
+                for (int i = 0; i < 16; ++i) mm.m[i / 4][i % 4] = l[i];
+            } else if (l.size() == 9) {
+                for (int i = 0; i < 9; ++i) mm.m[i / 3][i % 3] = l[i];
+            } else {
+                throw SceneError(op.loc, "<matrix> needs 16 (or 9) numbers, got " + std::to_string(l.size()));
+            }
+            bool ok = true;
+            Matrix4 inv = mm.inverse(&ok);
+            if (!ok) throw SceneError(op.loc, "<matrix> is singular");
+            m = Transform(mm, inv);
+        } else if (tag == "lookat") {
+            check_attrs(op.attrs, {"origin", "target", "up"}, tag, op.loc);
+            Vec3f o = parse_vec3_attr(op, "origin", "<lookat>"), tg = parse_vec3_attr(op, "target", "<lookat>");
+            Vec3f up = op.attr("up") ? parse_vec3_attr(op, "up", "<lookat>") : Vec3f(0, 1, 0);
+            Vec3f dir = tg - o;
+            if (squared_norm(dir) == 0) throw SceneError(op.loc, "<lookat> origin and target coincide");
+            if (squared_norm(cross(normalize(up), normalize(dir))) < 1e-12f)
+                throw SceneError(op.loc, "<lookat> 'up' is parallel to the view direction");
+            m = Transform::look_at(o, tg, up);
+        } else {
+            throw SceneError(op.loc, "unknown transform operation <" + tag +
+                                         "> (expected translate, rotate, scale, matrix or lookat)");
+        }
+        t = m * t;
+    }
+    if (!t.matrix().is_finite()) throw SceneError(node.loc, "transform is not finite");
+    return t;
+}
+
+} // namespace
+
+void parse_value_node(const XmlNode &n, Properties &props) {
+    const std::string &tag = n.tag;
+    auto name_of = [&] { return required(n.attrs, "name", tag, n.loc); };
+    auto no_children = [&] {
+        if (!n.children.empty()) throw SceneError(n.children[0].loc, "<" + tag + "> cannot have child elements");
+    };
+    if (tag == "float") {
+        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
+        no_children();
+        std::string name = name_of();
+        props.set(name, parse_float(required(n.attrs, "value", tag, n.loc), n.loc, "float '" + name + "'"), n.loc, tag);
+    } else if (tag == "integer") {
+        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
+        no_children();
+        std::string name = name_of();
+        props.set(name, parse_int(required(n.attrs, "value", tag, n.loc), n.loc, "integer '" + name + "'"), n.loc, tag);
+    } else if (tag == "boolean") {
+        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
+        no_children();
+        std::string name = name_of(), v = required(n.attrs, "value", tag, n.loc);
+        std::string lv = v;
+        std::transform(lv.begin(), lv.end(), lv.begin(), ::tolower);
+        bool b;
+        if (lv == "true" || lv == "1") b = true;
+        else if (lv == "false" || lv == "0") b = false;
+        else throw SceneError(n.loc, "boolean '" + name + "': expected true or false, got '" + v + "'");
+        props.set(name, b, n.loc, tag);
+    } else if (tag == "string") {
+        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
+        no_children();
+        props.set(name_of(), required(n.attrs, "value", tag, n.loc), n.loc, tag);
+    } else if (tag == "rgb" || tag == "spectrum") {
+        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
+        no_children();
+        std::string name = name_of(), v = required(n.attrs, "value", tag, n.loc);
+        if (tag == "spectrum" && v.find(':') != std::string::npos)
+            throw SceneError(n.loc, "spectrum '" + name + "': wavelength-sampled spectra are not supported; use <rgb>");
+        auto l = parse_float_list(v, n.loc, tag + " '" + name + "'");
+        if (l.size() == 1) props.set(name, Color3f(float(l[0])), n.loc, tag);
+        else if (l.size() == 3 && tag == "rgb") props.set(name, Color3f(float(l[0]), float(l[1]), float(l[2])), n.loc, tag);
+        else throw SceneError(n.loc, tag + " '" + name + "': expected 1" + (tag == "rgb" ? " or 3" : "") + " numbers");
+    } else if (tag == "point" || tag == "vector") {
+        check_attrs(n.attrs, {"name", "value", "x", "y", "z"}, tag, n.loc);
+        no_children();
+        std::string name = name_of();
+        props.set(name, parse_xyz(n, tag + " '" + name + "'", 0.f), n.loc, tag);
+    } else if (tag == "transform") {
+        check_attrs(n.attrs, {"name"}, tag, n.loc);
+        props.set(name_of(), parse_transform_ops(n), n.loc, tag);
+    } else if (tag == "animation") {
+        check_attrs(n.attrs, {"name"}, tag, n.loc);
+        std::vector<std::pair<float, Transform>> keys;
+        for (auto &k : n.children) {
+            if (k.tag != "transform")
+                throw SceneError(k.loc, "<animation> may only contain <transform time=\"...\"> keyframes, got <" + k.tag + ">");
+            check_attrs(k.attrs, {"time"}, "transform", k.loc);
+            float time = float(parse_float(required(k.attrs, "time", "transform", k.loc), k.loc, "keyframe time"));
+            keys.emplace_back(time, parse_transform_ops(k));
+        }
+        if (keys.empty()) throw SceneError(n.loc, "<animation> needs at least one <transform time=\"...\"> keyframe");
+        for (size_t i = 0; i < keys.size(); ++i)
+            for (size_t j = i + 1; j < keys.size(); ++j)
+                if (keys[i].first == keys[j].first)
+                    throw SceneError(n.loc, "<animation> has two keyframes at time " + std::to_string(keys[i].first));
+        AnimatedTransform at;
+        std::string err;
+        if (!AnimatedTransform::from_keys(keys, at, err)) throw SceneError(n.loc, err);
+        props.set(name_of(), at, n.loc, tag);
+    } else {
+        throw SceneError(n.loc, "unknown element <" + tag + ">");
+    }
+}
+
+} // namespace mvpt

@@ -1,0 +1,141 @@
+#include "scene.h"
+
+#include "plugin.h"
+
+#include <cstdio>
+
+namespace mvpt {
+
+namespace {
+void embree_error(void *, RTCError code, const char *str) {
+    std::fprintf(stderr, "mvpt: Embree error %d: %s\n", int(code), str ? str : "");
+}
+} // namespace
+
+Scene::Scene() {
+    m_device = rtcNewDevice(nullptr);
+    rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
+    m_scene = rtcNewScene(m_device);
+    rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
+}
+
+Scene::~Scene() {
+    m_shapes.clear(); // shapes may own Embree sub-scenes
+    if (m_scene) rtcReleaseScene(m_scene);
+    if (m_device) rtcReleaseDevice(m_device);
+}
+
+void Scene::build(const SceneTree &tree) {
+    const Properties &props = tree.props;
+    for (const ChildObject &c : props.children()) {
+        c.queried = true;
+        bool owned_elsewhere = !c.id.empty() && tree.referenced_ids.count(c.id);
+        if (c.kind == "shape") {
+            if (owned_elsewhere) continue; // e.g. shapes inside a shapegroup reached by <ref>
+            m_shapes.push_back(std::static_pointer_cast<Shape>(c.object));
+        } else if (c.kind == "emitter") {
+            auto light = std::static_pointer_cast<Light>(c.object);
+            if (light->is_area()) {
+                if (!owned_elsewhere)
+                    throw SceneError(c.loc, "an 'area' emitter must be placed inside a <shape> (or referenced from one)");
+                continue;
+            }
+            if (owned_elsewhere) continue;
+            if (light->is_environment()) {
+                if (m_environment) throw SceneError(c.loc, "the scene has more than one environment emitter");
+                m_environment = light.get();
+            }
+            m_lights.push_back(light);
+        } else if (c.kind == "sensor") {
+            auto cam = std::static_pointer_cast<Camera>(c.object);
+            if (cam->id.empty()) cam->id = std::to_string(m_cameras.size());
+            for (auto &other : m_cameras)
+                if (other->id == cam->id) throw SceneError(c.loc, "two sensors have the id '" + cam->id + "'");
+            m_cameras.push_back(cam);
+        } else if (c.kind == "integrator") {
+            if (m_integrator) throw SceneError(c.loc, "the scene has more than one <integrator>");
+            m_integrator = std::static_pointer_cast<Integrator>(c.object);
+        } else if (c.kind == "bsdf" || c.kind == "texture") {
+            // Declared for <ref> use; unreferenced ones are simply unused.
+        } else {
+            throw SceneError(c.loc, "a <" + c.kind + "> cannot be placed directly in <scene>");
+        }
+    }
+    props.check_all_queried();
+    if (m_cameras.empty()) throw SceneError(props.loc(), "the scene has no <sensor>: nothing to render");
+    if (!m_integrator) {
+        Properties ip("integrator", "path", props.loc());
+        m_integrator = std::static_pointer_cast<Integrator>((*PluginRegistry::find("integrator", "path"))(ip, {}));
+    }
+
+    for (auto &shape : m_shapes) {
+        unsigned gid = shape->attach(m_device, m_scene);
+        if (gid >= m_geom_to_shape.size()) m_geom_to_shape.resize(gid + 1, nullptr);
+        m_geom_to_shape[gid] = shape.get();
+        m_bounds.expand(shape->bounds());
+        if (shape->emitter) m_lights.push_back(shape->emitter);
+    }
+    rtcCommitScene(m_scene);
+
+    Point3f center = m_bounds.valid() ? m_bounds.center() : Point3f(0.f);
+    float radius = m_bounds.valid() ? norm(m_bounds.max - center) : 1.f;
+    for (auto &l : m_lights) l->set_scene_bounds(center, std::max(radius, 1e-3f));
+}
+
+bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
+    rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
+    rh.ray.tnear = ray.tmin;
+    rh.ray.tfar = ray.tmax;
+    rh.ray.time = ray.time;
+    rh.ray.mask = 0xffffffffu;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(m_scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    unsigned gid = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
+    const Shape *shape = m_geom_to_shape[gid];
+    si.time = ray.time;
+    si.shape = shape;
+    si.prim = rh.hit.primID;
+    shape->fill_interaction(ray, rh.ray.tfar, rh.hit.primID, {rh.hit.u, rh.hit.v}, si);
+    return true;
+}
+
+bool Scene::occluded(const Ray &ray) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r;
+    r.org_x = ray.o.x; r.org_y = ray.o.y; r.org_z = ray.o.z;
+    r.dir_x = ray.d.x; r.dir_y = ray.d.y; r.dir_z = ray.d.z;
+    r.tnear = ray.tmin;
+    r.tfar = ray.tmax;
+    r.time = ray.time;
+    r.mask = 0xffffffffu;
+    r.flags = 0;
+    rtcOccluded1(m_scene, &ctx, &r);
+    return r.tfar < 0.f;
+}
+
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const std::map<std::string, std::string> &defines) {
+    XmlNode root = parse_scene_file(path, defines);
+    SceneTree tree = instantiate_scene(root, std::filesystem::absolute(path).parent_path());
+    auto scene = std::make_unique<Scene>();
+    scene->build(tree);
+    return scene;
+}
+
+std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
+                                         const std::map<std::string, std::string> &defines) {
+    XmlNode root = parse_scene_string(xml, base_dir, defines);
+    SceneTree tree = instantiate_scene(root, std::filesystem::absolute(base_dir));
+    auto scene = std::make_unique<Scene>();
+    scene->build(tree);
+    return scene;
+}
+
+} // namespace mvpt

@@ -1,0 +1,63 @@
+// The scene: shapes in an Embree BVH, lights, cameras (views), integrator.
+#pragma once
+
+#include "../integrators/integrator.h"
+#include "../render/camera.h"
+#include "../render/light.h"
+#include "../render/shape.h"
+#include "xml_parser.h"
+
+#include <embree3/rtcore.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mvpt {
+
+class Scene {
+public:
+    Scene();
+    ~Scene();
+    Scene(const Scene &) = delete;
+    Scene &operator=(const Scene &) = delete;
+
+    /// Build from an instantiated scene tree (validates and commits the BVH).
+    void build(const SceneTree &tree);
+
+    /// Closest hit along `ray` within [tmin, tmax) at `ray.time`.
+    bool intersect(const Ray &ray, SurfaceInteraction &si) const;
+    /// True if anything blocks `ray` within [tmin, tmax).
+    bool occluded(const Ray &ray) const;
+
+    const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
+    const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
+    /// The environment light (constant or envmap), if any.
+    const Light *environment() const { return m_environment; }
+    const std::vector<std::shared_ptr<Camera>> &cameras() const { return m_cameras; }
+    const Integrator &integrator() const { return *m_integrator; }
+    void set_integrator(std::shared_ptr<Integrator> i) { m_integrator = std::move(i); }
+    const BoundingBox &bounds() const { return m_bounds; }
+    RTCDevice device() const { return m_device; }
+
+private:
+    RTCDevice m_device = nullptr;
+    RTCScene m_scene = nullptr;
+    std::vector<std::shared_ptr<Shape>> m_shapes;
+    std::vector<const Shape *> m_geom_to_shape;
+    std::vector<std::shared_ptr<Light>> m_lights;
+    const Light *m_environment = nullptr;
+    std::vector<std::shared_ptr<Camera>> m_cameras;
+    std::shared_ptr<Integrator> m_integrator;
+    BoundingBox m_bounds;
+};
+
+/// Load a Mitsuba 3 XML scene; `defines` override its <default> values.
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path,
+                                       const std::map<std::string, std::string> &defines = {});
+std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
+                                         const std::map<std::string, std::string> &defines = {});
+
+} // namespace mvpt

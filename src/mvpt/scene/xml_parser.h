@@ -1,0 +1,52 @@
+// Mitsuba 3 XML scene files -> a tree of instantiated objects.
+//
+// Parsing happens in two steps: the XML is read into a tree of `XmlNode`s with
+// `<include>` expanded and `$name` variables substituted (`<default>` supplies
+// values that the caller's defines override); then objects are instantiated
+// depth-first, each from a `Properties` bag that must be read in full.
+#pragma once
+
+#include "../core/error.h"
+#include "properties.h"
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace mvpt {
+
+struct XmlNode {
+    std::string tag;
+    std::vector<std::pair<std::string, std::string>> attrs; // after substitution
+    std::vector<XmlNode> children;
+    FileLoc loc;
+    /// Directory of the file the node came from (relative paths resolve there first).
+    std::filesystem::path dir;
+
+    const std::string *attr(const std::string &name) const {
+        for (auto &a : attrs)
+            if (a.first == name) return &a.second;
+        return nullptr;
+    }
+};
+
+/// The root `<scene>` node, fully expanded.
+XmlNode parse_scene_file(const std::filesystem::path &path, std::map<std::string, std::string> defines);
+XmlNode parse_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
+                           std::map<std::string, std::string> defines);
+
+/// Instantiated top-level scene: its parameters and children (shapes, emitters, sensors, ...).
+struct SceneTree {
+    Properties props{"scene", "scene"};
+    std::filesystem::path scene_dir;
+    /// Ids of top-level objects that other objects reference (and so own).
+    std::set<std::string> referenced_ids;
+};
+
+/// Instantiate every object below the root node.
+SceneTree instantiate_scene(const XmlNode &root, const std::filesystem::path &scene_dir);
+
+} // namespace mvpt

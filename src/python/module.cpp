@@ -1,0 +1,214 @@
+// The `mvpt._core` extension: scene loading, a background render job that
+// Python polls (GIL released while waiting), NumPy images out, image writers.
+#include "mvpt/io/image_io.h"
+#include "mvpt/renderer.h"
+#include "mvpt/scene/scene.h"
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/map.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/shared_ptr.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace mvpt;
+
+void bind_probes(nb::module_ &m);
+
+namespace {
+
+using FloatArray = nb::ndarray<nb::numpy, float>;
+
+FloatArray make_array(std::vector<float> data, std::initializer_list<size_t> shape) {
+    auto *heap = new std::vector<float>(std::move(data));
+    nb::capsule owner(heap, [](void *p) noexcept { delete static_cast<std::vector<float> *>(p); });
+    std::vector<size_t> sh(shape);
+    return FloatArray(heap->data(), sh.size(), sh.data(), owner);
+}
+
+/// A render running on its own thread; Python polls it so that Ctrl-C and
+/// progress bars stay responsive.
+class RenderJob {
+public:
+    RenderJob(std::shared_ptr<Scene> scene, RenderOptions opts)
+        : m_scene(std::move(scene)), m_renderer(*m_scene, std::move(opts)) {}
+    ~RenderJob() {
+        m_cancel = true;
+        if (m_thread.joinable()) m_thread.join();
+    }
+
+    void start() {
+        if (m_thread.joinable()) throw std::runtime_error("render job already started");
+        m_thread = std::thread([this] {
+            try {
+                m_renderer.render(m_cancel, [this](const RenderProgress &p) {
+                    std::lock_guard<std::mutex> lock(m_mutex);
+                    m_progress = p;
+                });
+            } catch (const std::exception &e) {
+                std::lock_guard<std::mutex> lock(m_mutex);
+                m_error = e.what();
+            }
+            std::lock_guard<std::mutex> lock(m_mutex);
+            m_done = true;
+            m_cv.notify_all();
+        });
+    }
+
+    /// Wait up to `timeout` seconds; true when finished.
+    bool wait(double timeout) {
+        std::unique_lock<std::mutex> lock(m_mutex);
+        m_cv.wait_for(lock, std::chrono::duration<double>(timeout), [this] { return m_done; });
+        if (m_done && m_thread.joinable()) {
+            lock.unlock();
+            m_thread.join();
+        }
+        return m_done;
+    }
+
+    void cancel() { m_cancel = true; }
+
+    nb::dict progress() {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        nb::dict d;
+        d["pass"] = m_progress.pass;
+        d["fraction"] = m_progress.fraction;
+        d["elapsed"] = m_progress.elapsed;
+        d["samples"] = m_progress.samples;
+        return d;
+    }
+
+    nb::list results() {
+        check_finished();
+        nb::list out;
+        for (const ViewResult &r : m_renderer.results()) {
+            nb::dict d;
+            d["id"] = r.id;
+            size_t h = r.height, w = r.width;
+            d["image"] = make_array(r.rgb, {h, w, 3});
+            d["variance"] = make_array(r.variance, {h, w, 3});
+            std::vector<float> count(r.sample_count.begin(), r.sample_count.end());
+            d["sample_count"] = make_array(std::move(count), {h, w});
+            d["samples"] = r.samples;
+            out.append(d);
+        }
+        return out;
+    }
+
+    nb::dict stats() {
+        check_finished();
+        const RenderStats &s = m_renderer.stats();
+        nb::dict d;
+        d["seconds"] = s.seconds;
+        d["passes"] = s.passes;
+        d["cancelled"] = s.cancelled;
+        d["samples"] = s.samples;
+        d["camera_rays"] = s.counters.camera_rays;
+        d["rays"] = s.counters.rays;
+        d["shadow_rays"] = s.counters.shadow_rays;
+        d["nonfinite_samples"] = s.counters.nonfinite;
+        d["threads"] = s.threads;
+        if (s.nonfinite_view >= 0) {
+            nb::dict f;
+            f["view"] = s.nonfinite_view; f["x"] = s.nonfinite_x; f["y"] = s.nonfinite_y; f["sample"] = s.nonfinite_sample;
+            d["first_nonfinite"] = f;
+        }
+        return d;
+    }
+
+private:
+    void check_finished() {
+        std::lock_guard<std::mutex> lock(m_mutex);
+        if (!m_done) throw std::runtime_error("render job has not finished");
+        if (!m_error.empty()) throw std::runtime_error(m_error);
+    }
+
+    std::shared_ptr<Scene> m_scene;
+    Renderer m_renderer;
+    std::atomic<bool> m_cancel{false};
+    std::thread m_thread;
+    std::mutex m_mutex;
+    std::condition_variable m_cv;
+    bool m_done = false;
+    std::string m_error;
+    RenderProgress m_progress;
+};
+
+nb::list view_info(const Scene &s) {
+    nb::list l;
+    for (auto &c : s.cameras()) {
+        nb::dict d;
+        d["id"] = c->id;
+        d["width"] = c->film.crop_width;
+        d["height"] = c->film.crop_height;
+        d["film_width"] = c->film.width;
+        d["film_height"] = c->film.height;
+        d["spp"] = c->sample_count;
+        d["shutter"] = nb::make_tuple(c->shutter_open, c->shutter_close);
+        l.append(d);
+    }
+    return l;
+}
+
+} // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "mvpt native core";
+    static nb::exception<SceneError> scene_error(m, "SceneError", PyExc_ValueError);
+
+    nb::class_<Scene>(m, "Scene")
+        .def_prop_ro("views", &view_info)
+        .def_prop_ro("integrator", [](const Scene &s) { return s.integrator().name(); })
+        .def_prop_ro("shape_count", [](const Scene &s) { return s.shapes().size(); })
+        .def_prop_ro("light_count", [](const Scene &s) { return s.lights().size(); });
+
+    m.def("load_file", [](const std::string &path, const std::map<std::string, std::string> &defines) {
+        return std::shared_ptr<Scene>(load_scene_file(path, defines));
+    }, "path"_a, "defines"_a = std::map<std::string, std::string>{});
+    m.def("load_string", [](const std::string &xml, const std::string &base_dir, const std::map<std::string, std::string> &defines) {
+        return std::shared_ptr<Scene>(load_scene_string(xml, base_dir, defines));
+    }, "xml"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{});
+
+    nb::class_<RenderJob>(m, "RenderJob")
+        .def("__init__", [](RenderJob *self, std::shared_ptr<Scene> scene, int spp, double time, std::optional<uint32_t> seed,
+                            int threads, std::vector<int> views) {
+            RenderOptions o;
+            o.spp = spp; o.time_budget = time; o.seed = seed; o.threads = threads; o.views = std::move(views);
+            new (self) RenderJob(std::move(scene), std::move(o));
+        }, "scene"_a, "spp"_a = 0, "time"_a = 0.0, "seed"_a = nb::none(), "threads"_a = 0, "views"_a = std::vector<int>{})
+        .def("start", &RenderJob::start)
+        .def("wait", &RenderJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
+        .def("cancel", &RenderJob::cancel)
+        .def("progress", &RenderJob::progress)
+        .def("results", &RenderJob::results)
+        .def("stats", &RenderJob::stats);
+
+    m.def("write_exr", [](const std::string &path, std::map<std::string, nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>> channels) {
+        std::vector<ExrChannel> ch;
+        int w = -1, h = -1;
+        for (auto &[name, arr] : channels) {
+            if (w < 0) { h = int(arr.shape(0)); w = int(arr.shape(1)); }
+            if (int(arr.shape(0)) != h || int(arr.shape(1)) != w) throw std::invalid_argument("EXR channels differ in size");
+            ch.push_back({name, std::vector<float>(arr.data(), arr.data() + arr.size())});
+        }
+        if (ch.empty()) throw std::invalid_argument("no channels");
+        write_exr(path, w, h, ch);
+    }, "path"_a, "channels"_a);
+    m.def("write_png", [](const std::string &path, nb::ndarray<float, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu> rgb) {
+        write_png_srgb(path, int(rgb.shape(1)), int(rgb.shape(0)), rgb.data());
+    }, "path"_a, "rgb"_a);
+    m.def("read_image", [](const std::string &path) {
+        ImageRGB img = read_image(path);
+        size_t h = img.height, w = img.width;
+        return make_array(std::move(img.rgb), {h, w, 3});
+    }, "path"_a);
+
+    bind_probes(m);
+}
