@@ -21,6 +21,7 @@ using namespace nb::literals;
 using namespace mvpt;
 
 void bind_probes(nb::module_ &m);
+void bind_light_probes(nb::module_ &m);
 
 namespace {
 
@@ -211,4 +212,5 @@ NB_MODULE(_core, m) {
     }, "path"_a);
 
     bind_probes(m);
+    bind_light_probes(m);
 }
