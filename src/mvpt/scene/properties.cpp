@@ -6,20 +6,6 @@
 
 namespace mvpt {
 
-namespace {
-const char *value_type_name(const Properties::Value &v) {
-    switch (v.index()) {
-        case 0: return "boolean";
-        case 1: return "integer";
-        case 2: return "float";
-        case 3: return "string";
-        case 4: return "rgb";
-        case 5: return "point/vector";
-        case 6: return "transform";
-        default: return "animation";
-    }
-}
-} // namespace
 
 void Properties::set(const std::string &name, Value v, const FileLoc &loc, const std::string &tag) {
     if (m_values.count(name))
