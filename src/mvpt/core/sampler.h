@@ -62,6 +62,7 @@ public:
 
     void start(uint32_t view, uint32_t px, uint32_t py, uint32_t sample_index, uint32_t dimension = 0) {
         m_pixel_hash = hash_ints(m_seed, view, px, py);
+        m_sample_hash = hash_combine(m_pixel_hash, sample_index);
         m_index = sample_index;
         m_dim = dimension;
     }
@@ -71,16 +72,16 @@ public:
     uint32_t seed() const { return m_seed; }
 
     float next_1d() {
-        uint64_t h = hash_ints(m_pixel_hash, m_dim++);
-        if (m_kind == SamplerKind::Independent) return bits_to_unit_float(uint32_t(hash_ints(h, m_index)));
+        if (m_kind == SamplerKind::Independent) return bits_to_unit_float(uint32_t(independent_bits()));
+        uint64_t h = dimension_hash();
         return bits_to_unit_float(owen_scramble(sobol_dim0(shuffled_index(h)), uint32_t(h >> 32)));
     }
     Vec2f next_2d() {
-        uint64_t h = hash_ints(m_pixel_hash, m_dim++);
         if (m_kind == SamplerKind::Independent) {
-            uint64_t r = hash_ints(h, m_index);
+            uint64_t r = independent_bits();
             return {bits_to_unit_float(uint32_t(r)), bits_to_unit_float(uint32_t(r >> 32))};
         }
+        uint64_t h = dimension_hash();
         uint32_t i = shuffled_index(h);
         uint64_t h2 = mix_bits(h);
         return {bits_to_unit_float(owen_scramble(sobol_dim0(i), uint32_t(h2))),
@@ -88,6 +89,10 @@ public:
     }
 
 private:
+    /// 64 random bits of (sample, dimension) for the independent sampler: one mix per draw.
+    uint64_t independent_bits() { return mix_bits(m_sample_hash + 0x9e3779b97f4a7c15ULL * (uint64_t(m_dim++) + 1)); }
+    /// Per (pixel, dimension) scrambling seed of the Sobol sampler, shared by all sample indices.
+    uint64_t dimension_hash() { return mix_bits(m_pixel_hash + 0x9e3779b97f4a7c15ULL * (uint64_t(m_dim++) + 1)); }
     /// Owen-scrambled sample index: decorrelates padded dimension pairs while
     /// keeping every power-of-two prefix stratified [Burley 2020, §4].
     uint32_t shuffled_index(uint64_t h) const { return owen_scramble(m_index, uint32_t(h)); }
@@ -101,7 +106,7 @@ private:
 
     SamplerKind m_kind;
     uint32_t m_seed;
-    uint64_t m_pixel_hash = 0;
+    uint64_t m_pixel_hash = 0, m_sample_hash = 0;
     uint32_t m_index = 0, m_dim = 0;
 };
 
