@@ -89,7 +89,7 @@ def synthetic_envmap(path, w=24, h=12):
     """Smooth gradient plus a bright 2x2 spot; values are exact in half precision."""
     y, x = np.mgrid[0:h, 0:w]
     img = np.zeros((h, w, 3), np.float32)
-    img[..., 0] = 0.25 + x / w
+    img[..., 0] = 0.25 + x / 32
     img[..., 1] = 0.5 + (y % 3) / 4
     img[..., 2] = 1.0
     img[3:5, 17:19] = [40.0, 30.0, 20.0]
