@@ -7,7 +7,7 @@ import pytest
 import mvpt
 from light_scenes import ROOM, block_z, compare, render_mitsuba, scene_xml, SIZE
 from scipy import stats
-from test_lights_chi2 import synthetic_envmap
+from test_lights_chi2 import shared_scenes, synthetic_envmap
 
 try:
     import mitsuba as mi  # noqa: F401
@@ -125,6 +125,9 @@ EMITTERS = {
 }
 
 
+N_COMPARISONS = len(EMITTERS) + 1
+
+
 @needs_mitsuba
 @pytest.mark.parametrize("kind", list(EMITTERS))
 def test_matches_mitsuba(kind, tmp_path):
@@ -132,5 +135,19 @@ def test_matches_mitsuba(kind, tmp_path):
     xml = scene_xml(ROOM + EMITTERS[kind].format(env=tmp_path / "env.exr"), max_depth=4)
     ref = render_mitsuba(xml, 2, spp=64, seeds=4)
     ours = render(xml, spp=256, seed=11)
-    failures = compare(ours, ref, n_tests=len(EMITTERS))
+    failures = compare(ours, ref, n_tests=N_COMPARISONS)
+    assert not failures, "; ".join(failures)
+
+
+@needs_mitsuba
+def test_matpreview_envmap_matches_mitsuba():
+    path = shared_scenes() / "m3data-matpreview" / "envmap.exr"
+    if not path.exists():
+        pytest.skip(f"shared scenes not available ({path} is absent)")
+    emitter = (f'<emitter type="envmap"><string name="filename" value="{path}"/>'
+               '<transform name="to_world"><rotate x="1" angle="90"/><rotate z="1" angle="-60"/></transform></emitter>')
+    xml = scene_xml(ROOM + emitter, max_depth=4)
+    ref = render_mitsuba(xml, 2, spp=64, seeds=4)
+    ours = render(xml, spp=256, seed=13)
+    failures = compare(ours, ref, n_tests=N_COMPARISONS)
     assert not failures, "; ".join(failures)
