@@ -60,3 +60,34 @@ TEST(AreaLightTexture, SampleAndEvalUseSurfaceUv) {
     ASSERT_TRUE(scene->intersect(Ray{above, Vec3f(0, 0, -1), 0.f, Infinity, 0.f}, si));
     EXPECT_TRUE(light.eval(si, Vec3f(0, 0, 1)).is_black());
 }
+
+TEST(SpotLightTexture, ProjectsTheCutoffConeOntoUnitSquare) {
+    // Spot at the origin looking down +z (identity to_world); a receiver at
+    // local direction (x, y, 1) sees uv = 1/2 + (x, y) / (2 tan(cutoff)).
+    auto scene = load_scene_string(R"(<scene version="3.0.0">
+      <emitter type="spot"><float name="cutoff_angle" value="40"/><float name="beam_width" value="40"/>
+        <texture type="test_uv" name="texture"/></emitter>
+      <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+    </scene>)", ".");
+    const Light &light = *scene->lights()[0];
+    const float t = std::tan(deg_to_rad(40.f));
+    for (Vec2f xy : {Vec2f(0.f, 0.f), Vec2f(0.3f, -0.2f), Vec2f(-0.5f, 0.4f)}) {
+        Point3f ref(xy.x * 2.f, xy.y * 2.f, 2.f);
+        auto [ls, weight] = light.sample_li(ref, {0.5f, 0.5f}, 0.f);
+        Color3f L = weight * squared_norm(ref);
+        EXPECT_NEAR(L.r, 0.5f + 0.5f * xy.x / t, 1e-4f);
+        EXPECT_NEAR(L.g, 0.5f + 0.5f * xy.y / t, 1e-4f);
+        EXPECT_NEAR(L.b, 1.f, 1e-4f);
+    }
+}
+
+TEST(SpotLightTexture, ConstantTextureIsAnError) {
+    try {
+        load_scene_string(R"(<scene version="3.0.0">
+          <emitter type="spot"><rgb name="texture" value="0.5"/></emitter>
+          <sensor type="perspective"/></scene>)", ".");
+        FAIL() << "a constant spot texture was accepted";
+    } catch (const SceneError &e) {
+        EXPECT_NE(std::string(e.what()).find("spatially varying"), std::string::npos) << e.what();
+    }
+}
