@@ -159,3 +159,15 @@ def test_constant_environment():
 def test_bad_parameters(xml, message):
     with pytest.raises(ValueError, match=message):
         _core.LightProbe(xml)
+
+
+def test_animated_point_light_moves():
+    """to_world may be an <animation>: the light sits at the interpolated position at `time`."""
+    xml = ('<emitter type="point"><animation name="to_world">'
+           '<transform time="0"><translate x="0" y="0" z="1"/></transform>'
+           '<transform time="1"><translate x="2" y="0" z="1"/></transform></animation></emitter>')
+    probe = _core.LightProbe(xml)
+    for t, x in [(0.0, 0.0), (0.25, 0.5), (1.0, 2.0), (3.0, 2.0)]:
+        d, w, _, dist = probe.sample_li((0, 0, 0), 1, time=t)
+        np.testing.assert_allclose(dist[0], np.hypot(x, 1.0), rtol=1e-5)
+        np.testing.assert_allclose(d[0], np.array([x, 0, 1]) / np.hypot(x, 1.0), rtol=1e-5, atol=1e-7)
