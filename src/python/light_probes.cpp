@@ -122,11 +122,13 @@ struct LightProbe {
 } // namespace
 
 void bind_light_probes(nb::module_ &m) {
-    nb::class_<LightProbe>(m, "LightProbe")
+    nb::class_<LightProbe>(m, "LightProbe", "One light of a scene snippet (shapes/emitters XML), for tests")
         .def(nb::init<const std::string &, size_t, const std::string &>(), "xml"_a, "index"_a = 0, "base_dir"_a = ".")
-        .def("sample_li", &LightProbe::sample_li, "ref"_a, "n"_a, "seed"_a = 0, "time"_a = 0.f)
-        .def("pdf_li", &LightProbe::pdf_li, "ref"_a, "dirs"_a)
-        .def("eval", &LightProbe::eval, "ref"_a, "dirs"_a)
+        .def("sample_li", &LightProbe::sample_li, "ref"_a, "n"_a, "seed"_a = 0, "time"_a = 0.f,
+             "n samples of sample_li at point ref: (directions (n,3), weights L/pdf (n,3), pdfs (n,), distances (n,))")
+        .def("pdf_li", &LightProbe::pdf_li, "ref"_a, "dirs"_a,
+             "Solid-angle density of sample_li at ref for unit directions dirs (m,3), occlusion ignored")
+        .def("eval", &LightProbe::eval, "ref"_a, "dirs"_a, "Radiance arriving at ref from each direction (m,3)")
         .def_prop_ro("flags", [](const LightProbe &p) { return p.light->flags(); })
         .def_prop_ro("light_count", [](const LightProbe &p) { return p.scene->lights().size(); })
         .def_prop_ro("is_delta", [](const LightProbe &p) { return p.light->is_delta(); })
