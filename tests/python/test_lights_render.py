@@ -75,22 +75,17 @@ def test_directional_light_on_plane():
 
 
 def test_constant_environment_convex_object():
-    """A convex diffuse object only sees the environment: L = rho * L_env on it,
-    L_env around it (depth unlimited: nothing else can contribute)."""
+    """A convex diffuse object only sees the environment: L = rho * L_env on it
+    (depth unlimited: nothing else can contribute). The views see only the cube."""
     rho, le = np.array([0.8, 0.5, 0.2]), np.array([1.0, 2.0, 0.5])
     body = ('<shape type="cube"><transform name="to_world"><rotate x="1" y="1" angle="30"/></transform>'
             '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.5, 0.2"/></bsdf></shape>'
             '<emitter type="constant"><rgb name="radiance" value="1, 2, 0.5"/></emitter>')
-    views = [("0, -5, 1", "0, 0, 0", "0, 0, 1"), ("4, 3, -2", "0, 0, 0", "0, 0, 1")]
-    # Each pixel is a mix of cube and background; per-pixel radiance is exact for pure pixels.
-    for img, var in render(scene_xml(body, views=views, max_depth=-1, fov=40), spp=64):
-        on_cube = np.all(np.abs(img - rho * le) < 1e-3 * le + 8 * np.sqrt(var), axis=2)
-        background = np.all(np.abs(img - le) < 1e-6, axis=2)
-        assert on_cube.mean() > 0.2 and background.mean() > 0.2
-        assert (on_cube | background).mean() > 0.85  # the rest are silhouette pixels
-        # Pure cube pixels: the estimate is rho * L_env up to noise.
-        cube = np.all(var < 1e-12, axis=2) & ~background
-        np.testing.assert_allclose(img[cube], np.broadcast_to(rho * le, img[cube].shape), rtol=2e-4)
+    views = [("0, -3, 0.2", "0, 0, 0", "0, 0, 1"), ("2.2, 1.5, -1.2", "0, 0, 0", "0, 0, 1")]
+    out = render(scene_xml(body, views=views, max_depth=-1, fov=15), spp=64)
+    for img, var in out:
+        assert np.all(var > 0), "a pixel missed the cube"
+    zcheck(out, [np.broadcast_to(rho * le, img.shape).copy() for img, _ in out])
 
 
 def test_closed_emitting_box_furnace():
