@@ -1,22 +1,30 @@
-// Area emitter: constant radiance on the front side of its shape.
+// Area emitter (Mitsuba's `area`): radiance, constant or a texture looked up
+// at the surface uv, leaving the front side of its shape.
 #include "../../scene/plugin.h"
 #include "../light.h"
 #include "../shape.h"
+#include "../texture.h"
 
 namespace mvpt {
 
 class AreaLight final : public Light {
 public:
     explicit AreaLight(const Properties &props) {
-        m_radiance = props.get_color("radiance", Color3f(1.f));
-        if (!m_radiance.is_finite() || m_radiance.r < 0 || m_radiance.g < 0 || m_radiance.b < 0)
-            props.fail("radiance", "'radiance' must be finite and non-negative");
+        m_radiance = props.get_texture("radiance", Color3f(1.f));
+        if (m_radiance->is_constant()) {
+            Color3f c = m_radiance->mean();
+            if (!c.is_finite() || c.r < 0 || c.g < 0 || c.b < 0)
+                props.fail("radiance", "'radiance' must be finite and non-negative");
+        }
         m_flags = LightSurface;
     }
 
     void set_shape(const Shape *s) override { m_shape = s; }
     const Shape *shape() const override { return m_shape; }
 
+    // Mitsuba samples a spatially varying radiance texture by the texture's own
+    // density mapped onto the shape; here the shape's solid-angle sampling is
+    // used for both cases (same expectation, different noise).
     std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float) const override {
         auto [ss, pdf] = m_shape->sample_solid_angle(ref, u);
         LightSample ls;
@@ -28,7 +36,7 @@ public:
         ls.d = d / ls.dist;
         ls.pdf = pdf;
         if (dot(ls.n, ls.d) >= 0.f) return {ls, {}}; // back side of a one-sided emitter
-        return {ls, m_radiance / pdf};
+        return {ls, m_radiance->eval(ss.uv) / pdf};
     }
 
     float pdf_li(Point3f ref, const SurfaceInteraction &si, Vec3f d) const override {
@@ -36,12 +44,13 @@ public:
         return m_shape->pdf_solid_angle(ref, si);
     }
 
+    /// Emission towards `w` from the front side (Mitsuba tests the shading normal).
     Spectrum eval(const SurfaceInteraction &si, Vec3f w) const override {
-        return dot(si.n, w) > 0.f ? m_radiance : Spectrum();
+        return dot(si.sh_frame.n, w) > 0.f ? m_radiance->eval(si.uv) : Spectrum();
     }
 
 private:
-    Color3f m_radiance;
+    std::shared_ptr<Texture> m_radiance;
     const Shape *m_shape = nullptr;
 };
 

@@ -1,0 +1,81 @@
+// Piecewise-bilinear 2D density on [0,1]^2: the density of Mitsuba 3's
+// Hierarchical2D (core/distr_2d.h, no conditioning parameters), which the
+// envmap emitter samples. Values sit on a w x h vertex grid; each of the
+// (w-1) x (h-1) patches interpolates its four corners bilinearly.
+#pragma once
+
+#include "distribution.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace mvpt {
+
+/// Inverse CDF of the density proportional to lerp(t, a, b) on [0, 1]
+/// (a, b >= 0): the positive root of (b - a) t^2 / 2 + a t = u (a + b) / 2,
+/// in the cancellation-free form u (a + b) / (a + sqrt(lerp(u, a^2, b^2))).
+inline float sample_linear(float u, float a, float b) {
+    float denom = a + std::sqrt(lerp(u, a * a, b * b));
+    return denom > 0.f ? std::min(u * (a + b) / denom, OneMinusEpsilon) : u;
+}
+
+class BilinearDistribution2D {
+public:
+    BilinearDistribution2D() = default;
+    /// `values`: row-major, `w` x `h` non-negative vertex values (w, h >= 2).
+    BilinearDistribution2D(const std::vector<float> &values, int w, int h) : m_w(w), m_h(h), m_values(values) {
+        const int nx = w - 1, ny = h - 1;
+        m_rows.resize(ny);
+        std::vector<float> row_sums(ny), patch(nx);
+        double total = 0;
+        for (int y = 0; y < ny; ++y) {
+            for (int x = 0; x < nx; ++x)
+                patch[x] = 0.25f * (vertex(x, y) + vertex(x + 1, y) + vertex(x, y + 1) + vertex(x + 1, y + 1));
+            m_rows[y].build(patch);
+            row_sums[y] = float(m_rows[y].sum());
+            total += m_rows[y].sum();
+        }
+        m_marginal.build(row_sums);
+        // Scale so the interpolant integrates to one over the unit square.
+        float scale = total > 0 ? float(double(nx) * double(ny) / total) : 0.f;
+        for (float &v : m_values) v *= scale;
+    }
+
+    /// Point in [0,1)^2 with density `*pdf` w.r.t. area of the unit square.
+    Vec2f sample(Vec2f u, float *pdf) const {
+        float uy, ux;
+        size_t py = m_marginal.sample(u.y, nullptr, &uy);
+        size_t px = m_rows[py].sample(u.x, nullptr, &ux);
+        const int x = int(px), y = int(py);
+        float v00 = vertex(x, y), v10 = vertex(x + 1, y), v01 = vertex(x, y + 1), v11 = vertex(x + 1, y + 1);
+        // Marginal in y is linear between the row sums, then x given y is linear.
+        float fy = sample_linear(uy, v00 + v10, v01 + v11);
+        float fx = sample_linear(ux, lerp(fy, v00, v01), lerp(fy, v10, v11));
+        *pdf = bilerp(v00, v10, v01, v11, fx, fy);
+        return {(float(x) + fx) / float(m_w - 1), (float(y) + fy) / float(m_h - 1)};
+    }
+
+    /// Density at `p` (clamped to the unit square).
+    float pdf(Vec2f p) const {
+        float px = std::clamp(p.x, 0.f, 1.f) * float(m_w - 1), py = std::clamp(p.y, 0.f, 1.f) * float(m_h - 1);
+        int x = std::min(int(px), m_w - 2), y = std::min(int(py), m_h - 2);
+        return bilerp(vertex(x, y), vertex(x + 1, y), vertex(x, y + 1), vertex(x + 1, y + 1), px - float(x), py - float(y));
+    }
+
+    bool empty() const { return m_marginal.size() == 0 || m_marginal.sum() <= 0; }
+
+private:
+    float vertex(int x, int y) const { return m_values[size_t(y) * m_w + x]; }
+    static float bilerp(float v00, float v10, float v01, float v11, float fx, float fy) {
+        return lerp(fy, lerp(fx, v00, v10), lerp(fx, v01, v11));
+    }
+
+    int m_w = 0, m_h = 0;
+    /// Vertex values normalized so that the interpolant is a density.
+    std::vector<float> m_values;
+    std::vector<DiscreteDistribution> m_rows;
+    DiscreteDistribution m_marginal;
+};
+
+} // namespace mvpt

@@ -1,0 +1,161 @@
+// Environment map emitter (Mitsuba's `envmap`): a latitude-longitude image at
+// infinity, looked up bilinearly and importance sampled with a piecewise-
+// bilinear density proportional to luminance x sin(theta).
+//
+// Mapping (Mitsuba 3, emitters/envmap.cpp), in emitter space:
+//   u = atan2(d.x, -d.z) / 2pi, v = acos(d.y) / pi,
+//   d = (sin(phi) sin(theta), cos(theta), -cos(phi) sin(theta)), phi = 2pi u, theta = pi v.
+// Pixel column x sits at u = (x + 1/2) / W (periodic in u); pixel row y sits at
+// v = y / (H - 1), so the first and last rows are the poles.
+#include "../../core/bilinear_distribution.h"
+#include "../../io/image_io.h"
+#include "../../scene/plugin.h"
+#include "../light.h"
+
+#include <cmath>
+
+namespace mvpt {
+
+class EnvironmentMap final : public Light {
+public:
+    EnvironmentMap(const Properties &props, const LoadContext &ctx) {
+        std::string filename = props.get_string("filename");
+        auto path = ctx.resolve(filename, props.loc_of("filename"));
+        ImageRGB img;
+        try {
+            img = read_image(path);
+        } catch (const std::exception &e) {
+            props.fail("filename", "cannot load environment map '" + filename + "': " + e.what());
+        }
+        if (img.width < 2 || img.height < 3)
+            props.fail("filename", "'" + filename + "': the environment map resolution must be at least 2x3 pixels");
+        for (float v : img.rgb)
+            if (!std::isfinite(v)) props.fail("filename", "'" + filename + "' contains non-finite pixel values");
+        m_scale = props.get_float("scale", 1.f);
+        if (!std::isfinite(m_scale)) props.fail("scale", "'scale' must be finite");
+        m_to_world = props.get_transform("to_world");
+        m_to_local = m_to_world.inverse();
+        bool mis_compensation = props.get_bool("mis_compensation", false);
+        m_flags = LightInfinite;
+
+        // One extra column repeats the first, making the lookup periodic in u.
+        m_w = img.width + 1;
+        m_h = img.height;
+        m_texels.resize(size_t(m_w) * m_h);
+        for (int y = 0; y < m_h; ++y)
+            for (int x = 0; x < m_w; ++x) {
+                const float *p = &img.rgb[3 * (size_t(y) * img.width + size_t(x % img.width))];
+                m_texels[size_t(y) * m_w + x] = Color3f(p[0], p[1], p[2]);
+            }
+        build_distribution(mis_compensation);
+    }
+
+    void set_scene_bounds(Point3f center, float radius) override {
+        m_center = center;
+        m_radius = radius;
+    }
+
+    std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float) const override {
+        LightSample ls;
+        float pdf_uv;
+        Vec2f uv = m_distr.sample(u, &pdf_uv);
+        if (!(pdf_uv > 0.f)) return {ls, {}};
+        uv.x += half_texel();
+        float inv_sin_theta;
+        Vec3f d = m_to_world.vector(uv_to_direction(uv, inv_sin_theta));
+        ls.d = d;
+        ls.n = -d;
+        ls.dist = 2.f * std::max(m_radius, norm(ref - m_center));
+        ls.p = ref + d * ls.dist;
+        // Jacobian of the lat-long map: dA_uv = dw / (2 pi^2 sin(theta)).
+        ls.pdf = pdf_uv * inv_sin_theta * (1.f / (2.f * Pi * Pi));
+        return {ls, lookup(uv) / ls.pdf};
+    }
+
+    float pdf_li(Point3f, const SurfaceInteraction &, Vec3f d) const override {
+        Vec3f v = m_to_local.vector(d);
+        Vec2f uv = direction_to_uv(v);
+        uv.x -= half_texel();
+        uv = {uv.x - std::floor(uv.x), uv.y - std::floor(uv.y)};
+        float inv_sin_theta = 1.f / std::sqrt(std::max(v.x * v.x + v.z * v.z, sqr(Epsilon)));
+        return m_distr.pdf(uv) * inv_sin_theta * (1.f / (2.f * Pi * Pi));
+    }
+
+    Spectrum eval_environment(Vec3f d) const override {
+        return lookup(direction_to_uv(m_to_local.vector(d)));
+    }
+
+private:
+    /// Mitsuba's dr::Epsilon<float> (2^-24), the floor on sin(theta).
+    static constexpr float Epsilon = 0x1p-24f;
+
+    float half_texel() const { return 0.5f / float(m_w - 1); }
+
+    static Vec3f uv_to_direction(Vec2f uv, float &inv_sin_theta) {
+        float theta = uv.y * Pi, phi = uv.x * 2.f * Pi;
+        float sin_theta = std::sin(theta), cos_theta = std::cos(theta);
+        inv_sin_theta = 1.f / std::max(sin_theta, Epsilon);
+        return {std::sin(phi) * sin_theta, cos_theta, -std::cos(phi) * sin_theta};
+    }
+
+    static Vec2f direction_to_uv(Vec3f d) {
+        return {std::atan2(d.x, -d.z) * InvTwoPi, safe_acos(d.y) * InvPi};
+    }
+
+    /// Bilinear texel lookup at lat-long coordinates `uv` (wrapped as Mitsuba does).
+    Spectrum lookup(Vec2f uv) const {
+        uv.x -= half_texel();
+        uv = {uv.x - std::floor(uv.x), uv.y - std::floor(uv.y)};
+        float fx = uv.x * float(m_w - 1), fy = uv.y * float(m_h - 1);
+        int x = std::min(int(fx), m_w - 2), y = std::min(int(fy), m_h - 2);
+        float wx = fx - float(x), wy = fy - float(y);
+        const Color3f *row0 = &m_texels[size_t(y) * m_w], *row1 = row0 + m_w;
+        Color3f v0 = row0[x] * (1.f - wx) + row0[x + 1] * wx;
+        Color3f v1 = row1[x] * (1.f - wx) + row1[x + 1] * wx;
+        return (v0 * (1.f - wy) + v1 * wy) * m_scale;
+    }
+
+    /// Luminance x sin(theta) at the vertices, optionally minus the mean
+    /// luminance ["MIS compensation", Karlik et al. 2019].
+    void build_distribution(bool mis_compensation) {
+        std::vector<float> lum(m_texels.size());
+        for (size_t i = 0; i < lum.size(); ++i) lum[i] = m_texels[i].luminance();
+        float offset = 0.f;
+        if (mis_compensation) {
+            double sum = 0;
+            float min_lum = Infinity;
+            for (int y = 0; y < m_h; ++y)
+                for (int x = 0; x < m_w - 1; ++x) {
+                    float l = lum[size_t(y) * m_w + x];
+                    sum += l;
+                    min_lum = std::min(min_lum, l);
+                }
+            offset = float(sum / (double(m_w - 1) * m_h));
+            if (offset - min_lum <= 0.01f * offset) offset = 0.f; // nearly constant map: disable
+        }
+        float theta_scale = Pi / float(m_h - 1);
+        for (int y = 0; y < m_h; ++y) {
+            // sin(pi) rounds to a tiny negative float: clamp so the density stays >= 0.
+            float sin_theta = std::max(std::sin(float(y) * theta_scale), 0.f);
+            for (int x = 0; x < m_w; ++x) {
+                float &l = lum[size_t(y) * m_w + x];
+                l = std::max(l - offset, 0.f) * sin_theta;
+            }
+        }
+        m_distr = BilinearDistribution2D(lum, m_w, m_h);
+    }
+
+    int m_w = 0, m_h = 0;
+    std::vector<Color3f> m_texels;
+    float m_scale = 1.f;
+    Transform m_to_world, m_to_local;
+    BilinearDistribution2D m_distr;
+    Point3f m_center{0.f};
+    float m_radius = 1.f;
+};
+
+MVPT_REGISTER_PLUGIN("emitter", "envmap", [](const Properties &p, const LoadContext &ctx) {
+    return std::make_shared<EnvironmentMap>(p, ctx);
+});
+
+} // namespace mvpt
