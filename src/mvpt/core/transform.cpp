@@ -66,15 +66,16 @@ Transform Transform::scale(Vec3f s) {
 }
 
 Transform Transform::rotate(Vec3f axis, float angle_deg) {
-    double len = std::sqrt(double(axis.x) * axis.x + double(axis.y) * axis.y + double(axis.z) * axis.z);
-    double x = axis.x / len, y = axis.y / len, z = axis.z / len;
+    // Like Mitsuba 3 (drjit's rotate), the axis is used as given: a unit axis gives
+    // a rotation; other lengths give the same (non-rigid) matrix Mitsuba builds.
+    double x = axis.x, y = axis.y, z = axis.z;
     double th = angle_deg * 3.14159265358979323846 / 180.0;
     double c = std::cos(th), s = std::sin(th), t = 1 - c;
     Matrix4 m;
     m.m[0][0] = t * x * x + c;     m.m[0][1] = t * x * y - s * z; m.m[0][2] = t * x * z + s * y;
     m.m[1][0] = t * x * y + s * z; m.m[1][1] = t * y * y + c;     m.m[1][2] = t * y * z - s * x;
     m.m[2][0] = t * x * z - s * y; m.m[2][1] = t * y * z + s * x; m.m[2][2] = t * z * z + c;
-    return {m, m.transpose()};
+    return Transform(m);
 }
 
 Transform Transform::look_at(Vec3f origin, Vec3f target, Vec3f up) {

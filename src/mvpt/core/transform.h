@@ -52,7 +52,7 @@ public:
 
     static Transform translate(Vec3f t);
     static Transform scale(Vec3f s);
-    /// Rotation by `angle_deg` degrees about `axis` (right-handed).
+    /// Rotation by `angle_deg` degrees about a unit `axis` (right-handed).
     static Transform rotate(Vec3f axis, float angle_deg);
     /// Camera-to-world frame looking from `origin` at `target` (Mitsuba's convention:
     /// local +z is the view direction, +x is left, +y is up).

@@ -5,8 +5,6 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
-#include <ImfRgbaFile.h>
-#include <ImfArray.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb_image_write.h>
@@ -78,21 +76,27 @@ ImageRGB read_image(const fs::path &path, bool raw) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext == ".exr") {
+        // Read R, G, B (or a single Y) as 32-bit floats, whatever the stored type.
         try {
-            Imf::RgbaInputFile file(path.c_str());
-            Imath::Box2i dw = file.dataWindow();
+            Imf::InputFile file(path.c_str());
+            Imath::Box2i dw = file.header().dataWindow();
             img.width = dw.max.x - dw.min.x + 1;
             img.height = dw.max.y - dw.min.y + 1;
-            Imf::Array2D<Imf::Rgba> px(img.height, img.width);
-            file.setFrameBuffer(&px[0][0] - dw.min.x - dw.min.y * img.width, 1, img.width);
+            const Imf::ChannelList &cl = file.header().channels();
+            bool rgb = cl.findChannel("R") && cl.findChannel("G") && cl.findChannel("B");
+            if (!rgb && !cl.findChannel("Y")) throw std::runtime_error("no R, G, B or Y channels");
+            size_t n = size_t(img.width) * img.height;
+            img.rgb.assign(3 * n, 0.f);
+            Imf::FrameBuffer fb;
+            char *base = (char *)img.rgb.data() - (size_t(dw.min.x) + size_t(dw.min.y) * img.width) * 3 * sizeof(float);
+            const char *names[3] = {"R", "G", "B"};
+            for (int c = 0; c < (rgb ? 3 : 1); ++c)
+                fb.insert(rgb ? names[c] : "Y", Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 3 * sizeof(float),
+                                                           3 * sizeof(float) * img.width));
+            file.setFrameBuffer(fb);
             file.readPixels(dw.min.y, dw.max.y);
-            img.rgb.resize(size_t(img.width) * img.height * 3);
-            for (int y = 0; y < img.height; ++y)
-                for (int x = 0; x < img.width; ++x) {
-                    const Imf::Rgba &p = px[y][x];
-                    float *o = &img.rgb[3 * (size_t(y) * img.width + x)];
-                    o[0] = p.r; o[1] = p.g; o[2] = p.b;
-                }
+            if (!rgb)
+                for (size_t i = 0; i < n; ++i) img.rgb[3 * i + 1] = img.rgb[3 * i + 2] = img.rgb[3 * i];
         } catch (const std::exception &e) {
             throw std::runtime_error(std::string("cannot read EXR: ") + e.what());
         }

@@ -46,7 +46,8 @@ public:
     /// A point as seen from `ref`; returns it with its solid-angle density at `ref`
     /// (0 when degenerate). The default converts area sampling.
     virtual std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const;
-    /// Density of `sample_solid_angle` for the point `si` on this shape.
+    /// Density of `sample_solid_angle` for the point `si` on this shape (the
+    /// area-to-solid-angle factor uses the shading normal, as Mitsuba does).
     virtual float pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const;
 
     std::shared_ptr<Bsdf> bsdf;
@@ -68,7 +69,7 @@ inline std::pair<ShapeSample, float> Shape::sample_solid_angle(Point3f ref, Vec2
 }
 
 inline float Shape::pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const {
-    return area_to_solid_angle(1.f / area(), ref, si.p, si.n);
+    return area_to_solid_angle(1.f / area(), ref, si.p, si.sh_frame.n);
 }
 
 } // namespace mvpt

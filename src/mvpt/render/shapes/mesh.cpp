@@ -114,6 +114,11 @@ ShapeSample TriangleMesh::sample_area(Vec2f u) const {
     ShapeSample s;
     s.p = p0 * (1.f - b.x - b.y) + p1 * b.x + p2 * b.y;
     Normal3f n = normalize(cross(p1 - p0, p2 - p0));
+    if (!m_data.normals.empty()) {
+        // Smooth meshes: the interpolated normal, as Mitsuba uses for emitter sampling.
+        Normal3f ns = m_data.normals[i0] * (1.f - b.x - b.y) + m_data.normals[i1] * b.x + m_data.normals[i2] * b.y;
+        if (squared_norm(ns) > 0.f) n = normalize(ns);
+    }
     s.n = m_flip_normals ? -n : n;
     if (!m_data.uvs.empty())
         s.uv = m_data.uvs[i0] * (1.f - b.x - b.y) + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
