@@ -45,12 +45,13 @@ struct BsdfProbe {
         si.sh_frame = Frame();
     }
 
-    /// n samples for direction wi: (wo, weight, pdf, sampled_type) arrays.
-    nb::tuple sample(float wx, float wy, float wz, size_t n, uint32_t seed) {
+    /// n samples for direction wi: (wo, weight, pdf, sampled_type) arrays (importance: adjoint transport mode).
+    nb::tuple sample(float wx, float wy, float wz, size_t n, uint32_t seed, bool importance) {
         Vec3f wi(wx, wy, wz);
         OutArray wo = out_array(n, 3), w = out_array(n, 3), pdf = out_array(n, 1), type = out_array(n, 1);
         Sampler s(SamplerKind::Independent, seed);
         BsdfContext ctx;
+        if (importance) ctx.mode = TransportMode::Importance;
         for (size_t i = 0; i < n; ++i) {
             s.start(0, 0, 0, uint32_t(i));
             float u1 = s.next_1d();
@@ -115,7 +116,7 @@ void bind_probes(nb::module_ &m) {
     nb::class_<BsdfProbe>(m, "BsdfProbe")
         .def(nb::init<const std::string &, float, float, const std::string &>(), "xml"_a, "u"_a = 0.5f, "v"_a = 0.5f,
              "base_dir"_a = ".")
-        .def("sample", &BsdfProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0)
+        .def("sample", &BsdfProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0, "importance"_a = false)
         .def("sample_u", &BsdfProbe::sample_u, "wx"_a, "wy"_a, "wz"_a, "u"_a)
         .def("roughness", &BsdfProbe::roughness, "wx"_a = 0.f, "wy"_a = 0.f, "wz"_a = 1.f)
         .def("eval", &BsdfProbe::eval, "wx"_a, "wy"_a, "wz"_a, "wo"_a)

@@ -60,7 +60,10 @@ public:
         if (distr.sample_visible()) {
             weight *= distr.smith_g1(bs.wo, m);
         } else {
-            // Sampled from the widened distribution: the weight is f cos / pdf in full.
+            // Sampled from the widened distribution: the weight is f cos / pdf in full
+            // (Mitsuba's G-based shortcut would assume the unwidened one). Shadowed samples,
+            // and those that left on the wrong side for their lobe, have no weight.
+            if (distr.G(wi, bs.wo, m) == 0.f) return {bs, {}};
             float p = pdf(ctx, si, wi, bs.wo);
             if (!(p > 0.f)) return {bs, {}};
             return {bs, eval(ctx, si, wi, bs.wo) / p};
