@@ -72,6 +72,8 @@ DELTA_ONLY = {  # sample() only
     "conductor-Au": '<bsdf type="conductor"><string name="material" value="Au"/></bsdf>',
     "conductor-etak": '<bsdf type="conductor"><float name="eta" value="1.5"/><float name="k" value="2"/>'
                       '<rgb name="specular_reflectance" value="0.5, 0.7, 0.9"/></bsdf>',
+    "conductor-spectrum": '<bsdf type="conductor"><spectrum name="eta" value="0.789"/>'
+                          '<spectrum name="k" value="6.15"/></bsdf>',
     "dielectric": '<bsdf type="dielectric"/>',
     "dielectric-named": '<bsdf type="dielectric"><string name="int_ior" value="diamond"/>'
                         '<string name="ext_ior" value="water"/><rgb name="specular_transmittance" value="0.3, 0.6, 0.9"/></bsdf>',
