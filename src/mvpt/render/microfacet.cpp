@@ -132,7 +132,7 @@ Vec3f MicrofacetDistribution::sample(Vec3f wi, Vec2f u, float *pdf_out) const {
         else tan2 = alpha2 * u.x / std::max(1.f - u.x, 1e-12f);
         float cos_t = 1.f / std::sqrt(1.f + tan2), sin_t = safe_sqrt(1.f - cos_t * cos_t);
         Vec3f m(sin_t * cos_phi, sin_t * sin_phi, cos_t);
-        *pdf_out = eval(m) * cos_t;
+        if (pdf_out) *pdf_out = eval(m) * cos_t;
         return m;
     }
     // Stretch wi to the alpha = 1 configuration, sample slopes, unstretch [Heitz and d'Eon 2014].
@@ -145,7 +145,7 @@ Vec3f MicrofacetDistribution::sample(Vec3f wi, Vec2f u, float *pdf_out) const {
     slope.y *= m_alpha_v;
     Vec3f m = normalize(Vec3f(-slope.x, -slope.y, 1.f));
     if (!all_finite(m)) m = Vec3f(0.f, 0.f, 1.f);
-    *pdf_out = pdf(wi, m);
+    if (pdf_out) *pdf_out = pdf(wi, m);
     return m;
 }
 

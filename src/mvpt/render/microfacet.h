@@ -32,7 +32,7 @@ public:
     float eval(Vec3f m) const;
     /// Density of `sample` producing m (given wi when sampling visible normals).
     float pdf(Vec3f wi, Vec3f m) const;
-    /// Sample a microfacet normal; returns m and writes its density.
+    /// Sample a microfacet normal; returns m and writes its density (unless `pdf` is null).
     Vec3f sample(Vec3f wi, Vec2f u, float *pdf) const;
     /// Smith's separable shadowing-masking G1(v, m).
     float smith_g1(Vec3f v, Vec3f m) const;

@@ -11,7 +11,12 @@
 #include "../microfacet.h"
 #include "../texture.h"
 
+#include <tbb/parallel_for.h>
+
 #include <array>
+#include <map>
+#include <mutex>
+#include <tuple>
 
 namespace mvpt {
 
@@ -20,19 +25,30 @@ namespace {
 /// Resolution of the tabulated external transmittance over cos(theta) (Mitsuba's value).
 constexpr int TransmittanceRes = 64;
 
+/// Gauss-Legendre rule of `n` points, computed once per size.
+const std::pair<std::vector<float>, std::vector<float>> &gauss_legendre_cached(int n) {
+    static std::mutex mutex;
+    static std::map<int, std::pair<std::vector<float>, std::vector<float>>> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = cache.find(n);
+    if (it == cache.end()) {
+        it = cache.emplace(n, std::pair<std::vector<float>, std::vector<float>>{}).first;
+        gauss_legendre(n, it->second.first, it->second.second);
+    }
+    return it->second;
+}
+
 /// Albedo of microfacet reflection (`transmission` false) or transmission
 /// through a dielectric with relative IOR `eta`, seen from `wi`: the visible-normal
 /// estimator G1(wo, m) F (or 1 - F) integrated over the unit square with a
 /// tensor Gauss-Legendre rule (32^2 nodes for eta > 1, 128^2 otherwise), as Mitsuba.
 float microfacet_albedo(const MicrofacetDistribution &distr, Vec3f wi, float eta, bool transmission) {
-    std::vector<float> nodes, weights;
-    gauss_legendre(eta > 1.f ? 32 : 128, nodes, weights);
+    const auto &[nodes, weights] = gauss_legendre_cached(eta > 1.f ? 32 : 128);
     double sum = 0.0;
     for (size_t j = 0; j < nodes.size(); ++j)
         for (size_t i = 0; i < nodes.size(); ++i) {
             Vec2f u(0.5f * nodes[i] + 0.5f, 0.5f * nodes[j] + 0.5f);
-            float pdf_m;
-            Vec3f m = distr.sample(wi, u, &pdf_m);
+            Vec3f m = distr.sample(wi, u, nullptr);
             FresnelDielectric fr = fresnel_dielectric(dot(wi, m), eta);
             float value;
             if (transmission) {
@@ -45,6 +61,39 @@ float microfacet_albedo(const MicrofacetDistribution &distr, Vec3f wi, float eta
             sum += double(value) * weights[i] * weights[j] * 0.25;
         }
     return float(sum);
+}
+
+/// Tabulated coating of a rough plastic: transmittance t(mu) into the base and the
+/// base's internal diffuse reflectance, for one (distribution, alpha, eta).
+struct CoatingTables {
+    std::array<float, TransmittanceRes> external_transmittance;
+    float internal_reflectance;
+};
+
+/// Build (or fetch from a process-wide cache: scenes repeat materials) the coating
+/// tables, always with visible-normal sampling as Mitsuba does.
+std::shared_ptr<const CoatingTables> coating_tables(MicrofacetType type, float alpha, float eta) {
+    static std::mutex mutex;
+    static std::map<std::tuple<int, float, float>, std::shared_ptr<const CoatingTables>> cache;
+    auto key = std::make_tuple(int(type), alpha, eta);
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (auto it = cache.find(key); it != cache.end()) return it->second;
+    }
+    auto t = std::make_shared<CoatingTables>();
+    MicrofacetDistribution distr(type, alpha, alpha, true);
+    std::array<float, TransmittanceRes> internal_terms;
+    tbb::parallel_for(0, TransmittanceRes, [&](int i) {
+        float mu = std::max(1e-6f, float(i) / float(TransmittanceRes - 1));
+        Vec3f wi(std::sqrt(1.f - mu * mu), 0.f, mu);
+        t->external_transmittance[i] = microfacet_albedo(distr, wi, eta, true);
+        internal_terms[i] = microfacet_albedo(distr, wi, 1.f / eta, false) * mu;
+    });
+    double internal = 0.0;
+    for (float v : internal_terms) internal += v;
+    t->internal_reflectance = float(internal / TransmittanceRes) * 2.f;
+    std::lock_guard<std::mutex> lock(mutex);
+    return cache.emplace(key, t).first->second;
 }
 
 } // namespace
@@ -67,17 +116,7 @@ public:
         float s_mean = m_specular_reflectance ? m_specular_reflectance->mean().mean() : 1.f;
         m_specular_sampling_weight = s_mean / (d_mean + s_mean);
 
-        // Tabulate the coating's transmittance t(mu) and its internal diffuse reflectance,
-        // always with visible-normal sampling as in Mitsuba.
-        MicrofacetDistribution distr(m_type, m_alpha, m_alpha, true);
-        double internal = 0.0;
-        for (int i = 0; i < TransmittanceRes; ++i) {
-            float mu = std::max(1e-6f, float(i) / float(TransmittanceRes - 1));
-            Vec3f wi(std::sqrt(1.f - mu * mu), 0.f, mu);
-            m_external_transmittance[i] = microfacet_albedo(distr, wi, m_eta, true);
-            internal += double(microfacet_albedo(distr, wi, 1.f / m_eta, false)) * mu;
-        }
-        m_internal_reflectance = float(internal / TransmittanceRes) * 2.f;
+        m_coating = coating_tables(m_type, m_alpha, m_eta);
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
@@ -86,8 +125,7 @@ public:
         float cos_theta_i = Frame::cos_theta(wi);
         if (cos_theta_i <= 0.f) return {bs, {}};
         if (u1 < specular_probability(cos_theta_i)) {
-            float pdf_m;
-            Vec3f m = distribution().sample(wi, u2, &pdf_m);
+            Vec3f m = distribution().sample(wi, u2, nullptr);
             bs.wo = reflect(wi, m);
             bs.sampled_type = BsdfGlossyReflection;
         } else {
@@ -110,8 +148,8 @@ public:
 
         float t_i = transmittance(cos_theta_i), t_o = transmittance(cos_theta_o);
         Spectrum diff = m_diffuse_reflectance->eval(si.uv);
-        Spectrum denom = m_nonlinear ? Spectrum(1.f) - diff * m_internal_reflectance
-                                     : Spectrum(1.f - m_internal_reflectance);
+        Spectrum denom = m_nonlinear ? Spectrum(1.f) - diff * m_coating->internal_reflectance
+                                     : Spectrum(1.f - m_coating->internal_reflectance);
         return value + diff / denom * (InvPi * m_inv_eta_2 * cos_theta_o * t_i * t_o);
     }
 
@@ -162,13 +200,14 @@ private:
     float transmittance(float cos_theta) const {
         float x = cos_theta * float(TransmittanceRes - 1);
         int idx = std::min(int(x), TransmittanceRes - 2);
-        return lerp(x - float(idx), m_external_transmittance[idx], m_external_transmittance[idx + 1]);
+        const auto &t = m_coating->external_transmittance;
+        return lerp(x - float(idx), t[idx], t[idx + 1]);
     }
 
     MicrofacetType m_type;
-    float m_alpha, m_eta, m_inv_eta_2, m_specular_sampling_weight, m_internal_reflectance;
+    float m_alpha, m_eta, m_inv_eta_2, m_specular_sampling_weight;
     bool m_sample_visible, m_nonlinear;
-    std::array<float, TransmittanceRes> m_external_transmittance;
+    std::shared_ptr<const CoatingTables> m_coating;
     std::shared_ptr<Texture> m_diffuse_reflectance, m_specular_reflectance;
 };
 
