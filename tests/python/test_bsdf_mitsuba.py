@@ -16,6 +16,8 @@ Known, documented differences (asserted as such where they matter):
   grazing angles; a handful of samples exactly at a lobe-selection boundary may
   flip, so up to 0.5% of the samples may differ.
 """
+import zlib
+
 import numpy as np
 import pytest
 
@@ -104,10 +106,11 @@ def _close(a, b, rtol=RTOL, atol=ATOL):
 def test_eval_pdf_match_mitsuba(name):
     xml = SMOOTH[name]
     ours, theirs = probe(xml), _mitsuba(xml)
-    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    rng = np.random.default_rng(zlib.crc32(name.encode()))
     ctx = mi.BSDFContext()
-    n_wi, n_wo = 12, 60
-    wis = random_directions(n_wi, rng)
+    n_wo = 60
+    # Mostly incidence from above (where one-sided BSDFs are non-zero), some from anywhere.
+    wis = np.concatenate([random_directions(8, rng, upper_only=True), random_directions(4, rng)])
     checked = nonzero = 0
     for wi in wis:
         wos = random_directions(n_wo, rng)
@@ -130,7 +133,7 @@ def test_eval_pdf_match_mitsuba(name):
 
 def _sample_pairs(name, xml, n=400):
     ours, theirs = probe(xml), _mitsuba(xml)
-    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    rng = np.random.default_rng(zlib.crc32(name.encode()))
     below = any(k in xml for k in TWO_SIDED_KINDS)
     wis = [direction(t, p, below=b) for t, p, b in [(15, 20, False), (55, 140, False), (78, -60, False)]
            + ([(35, 80, True), (70, 250, True)] if below else [])]
