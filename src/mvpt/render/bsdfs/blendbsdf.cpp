@@ -27,7 +27,7 @@ public:
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
                                            Vec2f u2) const override {
         float w = blend_weight(si);
-        int sel = u1 > w ? 0 : 1;
+        int sel = (u1 > w || w == 0.f) ? 0 : 1; // Mitsuba's rule; never pick a lobe of weight 0
         float w_sel = sel == 0 ? 1.f - w : w, w_other = 1.f - w_sel;
         float u1_nested = sel == 0 ? (u1 - w) / (1.f - w) : u1 / w;
         auto [bs, weight] = m_bsdf[sel]->sample(ctx, si, wi, u1_nested, u2);
