@@ -45,12 +45,13 @@ struct BsdfProbe {
         si.sh_frame = Frame();
     }
 
-    /// n samples for direction wi: (wo, weight, pdf, sampled_type) arrays.
-    nb::tuple sample(float wx, float wy, float wz, size_t n, uint32_t seed) {
+    /// n samples for direction wi: (wo, weight, pdf, sampled_type) arrays (importance: adjoint transport mode).
+    nb::tuple sample(float wx, float wy, float wz, size_t n, uint32_t seed, bool importance) {
         Vec3f wi(wx, wy, wz);
         OutArray wo = out_array(n, 3), w = out_array(n, 3), pdf = out_array(n, 1), type = out_array(n, 1);
         Sampler s(SamplerKind::Independent, seed);
         BsdfContext ctx;
+        if (importance) ctx.mode = TransportMode::Importance;
         for (size_t i = 0; i < n; ++i) {
             s.start(0, 0, 0, uint32_t(i));
             float u1 = s.next_1d();
@@ -64,6 +65,30 @@ struct BsdfProbe {
             type.data()[i] = float(bs.sampled_type);
         }
         return nb::make_tuple(wo, w, pdf, type);
+    }
+
+    /// Samples with given random numbers u (n, 3) = (u1, u2.x, u2.y): (wo, weight, pdf, sampled_type).
+    nb::tuple sample_u(float wx, float wy, float wz, Vec3Array u) {
+        size_t n = u.shape(0);
+        Vec3f wi(wx, wy, wz);
+        OutArray wo = out_array(n, 3), w = out_array(n, 3), pdf = out_array(n, 1), type = out_array(n, 1);
+        BsdfContext ctx;
+        for (size_t i = 0; i < n; ++i) {
+            auto [bs, weight] = bsdf->sample(ctx, si, wi, u(i, 0), Vec2f(u(i, 1), u(i, 2)));
+            for (int c = 0; c < 3; ++c) {
+                wo.data()[3 * i + c] = bs.wo[c];
+                w.data()[3 * i + c] = weight[c];
+            }
+            pdf.data()[i] = bs.pdf;
+            type.data()[i] = float(bs.sampled_type);
+        }
+        return nb::make_tuple(wo, w, pdf, type);
+    }
+
+    /// Bsdf::roughness at the probe's uv, seen from direction wi.
+    float roughness(float wx, float wy, float wz) {
+        si.wi = Vec3f(wx, wy, wz);
+        return bsdf->roughness(si);
     }
 
     OutArray eval(float wx, float wy, float wz, Vec3Array wo) {
@@ -91,8 +116,22 @@ void bind_probes(nb::module_ &m) {
     nb::class_<BsdfProbe>(m, "BsdfProbe")
         .def(nb::init<const std::string &, float, float, const std::string &>(), "xml"_a, "u"_a = 0.5f, "v"_a = 0.5f,
              "base_dir"_a = ".")
-        .def("sample", &BsdfProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0)
+        .def("sample", &BsdfProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0, "importance"_a = false)
+        .def("sample_u", &BsdfProbe::sample_u, "wx"_a, "wy"_a, "wz"_a, "u"_a)
+        .def("roughness", &BsdfProbe::roughness, "wx"_a = 0.f, "wy"_a = 0.f, "wz"_a = 1.f)
         .def("eval", &BsdfProbe::eval, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
         .def("pdf", &BsdfProbe::pdf, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
-        .def_prop_ro("flags", [](const BsdfProbe &p) { return p.bsdf->flags(); });
+        .def_prop_ro("flags", [](const BsdfProbe &p) { return p.bsdf->flags(); })
+        .def_prop_ro_static("flag_values", [](nb::handle) {
+            nb::dict d;
+            d["null"] = uint32_t(BsdfNull);
+            d["diffuse_reflection"] = uint32_t(BsdfDiffuseReflection);
+            d["diffuse_transmission"] = uint32_t(BsdfDiffuseTransmission);
+            d["glossy_reflection"] = uint32_t(BsdfGlossyReflection);
+            d["glossy_transmission"] = uint32_t(BsdfGlossyTransmission);
+            d["delta_reflection"] = uint32_t(BsdfDeltaReflection);
+            d["delta_transmission"] = uint32_t(BsdfDeltaTransmission);
+            d["delta"] = uint32_t(BsdfDelta);
+            return d;
+        });
 }

@@ -66,8 +66,14 @@ inline Vec3f refract(Vec3f wi, Vec3f m, float cos_theta_t, float eta_ti) {
 /// Refraction about the local +z axis.
 inline Vec3f refract(Vec3f wi, float cos_theta_t, float eta_ti) { return {-eta_ti * wi.x, -eta_ti * wi.y, cos_theta_t}; }
 
-/// Diffuse Fresnel reflectance: the cosine-weighted hemispherical average of
-/// F for relative IOR `eta`, by numerical integration (used by plastic).
-float fresnel_diffuse_reflectance(float eta);
+/// Diffuse Fresnel reflectance F_dr(eta): the cosine-weighted hemispherical
+/// average of F, by the same fits Mitsuba 3 uses: Egan and Hilgeman (1973) for
+/// eta < 1, d'Eon and Irving (2011) otherwise (max. rel. error ~0.1-0.6%).
+inline float fresnel_diffuse_reflectance(float eta) {
+    float inv_eta = 1.f / eta;
+    if (eta < 1.f) return 0.0636f * inv_eta + eta * (eta * -1.4399f + 0.7099f) + 0.6681f;
+    float x = inv_eta; // polynomial in 1/eta, Horner form
+    return 0.919317f + x * (-3.4793f + x * (6.75335f + x * (-7.80989f + x * (4.98554f + x * -1.36881f))));
+}
 
 } // namespace mvpt

@@ -1,6 +1,6 @@
 #include "microfacet.h"
 
-#include "fresnel.h"
+#include "../core/warp.h"
 
 #include <cmath>
 
@@ -46,7 +46,8 @@ float MicrofacetDistribution::eval(Vec3f m) const {
         r = std::exp(-e) / (Pi * m_alpha_u * m_alpha_v * cos2 * cos2);
     else
         r = 1.f / (Pi * m_alpha_u * m_alpha_v * cos2 * cos2 * (1.f + e) * (1.f + e));
-    return (r * cos2 > 1e-20f) ? r : 0.f;
+    // As Mitsuba: drop negligible values to avoid numerical trouble downstream.
+    return (r * m.z > 1e-20f) ? r : 0.f;
 }
 
 float MicrofacetDistribution::project_roughness_sqr(Vec3f v) const {
@@ -79,68 +80,59 @@ float MicrofacetDistribution::pdf(Vec3f wi, Vec3f m) const {
 
 Vec2f MicrofacetDistribution::sample_visible_11(float cos_theta_i, Vec2f u) const {
     if (m_type == MicrofacetType::GGX) {
-        // Slopes of the visible GGX distribution for alpha = 1 [Heitz and d'Eon 2014, appendix].
-        if (cos_theta_i > 0.99999f) {
-            float r = std::sqrt(u.x / std::max(1.f - u.x, 1e-7f)), phi = 2.f * Pi * u.y;
-            return {r * std::cos(phi), r * std::sin(phi)};
-        }
-        float sin_i = safe_sqrt(1.f - cos_theta_i * cos_theta_i), tan_i = sin_i / cos_theta_i;
-        float a = 1.f / tan_i, g1 = 2.f / (1.f + safe_sqrt(1.f + 1.f / (a * a)));
-        float A = 2.f * u.x / g1 - 1.f;
-        float tmp = 1.f / (A * A - 1.f);
-        if (std::abs(A * A - 1.f) < 1e-7f) tmp = 1e7f;
-        float B = tan_i, D = safe_sqrt(B * B * tmp * tmp - (A * A - B * B) * tmp);
-        float sx1 = B * tmp - D, sx2 = B * tmp + D;
-        float sx = (A < 0.f || sx2 > 1.f / tan_i) ? sx1 : sx2;
-        float s, uy;
-        if (u.y > 0.5f) { s = 1.f; uy = 2.f * (u.y - 0.5f); }
-        else { s = -1.f; uy = 2.f * (0.5f - u.y); }
-        float z = (uy * (uy * (uy * 0.27385f - 0.73369f) + 0.46341f)) /
-                  (uy * (uy * (uy * 0.093073f + 0.309420f) - 1.f) + 0.597999f);
-        float sy = s * z * std::sqrt(1.f + sx * sx);
-        return {sx, sy};
+        // Exact visible-normal sampling of the alpha = 1 GGX distribution by projecting a
+        // disk sample onto the visible hemisphere [Heitz 2018, "A Simpler and Exact Sampling
+        // Routine for the GGX Distribution of Visible Normals"], written in slope space.
+        Vec2f p = warp::square_to_uniform_disk_concentric(u);
+        float s = 0.5f * (1.f + cos_theta_i);
+        p.y = lerp(s, safe_sqrt(1.f - p.x * p.x), p.y);
+        float z = safe_sqrt(1.f - p.x * p.x - p.y * p.y);
+        float sin_theta_i = safe_sqrt(1.f - cos_theta_i * cos_theta_i);
+        float inv_norm = 1.f / (sin_theta_i * p.y + cos_theta_i * z);
+        return {(cos_theta_i * p.y - sin_theta_i * z) * inv_norm, p.x * inv_norm};
     }
-    // Beckmann: invert the CDF of visible slopes by Newton-bisection [Jakob 2014, Mitsuba].
-    float tan_i = safe_sqrt(1.f - cos_theta_i * cos_theta_i) / cos_theta_i, cot_i = 1.f / tan_i;
+    // Beckmann: numerical inversion of the CDF of visible x-slopes in the erf() domain,
+    // started from the analytic solution for grazing incidence and refined by three
+    // Newton steps [Jakob 2014, "An Improved Visible Normal Sampling Routine for the
+    // Beckmann Distribution"]; the y-slope is an independent Gaussian.
     constexpr float InvSqrtPi = 0.56418958354775628695f;
-    float a = -1.f, c = std::erf(cot_i);
-    float ux = std::max(u.x, 1e-6f);
-    float theta_i = safe_acos(cos_theta_i);
-    float fit = 1.f + theta_i * (-0.876f + theta_i * (0.4265f - 0.0594f * theta_i));
-    float b = c - (1.f + c) * std::pow(1.f - ux, fit);
-    float norm = 1.f / (1.f + c + InvSqrtPi * tan_i * std::exp(-cot_i * cot_i));
-    for (int it = 0; it < 10; ++it) {
-        if (!(b >= a && b <= c)) b = 0.5f * (a + c);
-        float ie = erfinv(b);
-        float value = norm * (1.f + b + InvSqrtPi * tan_i * std::exp(-ie * ie)) - ux;
-        float deriv = norm * (1.f - ie * tan_i);
-        if (std::abs(value) < 1e-5f) break;
-        if (value > 0.f) c = b;
-        else a = b;
-        b -= value / deriv;
+    float tan_theta_i = safe_sqrt(1.f - cos_theta_i * cos_theta_i) / cos_theta_i;
+    float cot_theta_i = 1.f / tan_theta_i;
+    float max_val = std::erf(cot_theta_i);
+    u.x = std::clamp(u.x, 1e-6f, 1.f - 1e-6f);
+    u.y = std::clamp(u.y, 1e-6f, 1.f - 1e-6f);
+    float x = max_val - (max_val + 1.f) * std::erf(std::sqrt(-std::log(u.x)));
+    float target = u.x * (1.f + max_val + InvSqrtPi * tan_theta_i * std::exp(-cot_theta_i * cot_theta_i));
+    for (int it = 0; it < 3; ++it) {
+        float slope = erfinv(x);
+        float value = 1.f + x + InvSqrtPi * tan_theta_i * std::exp(-slope * slope) - target;
+        float derivative = 1.f - slope * tan_theta_i;
+        x -= value / derivative;
     }
-    return {erfinv(b), erfinv(2.f * std::max(u.y, 1e-6f) - 1.f)};
+    return {erfinv(x), erfinv(2.f * u.y - 1.f)};
 }
 
 Vec3f MicrofacetDistribution::sample(Vec3f wi, Vec2f u, float *pdf_out) const {
     if (!m_sample_visible) {
         // Sample D(m) cos(theta_m) directly.
-        float phi, alpha2, tan2;
+        float sin_phi, cos_phi, alpha2, tan2;
         if (m_alpha_u == m_alpha_v) {
-            phi = 2.f * Pi * u.y;
+            float phi = 2.f * Pi * u.y;
+            cos_phi = std::cos(phi);
+            sin_phi = std::sin(phi);
             alpha2 = m_alpha_u * m_alpha_u;
         } else {
-            float r = m_alpha_v / m_alpha_u;
-            phi = std::atan(r * std::tan(2.f * Pi * u.y + 0.5f * Pi));
-            if (u.y > 0.5f) phi += Pi;
-            float c = std::cos(phi), s = std::sin(phi);
-            alpha2 = 1.f / (c * c / (m_alpha_u * m_alpha_u) + s * s / (m_alpha_v * m_alpha_v));
+            // Anisotropic azimuth: tan(phi) = (alpha_v / alpha_u) tan(2 pi u) [Walter et al. 2007].
+            float t = (m_alpha_v / m_alpha_u) * std::tan(2.f * Pi * u.y);
+            cos_phi = std::copysign(1.f / std::sqrt(t * t + 1.f), std::abs(u.y - 0.5f) - 0.25f);
+            sin_phi = cos_phi * t;
+            alpha2 = 1.f / (sqr(cos_phi / m_alpha_u) + sqr(sin_phi / m_alpha_v));
         }
         if (m_type == MicrofacetType::Beckmann) tan2 = -alpha2 * std::log(std::max(1.f - u.x, 1e-12f));
         else tan2 = alpha2 * u.x / std::max(1.f - u.x, 1e-12f);
         float cos_t = 1.f / std::sqrt(1.f + tan2), sin_t = safe_sqrt(1.f - cos_t * cos_t);
-        Vec3f m(sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t);
-        *pdf_out = eval(m) * cos_t;
+        Vec3f m(sin_t * cos_phi, sin_t * sin_phi, cos_t);
+        if (pdf_out) *pdf_out = eval(m) * cos_t;
         return m;
     }
     // Stretch wi to the alpha = 1 configuration, sample slopes, unstretch [Heitz and d'Eon 2014].
@@ -153,19 +145,8 @@ Vec3f MicrofacetDistribution::sample(Vec3f wi, Vec2f u, float *pdf_out) const {
     slope.y *= m_alpha_v;
     Vec3f m = normalize(Vec3f(-slope.x, -slope.y, 1.f));
     if (!all_finite(m)) m = Vec3f(0.f, 0.f, 1.f);
-    *pdf_out = pdf(wi, m);
+    if (pdf_out) *pdf_out = pdf(wi, m);
     return m;
-}
-
-float fresnel_diffuse_reflectance(float eta) {
-    // Integrate 2 cos(theta) F(cos theta) over [0, 1] (midpoint rule, fine grid).
-    const int n = 4096;
-    double sum = 0;
-    for (int i = 0; i < n; ++i) {
-        float c = (i + 0.5f) / n;
-        sum += 2.0 * c * fresnel_dielectric(c, eta).F;
-    }
-    return float(sum / n);
 }
 
 } // namespace mvpt

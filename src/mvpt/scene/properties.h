@@ -45,6 +45,11 @@ public:
 
     void set(const std::string &name, Value v, const FileLoc &loc, const std::string &tag);
     bool has(const std::string &name) const { return m_values.count(name) != 0; }
+    /// True when parameter `name` was given as a <string> (e.g. a named IOR instead of a float).
+    bool is_string(const std::string &name) const {
+        auto it = m_values.find(name);
+        return it != m_values.end() && std::holds_alternative<std::string>(it->second.value);
+    }
     /// Location of parameter `name`, or of the object itself when it is absent.
     const FileLoc &loc_of(const std::string &name) const;
 

@@ -1,0 +1,79 @@
+// Normalised modified Phong BRDF plus a Lambertian term (an mvpt extension;
+// Mitsuba 3 has no `phong`): f = kd / pi + ks (e + 2) / (2 pi) cos^e(alpha),
+// alpha the angle between wo and the mirror direction of wi [Lafortune and
+// Willems 1994, "Using the modified Phong reflectance model for physically
+// based rendering"]. One-sided.
+#include "../../scene/plugin.h"
+#include "../../core/warp.h"
+#include "../bsdf.h"
+#include "../texture.h"
+
+namespace mvpt {
+
+class PhongBsdf final : public Bsdf {
+public:
+    explicit PhongBsdf(const Properties &props) {
+        m_exponent = props.get_texture("exponent", 30.f);
+        m_specular_reflectance = props.get_texture("specular_reflectance", 0.2f);
+        m_diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5f);
+        m_flags = BsdfGlossyReflection | BsdfDiffuseReflection;
+    }
+
+    std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
+                                           Vec2f u2) const override {
+        BsdfSample bs;
+        if (Frame::cos_theta(wi) <= 0.f) return {bs, {}};
+        if (u1 < specular_probability(si)) {
+            // cos^e lobe around the mirror direction: cos(alpha) = u^(1/(e+1)).
+            float e = exponent(si);
+            float cos_a = std::pow(u2.x, 1.f / (e + 1.f)), sin_a = safe_sqrt(1.f - cos_a * cos_a);
+            float phi = 2.f * Pi * u2.y;
+            Frame lobe(Vec3f(-wi.x, -wi.y, wi.z));
+            bs.wo = lobe.to_world(Vec3f(sin_a * std::cos(phi), sin_a * std::sin(phi), cos_a));
+            bs.sampled_type = BsdfGlossyReflection;
+        } else {
+            bs.wo = warp::square_to_cosine_hemisphere(u2);
+            bs.sampled_type = BsdfDiffuseReflection;
+        }
+        bs.pdf = pdf(ctx, si, wi, bs.wo);
+        if (!(bs.pdf > 0.f)) return {bs, {}};
+        return {bs, eval(ctx, si, wi, bs.wo) / bs.pdf};
+    }
+
+    Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        float cos_i = Frame::cos_theta(wi), cos_o = Frame::cos_theta(wo);
+        if (cos_i <= 0.f || cos_o <= 0.f) return {};
+        float e = exponent(si);
+        float cos_a = std::max(0.f, dot(wo, Vec3f(-wi.x, -wi.y, wi.z)));
+        float spec = (e + 2.f) * InvTwoPi * std::pow(cos_a, e);
+        return (m_diffuse_reflectance->eval(si.uv) * InvPi + m_specular_reflectance->eval(si.uv) * spec) * cos_o;
+    }
+
+    /// Mixture of the lobe densities; zero below the surface, where `sample` returns no weight.
+    float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        if (Frame::cos_theta(wi) <= 0.f || Frame::cos_theta(wo) <= 0.f) return 0.f;
+        float p_spec = specular_probability(si), e = exponent(si);
+        float cos_a = std::max(0.f, dot(wo, Vec3f(-wi.x, -wi.y, wi.z)));
+        float pdf_spec = (e + 1.f) * InvTwoPi * std::pow(cos_a, e);
+        return p_spec * pdf_spec + (1.f - p_spec) * warp::square_to_cosine_hemisphere_pdf(wo);
+    }
+
+    /// GGX-equivalent roughness of the lobe: alpha = sqrt(2 / (e + 2)).
+    float roughness(const SurfaceInteraction &si) const override { return std::sqrt(2.f / (exponent(si) + 2.f)); }
+
+private:
+    float exponent(const SurfaceInteraction &si) const { return std::max(m_exponent->eval_1(si.uv), 0.f); }
+    /// Lobe choice in proportion to the mean (over channels) specular and diffuse reflectances at `si`.
+    float specular_probability(const SurfaceInteraction &si) const {
+        float ks = m_specular_reflectance->eval(si.uv).mean(), kd = m_diffuse_reflectance->eval(si.uv).mean();
+        return ks + kd > 0.f ? ks / (ks + kd) : 0.5f;
+    }
+
+    std::shared_ptr<Texture> m_exponent, m_specular_reflectance, m_diffuse_reflectance;
+};
+
+MVPT_REGISTER_PLUGIN("bsdf", "phong", [](const Properties &p, const LoadContext &) {
+    return std::make_shared<PhongBsdf>(p);
+});
+
+} // namespace mvpt

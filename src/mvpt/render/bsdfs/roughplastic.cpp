@@ -1,0 +1,218 @@
+// Rough plastic: a diffuse base under a rough dielectric coating (Mitsuba 3's
+// `roughplastic`): microfacet reflection plus a diffuse term attenuated by the
+// coating's precomputed rough transmittance and internal reflectance
+// [Weidlich and Wilkie 2007; Mitsuba's tabulation]. One-sided, isotropic.
+#include "../../core/quadrature.h"
+#include "../../core/warp.h"
+#include "../../scene/plugin.h"
+#include "../bsdf.h"
+#include "../fresnel.h"
+#include "../ior.h"
+#include "../microfacet.h"
+#include "../texture.h"
+
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <map>
+#include <mutex>
+#include <tuple>
+
+namespace mvpt {
+
+namespace {
+
+/// Resolution of the tabulated external transmittance over cos(theta) (Mitsuba's value).
+constexpr int TransmittanceRes = 64;
+
+/// Gauss-Legendre rule of `n` points, computed once per size.
+const std::pair<std::vector<float>, std::vector<float>> &gauss_legendre_cached(int n) {
+    static std::mutex mutex;
+    static std::map<int, std::pair<std::vector<float>, std::vector<float>>> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = cache.find(n);
+    if (it == cache.end()) {
+        it = cache.emplace(n, std::pair<std::vector<float>, std::vector<float>>{}).first;
+        gauss_legendre(n, it->second.first, it->second.second);
+    }
+    return it->second;
+}
+
+/// Albedo of microfacet reflection (`transmission` false) or transmission
+/// through a dielectric with relative IOR `eta`, seen from `wi`: the visible-normal
+/// estimator G1(wo, m) F (or 1 - F) integrated over the unit square with a
+/// tensor Gauss-Legendre rule (32^2 nodes for eta > 1, 128^2 otherwise), as Mitsuba.
+float microfacet_albedo(const MicrofacetDistribution &distr, Vec3f wi, float eta, bool transmission) {
+    const auto &[nodes, weights] = gauss_legendre_cached(eta > 1.f ? 32 : 128);
+    double sum = 0.0;
+    for (size_t j = 0; j < nodes.size(); ++j)
+        for (size_t i = 0; i < nodes.size(); ++i) {
+            Vec2f u(0.5f * nodes[i] + 0.5f, 0.5f * nodes[j] + 0.5f);
+            Vec3f m = distr.sample(wi, u, nullptr);
+            FresnelDielectric fr = fresnel_dielectric(dot(wi, m), eta);
+            float value;
+            if (transmission) {
+                Vec3f wo = refract(wi, m, fr.cos_theta_t, fr.eta_ti);
+                value = wo.z * wi.z >= 0.f ? 0.f : distr.smith_g1(wo, m) * (1.f - fr.F);
+            } else {
+                Vec3f wo = reflect(wi, m);
+                value = (wo.z <= 0.f || wi.z <= 0.f) ? 0.f : distr.smith_g1(wo, m) * fr.F;
+            }
+            sum += double(value) * weights[i] * weights[j] * 0.25;
+        }
+    return float(sum);
+}
+
+/// Tabulated coating of a rough plastic: transmittance t(mu) into the base and the
+/// base's internal diffuse reflectance, for one (distribution, alpha, eta).
+struct CoatingTables {
+    std::array<float, TransmittanceRes> external_transmittance;
+    float internal_reflectance;
+};
+
+/// Build (or fetch from a process-wide cache: scenes repeat materials) the coating
+/// tables, always with visible-normal sampling as Mitsuba does.
+std::shared_ptr<const CoatingTables> coating_tables(MicrofacetType type, float alpha, float eta) {
+    static std::mutex mutex;
+    static std::map<std::tuple<int, float, float>, std::shared_ptr<const CoatingTables>> cache;
+    auto key = std::make_tuple(int(type), alpha, eta);
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (auto it = cache.find(key); it != cache.end()) return it->second;
+    }
+    auto t = std::make_shared<CoatingTables>();
+    MicrofacetDistribution distr(type, alpha, alpha, true);
+    std::array<float, TransmittanceRes> internal_terms;
+    tbb::parallel_for(0, TransmittanceRes, [&](int i) {
+        float mu = std::max(1e-6f, float(i) / float(TransmittanceRes - 1));
+        Vec3f wi(std::sqrt(1.f - mu * mu), 0.f, mu);
+        t->external_transmittance[i] = microfacet_albedo(distr, wi, eta, true);
+        internal_terms[i] = microfacet_albedo(distr, wi, 1.f / eta, false) * mu;
+    });
+    double internal = 0.0;
+    for (float v : internal_terms) internal += v;
+    t->internal_reflectance = float(internal / TransmittanceRes) * 2.f;
+    std::lock_guard<std::mutex> lock(mutex);
+    return cache.emplace(key, t).first->second;
+}
+
+} // namespace
+
+class RoughPlastic final : public Bsdf {
+public:
+    explicit RoughPlastic(const Properties &props) {
+        float int_ior = read_ior(props, "int_ior", "polypropylene"), ext_ior = read_ior(props, "ext_ior", "air");
+        if (int_ior == ext_ior) props.fail("int_ior", "the interior and exterior indices of refraction must differ");
+        m_eta = int_ior / ext_ior;
+        m_diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5f);
+        if (props.has_texture("specular_reflectance"))
+            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+        m_nonlinear = props.get_bool("nonlinear", false);
+        read_roughness(props);
+        m_flags = BsdfGlossyReflection | BsdfDiffuseReflection;
+
+        m_inv_eta_2 = 1.f / (m_eta * m_eta);
+        float d_mean = m_diffuse_reflectance->mean().mean();
+        float s_mean = m_specular_reflectance ? m_specular_reflectance->mean().mean() : 1.f;
+        m_specular_sampling_weight = s_mean / (d_mean + s_mean);
+
+        m_coating = coating_tables(m_type, m_alpha, m_eta);
+    }
+
+    std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
+                                           Vec2f u2) const override {
+        BsdfSample bs;
+        float cos_theta_i = Frame::cos_theta(wi);
+        if (cos_theta_i <= 0.f) return {bs, {}};
+        if (u1 < specular_probability(cos_theta_i)) {
+            Vec3f m = distribution().sample(wi, u2, nullptr);
+            bs.wo = reflect(wi, m);
+            bs.sampled_type = BsdfGlossyReflection;
+        } else {
+            bs.wo = warp::square_to_cosine_hemisphere(u2);
+            bs.sampled_type = BsdfDiffuseReflection;
+        }
+        bs.pdf = pdf(ctx, si, wi, bs.wo);
+        if (!(bs.pdf > 0.f)) return {bs, {}};
+        return {bs, eval(ctx, si, wi, bs.wo) / bs.pdf};
+    }
+
+    Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return {};
+        MicrofacetDistribution distr = distribution();
+        Vec3f h = normalize(wo + wi);
+        float F = fresnel_dielectric(dot(wi, h), m_eta).F;
+        Spectrum value(F * distr.eval(h) * distr.G(wi, wo, h) / (4.f * cos_theta_i));
+        if (m_specular_reflectance) value *= m_specular_reflectance->eval(si.uv);
+
+        float t_i = transmittance(cos_theta_i), t_o = transmittance(cos_theta_o);
+        Spectrum diff = m_diffuse_reflectance->eval(si.uv);
+        Spectrum denom = m_nonlinear ? Spectrum(1.f) - diff * m_coating->internal_reflectance
+                                     : Spectrum(1.f - m_coating->internal_reflectance);
+        return value + diff / denom * (InvPi * m_inv_eta_2 * cos_theta_o * t_i * t_o);
+    }
+
+    float pdf(const BsdfContext &, const SurfaceInteraction &, Vec3f wi, Vec3f wo) const override {
+        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return 0.f;
+        float prob_specular = specular_probability(cos_theta_i);
+        MicrofacetDistribution distr = distribution();
+        Vec3f h = normalize(wo + wi);
+        float p_spec = distr.sample_visible() ? distr.eval(h) * distr.smith_g1(wi, h) / (4.f * cos_theta_i)
+                                              : distr.pdf(wi, h) / (4.f * dot(wo, h));
+        return prob_specular * p_spec + (1.f - prob_specular) * warp::square_to_cosine_hemisphere_pdf(wo);
+    }
+
+    float roughness(const SurfaceInteraction &) const override { return m_alpha; }
+
+private:
+    /// `alpha` (float, default 0.1), or equal `alpha_u`/`alpha_v`; anisotropy is rejected as by Mitsuba.
+    void read_roughness(const Properties &props) {
+        m_type = MicrofacetType::Beckmann;
+        if (props.has("distribution")) {
+            std::string d = props.get_string("distribution");
+            if (!parse_microfacet_type(d, m_type))
+                props.fail("distribution", "invalid distribution \"" + d + "\", must be \"beckmann\" or \"ggx\"");
+        }
+        m_sample_visible = props.get_bool("sample_visible", true);
+        if (props.has("alpha_u") || props.has("alpha_v")) {
+            if (!props.has("alpha_u") || !props.has("alpha_v"))
+                props.fail(props.has("alpha_u") ? "alpha_u" : "alpha_v",
+                           "both 'alpha_u' and 'alpha_v' must be specified");
+            if (props.has("alpha")) props.fail("alpha", "specify either 'alpha' or 'alpha_u'/'alpha_v', not both");
+            m_alpha = props.get_float("alpha_u");
+            if (props.get_float("alpha_v") != m_alpha)
+                props.fail("alpha_v", "roughplastic does not support anisotropic roughness");
+        } else {
+            m_alpha = props.get_float("alpha", 0.1f);
+        }
+    }
+    MicrofacetDistribution distribution() const {
+        return MicrofacetDistribution(m_type, m_alpha, m_alpha, m_sample_visible);
+    }
+    float specular_probability(float cos_theta_i) const {
+        float t_i = transmittance(cos_theta_i);
+        float ps = (1.f - t_i) * m_specular_sampling_weight, pd = t_i * (1.f - m_specular_sampling_weight);
+        return ps / (ps + pd);
+    }
+    /// Linear interpolation in the transmittance table.
+    float transmittance(float cos_theta) const {
+        float x = cos_theta * float(TransmittanceRes - 1);
+        int idx = std::min(int(x), TransmittanceRes - 2);
+        const auto &t = m_coating->external_transmittance;
+        return lerp(x - float(idx), t[idx], t[idx + 1]);
+    }
+
+    MicrofacetType m_type;
+    float m_alpha, m_eta, m_inv_eta_2, m_specular_sampling_weight;
+    bool m_sample_visible, m_nonlinear;
+    std::shared_ptr<const CoatingTables> m_coating;
+    std::shared_ptr<Texture> m_diffuse_reflectance, m_specular_reflectance;
+};
+
+MVPT_REGISTER_PLUGIN("bsdf", "roughplastic", [](const Properties &p, const LoadContext &) {
+    return std::make_shared<RoughPlastic>(p);
+});
+
+} // namespace mvpt

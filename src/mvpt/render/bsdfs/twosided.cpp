@@ -1,0 +1,59 @@
+// Two-sided adapter: applies a one-sided BRDF on both sides, or a second
+// BRDF on the back side, by mirroring directions through the shading plane
+// (Mitsuba 3.9's `twosided`, which decides the side by the shading normal).
+#include "../../scene/plugin.h"
+#include "../bsdf.h"
+
+namespace mvpt {
+
+class TwoSidedBsdf final : public Bsdf {
+public:
+    explicit TwoSidedBsdf(const Properties &props) {
+        auto children = props.children_of_kind("bsdf");
+        if (children.empty()) props.fail("", "twosided needs a nested one-sided bsdf");
+        if (children.size() > 2)
+            throw SceneError(children[2]->loc, "twosided accepts at most two nested bsdfs");
+        m_brdf[0] = std::static_pointer_cast<Bsdf>(children[0]->object);
+        m_brdf[1] = children.size() == 2 ? std::static_pointer_cast<Bsdf>(children[1]->object) : m_brdf[0];
+        m_flags = m_brdf[0]->flags() | m_brdf[1]->flags();
+        if (m_flags & BsdfTransmission)
+            props.fail("", "twosided: only materials without a transmission component can be nested");
+    }
+
+    std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
+                                           Vec2f u2) const override {
+        if (wi.z > 0.f) return m_brdf[0]->sample(ctx, si, wi, u1, u2);
+        if (wi.z < 0.f) {
+            auto [bs, w] = m_brdf[1]->sample(ctx, si, flip(wi), u1, u2);
+            bs.wo = flip(bs.wo);
+            return {bs, w};
+        }
+        return {BsdfSample{}, {}};
+    }
+
+    Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        if (wi.z > 0.f) return m_brdf[0]->eval(ctx, si, wi, wo);
+        if (wi.z < 0.f) return m_brdf[1]->eval(ctx, si, flip(wi), flip(wo));
+        return {};
+    }
+
+    float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        if (wi.z > 0.f) return m_brdf[0]->pdf(ctx, si, wi, wo);
+        if (wi.z < 0.f) return m_brdf[1]->pdf(ctx, si, flip(wi), flip(wo));
+        return 0.f;
+    }
+
+    float roughness(const SurfaceInteraction &si) const override {
+        return si.wi.z < 0.f ? m_brdf[1]->roughness(si) : m_brdf[0]->roughness(si);
+    }
+
+private:
+    static Vec3f flip(Vec3f v) { return {v.x, v.y, -v.z}; }
+    std::shared_ptr<Bsdf> m_brdf[2];
+};
+
+MVPT_REGISTER_PLUGIN("bsdf", "twosided", [](const Properties &p, const LoadContext &) {
+    return std::make_shared<TwoSidedBsdf>(p);
+});
+
+} // namespace mvpt
