@@ -66,18 +66,25 @@ def compare_with_mitsuba(xml: str, base_dir: Path = Path("."), spp: int = 64, mi
         report.append(f"view {vid}: mvpt mean {ma:.5f}, mitsuba mean {mb:.5f}")
         assert mb > 0, f"view {vid}: the Mitsuba image is black; the test scene is broken"
         assert abs(ma - mb) <= mean_tol * mb, "; ".join(report)
-        # Per-block z-scores (block sums of means; variances add). Noise-free
-        # blocks (e.g. directly seen emitters) may still differ by float rounding:
-        # a relative 1e-5 floor on the deviation keeps those from dividing by ~0.
-        sa, sb = block_sums(a, block), block_sums(b, block)
-        sd = np.sqrt(block_sums(var_a, block) + block_sums(var_b, block) + (1e-5 * np.abs(sb)) ** 2)
-        ok = sd > 0
-        assert np.all(sa[~ok] == sb[~ok]), f"view {vid}: black blocks differ"
-        zs.append((sa - sb)[ok] / sd[ok])
-    z = np.concatenate(zs)
-    # Šidák correction over all tests: per-test level 1 - (1 - alpha)^(1/n).
+        zs.append(block_z_scores(a, var_a, b, var_b, block, f"view {vid}"))
+    assert_z_scores(np.concatenate(zs), alpha, "; ".join(report))
+    return report
+
+
+def block_z_scores(a, var_a, b, var_b, block: int, what: str) -> np.ndarray:
+    """z-scores of block sums of two mean images with per-pixel variances of the mean."""
+    # Noise-free blocks (e.g. directly seen emitters) may still differ by float
+    # rounding: a relative 1e-5 floor on the deviation keeps those from dividing by ~0.
+    sa, sb = block_sums(a, block), block_sums(b, block)
+    sd = np.sqrt(block_sums(var_a, block) + block_sums(var_b, block) + (1e-5 * np.abs(sb)) ** 2)
+    ok = sd > 0
+    assert np.all(sa[~ok] == sb[~ok]), f"{what}: black blocks differ"
+    return (sa - sb)[ok] / sd[ok]
+
+
+def assert_z_scores(z: np.ndarray, alpha: float, report: str = ""):
+    """Šidák correction over all tests: per-test level 1 - (1 - alpha)^(1/n)."""
     p_each = 1.0 - (1.0 - alpha) ** (1.0 / len(z))
     limit = stats.norm.ppf(1.0 - p_each / 2.0)
     worst = np.max(np.abs(z))
-    assert worst < limit, f"largest |z| = {worst:.2f} over {len(z)} blocks exceeds {limit:.2f}; " + "; ".join(report)
-    return report
+    assert worst < limit, f"largest |z| = {worst:.2f} over {len(z)} blocks exceeds {limit:.2f}; {report}"
