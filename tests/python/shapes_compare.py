@@ -22,8 +22,12 @@ mi.set_variant("scalar_rgb")
 
 def shared_scenes() -> Path:
     env = os.environ.get("MVPT_SHARED")
-    root = Path(env) / "scenes" if env else Path(__file__).resolve().parents[2] / ".." / "shared" / "scenes"
-    return root.resolve()
+    if env:
+        return (Path(env) / "scenes").resolve()
+    # The repository's sibling `shared/` (main checkout), or its parent's (a worktree under wt/).
+    here = Path(__file__).resolve()
+    candidates = [here.parents[2] / ".." / "shared" / "scenes", here.parents[3] / ".." / "shared" / "scenes"]
+    return next((c.resolve() for c in candidates if c.exists()), candidates[0].resolve())
 
 
 def require_shared(rel: str) -> Path:

@@ -266,7 +266,7 @@ MeshData read_ply(const std::filesystem::path &path, const FileLoc &loc) {
                     if (n < 0) body.fail("negative list length in element 'face'");
                     if (int(i) != index_prop) { body.skip(p.type, uint64_t(n), p.name.c_str()); continue; }
                     if (uint64_t(n) > body.remaining() / body.min_bytes(p.type))
-                        body.fail("a face declares " + std::to_string(uint64_t(n)) + " vertices, more than the file can hold");
+                        body.fail("a face declares " + std::to_string(uint64_t(n)) + " vertices, more than the file can hold (truncated or corrupt)");
                     poly.resize(size_t(n));
                     for (auto &idx : poly) {
                         double d = body.read(p.type, "a vertex index");
