@@ -143,3 +143,18 @@ def test_motion_blur_differs_from_static_pose():
     static = mvpt.render(mvpt.load_string(scene(animated_body(0.0))), spp=32, seed=2)
     for k in blurred.images:
         assert np.abs(blurred.images[k] - static.images[k]).mean() > 0.01 * static.images[k].mean() + 1e-3
+
+
+def test_animated_area_emitter_is_an_error():
+    xml = scene("""<shape type="sphere"><animation name="to_world">
+        <transform time="0"><translate x="1"/></transform><transform time="1"><translate x="2"/></transform>
+      </animation><emitter type="area"/></shape>""")
+    with pytest.raises(mvpt.SceneError, match="animated shape"):
+        mvpt.load_string(xml)
+
+
+def test_nested_instancing_is_an_error():
+    xml = scene(GROUP + """<shape type="shapegroup" id="outer"><shape type="instance"><ref id="grp"/></shape></shape>
+      <shape type="instance"><ref id="outer"/></shape>""")
+    with pytest.raises(mvpt.SceneError, match="nested instancing"):
+        mvpt.load_string(xml)
