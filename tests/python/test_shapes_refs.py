@@ -87,3 +87,26 @@ def test_various_shapes_scene_matches_mitsuba():
     assert second != sensor
     xml = xml.replace(sensor, sensor + second)
     compare_with_mitsuba(xml, base_dir=folder, spp=128, mi_spp=8, runs=16)
+
+
+def test_texture_interp_scene_matches_mitsuba():
+    """Mitsuba's texture_interp scene: a PNG on six rectangles with repeat/mirror/clamp and
+    bilinear/nearest lookups through to_uv = 2 uv - 1/2. Rendered by both renderers from the
+    same XML with a box filter, a second sensor, path tracing to depth 2 (the `direct`
+    integrator's estimand) and the point light replaced by a small spherical area light."""
+    folder = require_shared("m3data-testsuite/tests/scenes/texture_interp")
+    xml = (folder / "test_texture_interp_direct.xml").read_text()
+    xml = re.sub(r'<integrator type="moment">.*?</integrator>',  # its inner integrator is self-closing
+                 '<integrator type="path"><integer name="max_depth" value="2"/></integrator>', xml, flags=re.S)
+    xml = re.sub(r'<default name="integrator"[^>]*/>', "", xml)
+    xml = re.sub(r'<emitter type="point">.*?</emitter>', """<shape type="sphere"><point name="center" x="0" y="0" z="10"/>
+        <float name="radius" value="0.5"/><emitter type="area"><rgb name="radiance" value="130"/></emitter></shape>""",
+                 xml, flags=re.S)
+    common = (folder / "../../../common").resolve()
+    xml = re.sub(r'<path value="[^"]*"\s*/>', "", xml).replace("textures/carrot.png", str(common / "textures/carrot.png"))
+    xml = xml.replace('value="128"', 'value="48"').replace("$spp", "16")
+    xml = xml.replace('<string name="pixel_format" value="rgb"/>', '<rfilter type="box"/>')
+    sensor = re.search(r"<sensor .*?</sensor>", xml, flags=re.S).group(0)
+    second = sensor.replace('origin="0, 0, 8"', 'origin="3, -2, 7"')
+    assert second != sensor and "direct" not in xml and "point" not in xml.replace('<point name="center"', "")
+    compare_with_mitsuba(xml.replace(sensor, sensor + second), base_dir=folder, spp=64, mi_spp=8, runs=16)
