@@ -8,7 +8,9 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <memory>
+#include <stdexcept>
 #include <utility>
 
 namespace mvpt {
@@ -33,12 +35,29 @@ struct ShapeSample {
     float pdf_a = 0.f;
 };
 
+/// Maps scene time to Embree's motion-blur time in [0, 1]: one affine map per
+/// scene, spanning the keyframes of all animated shapes (times outside clamp,
+/// which holds the end poses).
+struct MotionTime {
+    float t0 = 0.f, t1 = 1.f;
+    float to_embree(float t) const { return t1 > t0 ? std::clamp((t - t0) / (t1 - t0), 0.f, 1.f) : 0.f; }
+};
+
 class Shape : public Object {
 public:
     /// Add the geometry to `scene`; returns its Embree geometry id.
-    virtual unsigned attach(RTCDevice device, RTCScene scene) = 0;
+    virtual unsigned attach(RTCDevice device, RTCScene scene, const MotionTime &motion) = 0;
     /// Complete a hit: `prim` and barycentrics `b` come from Embree.
     virtual void fill_interaction(const Ray &ray, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const = 0;
+    /// Complete a hit inside an Embree instance that this shape attached
+    /// (instances, animated shapes): `inner_geom` is the geometry id in its
+    /// sub-scene. Sets `si.shape` to the shape actually hit.
+    virtual void fill_instance_interaction(const Ray &ray, float t, unsigned inner_geom, uint32_t prim, Vec2f b,
+                                           SurfaceInteraction &si) const;
+    /// Keyframe time range of an animated shape; false when it does not move.
+    virtual bool time_range(float &begin, float &end) const { (void)begin; (void)end; return false; }
+    /// True for a `shapegroup`, which is rendered only through instances.
+    virtual bool is_shapegroup() const { return false; }
     virtual float area() const = 0;
     virtual BoundingBox bounds() const = 0;
     /// Uniform point on the surface (density 1/area).
@@ -66,6 +85,10 @@ inline float area_to_solid_angle(float pdf_a, Point3f ref, Point3f p, Normal3f n
 inline std::pair<ShapeSample, float> Shape::sample_solid_angle(Point3f ref, Vec2f u) const {
     ShapeSample s = sample_area(u);
     return {s, area_to_solid_angle(s.pdf_a, ref, s.p, s.n)};
+}
+
+inline void Shape::fill_instance_interaction(const Ray &, float, unsigned, uint32_t, Vec2f, SurfaceInteraction &) const {
+    throw std::logic_error("fill_instance_interaction called on a shape that attaches no instance");
 }
 
 inline float Shape::pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const {

@@ -2,6 +2,7 @@
 
 #include "plugin.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace mvpt {
@@ -32,7 +33,9 @@ void Scene::build(const SceneTree &tree) {
         bool owned_elsewhere = !c.id.empty() && tree.referenced_ids.count(c.id);
         if (c.kind == "shape") {
             if (owned_elsewhere) continue; // e.g. shapes inside a shapegroup reached by <ref>
-            m_shapes.push_back(std::static_pointer_cast<Shape>(c.object));
+            auto shape = std::static_pointer_cast<Shape>(c.object);
+            if (shape->is_shapegroup()) continue; // rendered only through instances
+            m_shapes.push_back(shape);
         } else if (c.kind == "emitter") {
             auto light = std::static_pointer_cast<Light>(c.object);
             if (light->is_area()) {
@@ -68,8 +71,17 @@ void Scene::build(const SceneTree &tree) {
         m_integrator = std::static_pointer_cast<Integrator>((*PluginRegistry::find("integrator", "path"))(ip, {}));
     }
 
+    // One scene-time -> Embree-time map covering every animated shape's keyframes.
+    bool animated = false;
     for (auto &shape : m_shapes) {
-        unsigned gid = shape->attach(m_device, m_scene);
+        float b, e;
+        if (!shape->time_range(b, e)) continue;
+        m_motion.t0 = animated ? std::min(m_motion.t0, b) : b;
+        m_motion.t1 = animated ? std::max(m_motion.t1, e) : e;
+        animated = true;
+    }
+    for (auto &shape : m_shapes) {
+        unsigned gid = shape->attach(m_device, m_scene, m_motion);
         if (gid >= m_geom_to_shape.size()) m_geom_to_shape.resize(gid + 1, nullptr);
         m_geom_to_shape[gid] = shape.get();
         m_bounds.expand(shape->bounds());
@@ -90,16 +102,21 @@ bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
     rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
     rh.ray.tnear = ray.tmin;
     rh.ray.tfar = ray.tmax;
-    rh.ray.time = ray.time;
+    rh.ray.time = m_motion.to_embree(ray.time);
     rh.ray.mask = 0xffffffffu;
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    unsigned gid = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
-    const Shape *shape = m_geom_to_shape[gid];
     si.time = ray.time;
+    if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+        // Instances resolve the inner geometry and move the hit to world space.
+        m_geom_to_shape[rh.hit.instID[0]]->fill_instance_interaction(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.primID,
+                                                                     {rh.hit.u, rh.hit.v}, si);
+        return true;
+    }
+    const Shape *shape = m_geom_to_shape[rh.hit.geomID];
     si.shape = shape;
     si.prim = rh.hit.primID;
     shape->fill_interaction(ray, rh.ray.tfar, rh.hit.primID, {rh.hit.u, rh.hit.v}, si);
@@ -114,7 +131,7 @@ bool Scene::occluded(const Ray &ray) const {
     r.dir_x = ray.d.x; r.dir_y = ray.d.y; r.dir_z = ray.d.z;
     r.tnear = ray.tmin;
     r.tfar = ray.tmax;
-    r.time = ray.time;
+    r.time = m_motion.to_embree(ray.time);
     r.mask = 0xffffffffu;
     r.flags = 0;
     rtcOccluded1(m_scene, &ctx, &r);

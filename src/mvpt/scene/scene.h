@@ -52,6 +52,7 @@ private:
     std::vector<std::shared_ptr<Camera>> m_cameras;
     std::shared_ptr<Integrator> m_integrator;
     BoundingBox m_bounds;
+    MotionTime m_motion;
 };
 
 /// Load a Mitsuba 3 XML scene; `defines` override its <default> values.

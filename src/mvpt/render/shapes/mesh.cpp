@@ -8,8 +8,8 @@
 
 namespace mvpt {
 
-TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const std::string &what) : m_data(std::move(data)) {
-    Transform to_world = props.get_transform("to_world");
+TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transform &to_world, const std::string &what)
+    : m_data(std::move(data)) {
     m_flip_normals = props.get_bool("flip_normals", false);
     bool face_normals = props.get_bool("face_normals", false);
     if (face_normals) m_data.normals.clear();
@@ -31,6 +31,7 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const std::st
         float l = norm(wn);
         n = (l > 0.f && std::isfinite(l)) ? wn / l : Normal3f(0.f);
     }
+    if (m_data.normals.empty() && !face_normals) m_data.normals = compute_vertex_normals(m_data);
     std::vector<float> areas(m_data.triangle_count());
     for (size_t i = 0; i < areas.size(); ++i) {
         const Point3f &p0 = m_data.positions[m_data.indices[3 * i]], &p1 = m_data.positions[m_data.indices[3 * i + 1]],
@@ -43,7 +44,34 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const std::st
     if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
 }
 
-unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene) {
+std::vector<Normal3f> compute_vertex_normals(const MeshData &mesh) {
+    std::vector<Normal3f> normals(mesh.positions.size(), Normal3f(0.f));
+    auto unit_angle = [](Vec3f a, Vec3f b) {
+        // Angle between unit vectors, accurate near 0 and pi.
+        float d = dot(a, b);
+        return d < 0.f ? Pi - 2.f * std::asin(0.5f * norm(a + b)) : 2.f * std::asin(0.5f * norm(b - a));
+    };
+    for (size_t f = 0; f < mesh.triangle_count(); ++f) {
+        const uint32_t *idx = &mesh.indices[3 * f];
+        Point3f v[3] = {mesh.positions[idx[0]], mesh.positions[idx[1]], mesh.positions[idx[2]]};
+        Normal3f n = cross(v[1] - v[0], v[2] - v[0]);
+        float len2 = squared_norm(n);
+        if (!(len2 > 0.f)) continue;
+        n = n / std::sqrt(len2);
+        for (int j = 0; j < 3; ++j) {
+            Vec3f e1 = v[(j + 1) % 3] - v[j], e2 = v[(j + 2) % 3] - v[j];
+            float l1 = norm(e1), l2 = norm(e2);
+            if (l1 > 0.f && l2 > 0.f) normals[idx[j]] += n * unit_angle(e1 / l1, e2 / l2);
+        }
+    }
+    for (auto &n : normals) {
+        float l = norm(n);
+        n = (l > 0.f && std::isfinite(l)) ? n / l : Normal3f(1.f, 0.f, 0.f);
+    }
+    return normals;
+}
+
+unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene, const MotionTime &) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree reads 16 bytes per vertex: pad the buffer by one float.
     auto *v = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),

@@ -11,11 +11,12 @@ namespace mvpt {
 
 class TriangleMesh : public Shape {
 public:
-    /// Takes `data` in object space; applies to_world, flip_normals and
-    /// face_normals from `props`, and validates the data (errors at `props`' location).
-    TriangleMesh(MeshData data, const Properties &props, const std::string &what);
+    /// Takes `data` in object space; applies `to_world` and flip_normals /
+    /// face_normals from `props`, computes vertex normals when the data has none
+    /// (as Mitsuba does), and validates the data (errors at `props`' location).
+    TriangleMesh(MeshData data, const Properties &props, const Transform &to_world, const std::string &what);
 
-    unsigned attach(RTCDevice device, RTCScene scene) override;
+    unsigned attach(RTCDevice device, RTCScene scene, const MotionTime &motion) override;
     void fill_interaction(const Ray &ray, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const override;
     float area() const override { return m_area; }
     BoundingBox bounds() const override { return m_bounds; }
@@ -34,5 +35,9 @@ private:
 /// Shared parameters of every shape plugin: bsdf (default diffuse 0.5) and an
 /// optional area emitter child; call once the shape object exists.
 void attach_shape_children(Shape &shape, const Properties &props);
+
+/// Angle-weighted vertex normals [Thürmer & Wüthrich 1998], Mitsuba's
+/// `recompute_vertex_normals`; vertices without a valid face get (1, 0, 0).
+std::vector<Normal3f> compute_vertex_normals(const MeshData &mesh);
 
 } // namespace mvpt

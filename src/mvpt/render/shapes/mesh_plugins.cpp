@@ -1,15 +1,42 @@
-// Shape plugins that produce triangle meshes: obj, rectangle, cube.
+// Shape plugins that produce triangle meshes: obj, ply, serialized, rectangle, cube.
+#include "instance.h"
 #include "mesh.h"
 
 namespace mvpt {
 
 namespace {
 
+/// A mesh shape from `data`, static or (with an animated to_world) motion-blurred.
+std::shared_ptr<Object> make_mesh(MeshData data, const Properties &props, const std::string &what) {
+    return make_maybe_animated(props, [&](const Transform &to_world) {
+        return std::make_shared<TriangleMesh>(std::move(data), props, to_world, what);
+    });
+}
+
 std::shared_ptr<Object> make_obj(const Properties &props, const LoadContext &ctx) {
     std::string file = props.get_string("filename");
     auto path = ctx.resolve(file, props.loc_of("filename"));
     MeshData data = read_obj(path, props.loc_of("filename"));
-    return std::make_shared<TriangleMesh>(std::move(data), props, "OBJ mesh '" + file + "'");
+    // Mitsuba flips v by default, for consistency with Mitsuba 0.6.
+    if (props.get_bool("flip_tex_coords", true))
+        for (Vec2f &uv : data.uvs) uv.y = 1.f - uv.y;
+    return make_mesh(std::move(data), props, "OBJ mesh '" + file + "'");
+}
+
+std::shared_ptr<Object> make_ply(const Properties &props, const LoadContext &ctx) {
+    std::string file = props.get_string("filename");
+    auto path = ctx.resolve(file, props.loc_of("filename"));
+    MeshData data = read_ply(path, props.loc_of("filename"));
+    return make_mesh(std::move(data), props, "PLY mesh '" + file + "'");
+}
+
+std::shared_ptr<Object> make_serialized(const Properties &props, const LoadContext &ctx) {
+    std::string file = props.get_string("filename");
+    auto path = ctx.resolve(file, props.loc_of("filename"));
+    int64_t index = props.get_int("shape_index", 0);
+    if (index < 0 || index > INT32_MAX) props.fail("shape_index", "shape_index must be a non-negative integer");
+    MeshData data = read_serialized(path, int(index), props.loc_of("filename"));
+    return make_mesh(std::move(data), props, "serialized mesh '" + file + "'@" + std::to_string(index));
 }
 
 /// Mitsuba's rectangle: [-1, 1]^2 in the z = 0 plane, normal +z.
@@ -41,16 +68,18 @@ MeshData cube_data() {
 }
 
 std::shared_ptr<Object> make_rectangle(const Properties &props, const LoadContext &) {
-    return std::make_shared<TriangleMesh>(rectangle_data(), props, "rectangle");
+    return make_mesh(rectangle_data(), props, "rectangle");
 }
 
 std::shared_ptr<Object> make_cube(const Properties &props, const LoadContext &) {
-    return std::make_shared<TriangleMesh>(cube_data(), props, "cube");
+    return make_mesh(cube_data(), props, "cube");
 }
 
 } // namespace
 
 MVPT_REGISTER_PLUGIN("shape", "obj", make_obj);
+MVPT_REGISTER_PLUGIN("shape", "ply", make_ply);
+MVPT_REGISTER_PLUGIN("shape", "serialized", make_serialized);
 MVPT_REGISTER_PLUGIN("shape", "rectangle", make_rectangle);
 MVPT_REGISTER_PLUGIN("shape", "cube", make_cube);
 

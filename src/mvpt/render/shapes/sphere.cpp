@@ -1,0 +1,171 @@
+// Analytic sphere (Mitsuba's `sphere`): center + radius and/or a similarity
+// `to_world`; uv = (phi / 2pi, theta / pi) in object space. Light sampling
+// picks uniformly inside the visible cone from outside [Akalin, "Sampling the
+// visible sphere"], uniformly by area from inside.
+#include "../../core/warp.h"
+#include "analytic.h"
+#include "instance.h"
+#include "mesh.h"
+
+namespace mvpt {
+
+class Sphere final : public AnalyticShape {
+public:
+    Sphere(const Properties &props, const Transform &to_world) {
+        Vec3f center = props.get_vector("center", Vec3f(0.f));
+        float radius = props.get_float("radius", 1.f);
+        m_flip_normals = props.get_bool("flip_normals", false);
+        m_to_world = to_world * Transform::translate(center) * Transform::scale(Vec3f(radius));
+        // Like Mitsuba: the radius is the length of the transformed x axis (a
+        // non-uniform scale is not an ellipsoid), a mirroring flips the normals.
+        const Matrix4 &m = m_to_world.matrix();
+        m_center = {float(m.m[0][3]), float(m.m[1][3]), float(m.m[2][3])};
+        m_radius = std::sqrt(m.m[0][0] * m.m[0][0] + m.m[1][0] * m.m[1][0] + m.m[2][0] * m.m[2][0]);
+        if (!(m_radius > 0.0) || !std::isfinite(m_radius) || !m.is_finite())
+            props.fail("radius", "the sphere's radius (after to_world) must be positive and finite");
+        if (m.determinant3x3() < 0) m_flip_normals = !m_flip_normals;
+        m_to_object = m_to_world.inverse();
+        m_inv_area = float(1.0 / (4.0 * 3.14159265358979323846 * m_radius * m_radius));
+        attach_shape_children(*this, props);
+    }
+
+    double intersect_t(const double o[3], const double d[3], double tmin, double tmax) const override {
+        double near_t, far_t;
+        if (!roots(o, d, near_t, far_t)) return std::nan("");
+        if (near_t >= tmin && near_t <= tmax) return near_t;
+        if (far_t >= tmin && far_t <= tmax) return far_t;
+        return std::nan("");
+    }
+
+    void fill_interaction(const Ray &ray, float t, uint32_t, Vec2f, SurfaceInteraction &si) const override {
+        // Re-solve in double and take the root Embree reported (its t is rounded to float).
+        double o[3] = {ray.o.x, ray.o.y, ray.o.z}, d[3] = {ray.d.x, ray.d.y, ray.d.z}, tn, tf;
+        double th = t;
+        if (roots(o, d, tn, tf)) th = std::abs(tn - t) <= std::abs(tf - t) ? tn : tf;
+        double p[3], len2 = 0;
+        for (int i = 0; i < 3; ++i) {
+            p[i] = o[i] + th * d[i] - m_center[i];
+            len2 += p[i] * p[i];
+        }
+        double inv = len2 > 0 ? 1.0 / std::sqrt(len2) : 0.0;
+        Normal3f n(float(p[0] * inv), float(p[1] * inv), float(p[2] * inv));
+        si.t = t;
+        si.p = m_center + n * float(m_radius); // re-projected onto the surface
+        set_surface(si, n);
+    }
+
+    float area() const override { return 1.f / m_inv_area; }
+    BoundingBox bounds() const override {
+        BoundingBox b;
+        b.expand(m_center - Vec3f(float(m_radius)));
+        b.expand(m_center + Vec3f(float(m_radius)));
+        return b;
+    }
+
+    ShapeSample sample_area(Vec2f u) const override {
+        Normal3f n = warp::square_to_uniform_sphere(u);
+        ShapeSample s;
+        s.p = m_center + n * float(m_radius);
+        s.n = m_flip_normals ? -n : n;
+        s.uv = uv_of(s.p);
+        s.pdf_a = m_inv_area;
+        return s;
+    }
+
+    std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const override {
+        const float radius = float(m_radius);
+        Vec3f dc = m_center - ref;
+        float dc2 = squared_norm(dc);
+        float radius_adj = radius * (m_flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
+        ShapeSample s;
+        float pdf;
+        if (dc2 > radius_adj * radius_adj) {
+            // Outside: uniform direction in the cone subtended by the sphere.
+            float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
+                  inv_sin_max = 1.f / sin_max, cos_max = safe_sqrt(1.f - sin_max2);
+            // Taylor expansion below ~1.5 degrees, where 1 - cos^2 cancels badly.
+            float sin2 = sin_max2 > 0.00068523f ? 1.f - sqr((cos_max - 1.f) * u.x + 1.f) : sin_max2 * u.x;
+            float cos_t = safe_sqrt(1.f - sin2);
+            // Angle alpha at the sphere's center between -dc and the sampled point.
+            float cos_alpha = sin2 * inv_sin_max + cos_t * safe_sqrt(1.f - sin2 * inv_sin_max * inv_sin_max);
+            float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha), phi = 2.f * Pi * u.y;
+            Vec3f dir = Frame(dc * -inv_dc).to_world({std::cos(phi) * sin_alpha, std::sin(phi) * sin_alpha, cos_alpha});
+            s.p = m_center + dir * radius;
+            s.n = dir;
+            pdf = warp::square_to_uniform_cone_pdf(cos_max);
+            if (squared_norm(s.p - ref) == 0.f) pdf = 0.f;
+        } else {
+            // Inside: uniform by area, converted to solid angle.
+            Vec3f dir = warp::square_to_uniform_sphere(u);
+            s.p = m_center + dir * radius;
+            s.n = dir;
+            Vec3f d = s.p - ref;
+            float dist2 = squared_norm(d), cos_t = absdot(d, dir) / std::sqrt(dist2);
+            pdf = cos_t > 0.f ? m_inv_area * dist2 / cos_t : 0.f;
+        }
+        if (m_flip_normals) s.n = -s.n;
+        s.uv = uv_of(s.p);
+        s.pdf_a = m_inv_area;
+        return {s, pdf};
+    }
+
+    float pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const override {
+        float sin_alpha = float(m_radius) / norm(m_center - ref);
+        if (sin_alpha < OneMinusEpsilon) return warp::square_to_uniform_cone_pdf(safe_sqrt(1.f - sin_alpha * sin_alpha));
+        return area_to_solid_angle(m_inv_area, ref, si.p, si.n);
+    }
+
+private:
+    bool roots(const double o[3], const double d[3], double &near_t, double &far_t) const {
+        // Intersect from the point of the ray closest to the center: the
+        // quadratic is then well conditioned for far-away or large spheres
+        // (Mitsuba's robust variant, in double precision).
+        double l[3], dd = 0, ld = 0;
+        for (int i = 0; i < 3; ++i) {
+            l[i] = o[i] - double(m_center[i]);
+            dd += d[i] * d[i];
+            ld += l[i] * d[i];
+        }
+        if (!(dd > 0)) return false;
+        double plane_t = -ld / dd, op[3], b = 0, c = 0;
+        for (int i = 0; i < 3; ++i) {
+            op[i] = l[i] + plane_t * d[i];
+            b += 2.0 * op[i] * d[i];
+            c += op[i] * op[i];
+        }
+        c -= m_radius * m_radius;
+        if (!solve_quadratic(dd, b, c, near_t, far_t)) return false;
+        near_t += plane_t;
+        far_t += plane_t;
+        return true;
+    }
+
+    Vec2f uv_of(Point3f p) const {
+        Point3f local = m_to_object.point(p);
+        float theta = safe_acos(local.z), phi = std::atan2(local.y, local.x);
+        if (phi < 0.f) phi += 2.f * Pi;
+        return {phi * InvTwoPi, theta * InvPi};
+    }
+
+    void set_surface(SurfaceInteraction &si, Normal3f n) const {
+        Point3f local = m_to_object.point(si.p);
+        float theta = safe_acos(local.z), phi = std::atan2(local.y, local.x);
+        if (phi < 0.f) phi += 2.f * Pi;
+        si.uv = {phi * InvTwoPi, theta * InvPi};
+        Vec3f dp_du = m_to_world.vector({-local.y, local.x, 0.f}) * (2.f * Pi);
+        si.n = m_flip_normals ? -n : n;
+        si.sh_frame = frame_from_dpdu(si.n, dp_du);
+    }
+
+    Transform m_to_world, m_to_object;
+    Point3f m_center;
+    double m_radius = 1.0;
+    float m_inv_area = 1.f;
+    bool m_flip_normals = false;
+};
+
+MVPT_REGISTER_PLUGIN("shape", "sphere", [](const Properties &props, const LoadContext &) {
+    return make_maybe_animated(props, [&](const Transform &to_world) { return std::make_shared<Sphere>(props, to_world); });
+});
+
+} // namespace mvpt

@@ -1,0 +1,92 @@
+// Image texture (Mitsuba's `bitmap`): PNG/JPEG (sRGB-decoded unless `raw`),
+// EXR and HDR; uv (0, 0) is the first pixel of the first (top) row, pixel
+// centres at (i + 1/2) / width; bilinear or nearest lookup with repeat, mirror
+// or clamp wrapping. The scalar value is the Rec. 709 luminance, as in Mitsuba.
+#include "../../io/image_io.h"
+#include "../../scene/plugin.h"
+#include "../texture.h"
+#include "uv_transform.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mvpt {
+
+class BitmapTexture final : public Texture {
+public:
+    enum class Wrap { Repeat, Mirror, Clamp };
+
+    BitmapTexture(const Properties &props, const LoadContext &ctx) {
+        std::string file = props.get_string("filename");
+        auto path = ctx.resolve(file, props.loc_of("filename"));
+        bool raw = props.get_bool("raw", false);
+        std::string filter = props.get_string("filter_type", "bilinear");
+        if (filter == "bilinear") m_bilinear = true;
+        else if (filter == "nearest") m_bilinear = false;
+        else props.fail("filter_type", "filter_type must be 'bilinear' or 'nearest', got '" + filter + "'");
+        std::string wrap = props.get_string("wrap_mode", "repeat");
+        if (wrap == "repeat") m_wrap = Wrap::Repeat;
+        else if (wrap == "mirror") m_wrap = Wrap::Mirror;
+        else if (wrap == "clamp") m_wrap = Wrap::Clamp;
+        else props.fail("wrap_mode", "wrap_mode must be 'repeat', 'mirror' or 'clamp', got '" + wrap + "'");
+        m_to_uv = UvTransform(props.get_transform("to_uv"));
+        try {
+            m_image = read_image(path, raw);
+        } catch (const std::exception &e) {
+            props.fail("filename", "cannot read image '" + file + "': " + e.what());
+        }
+        if (m_image.width <= 0 || m_image.height <= 0) props.fail("filename", "image '" + file + "' is empty");
+        for (size_t i = 0; i < m_image.rgb.size(); i += 3) {
+            Color3f c(m_image.rgb[i], m_image.rgb[i + 1], m_image.rgb[i + 2]);
+            if (!c.is_finite()) props.fail("filename", "image '" + file + "' contains non-finite values");
+            m_mean += c;
+        }
+        m_mean = m_mean / float(size_t(m_image.width) * m_image.height);
+    }
+
+    Color3f eval(Vec2f uv_in) const override {
+        Vec2f uv = m_to_uv(uv_in);
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
+        // Bounded before the int conversion (far-out uvs only lose precision).
+        auto to_int = [](float v) { return int(std::clamp(v, -1e9f, 1e9f)); };
+        const int w = m_image.width, h = m_image.height;
+        if (!m_bilinear) return texel(to_int(std::floor(uv.x * float(w))), to_int(std::floor(uv.y * float(h))));
+        float x = uv.x * float(w) - 0.5f, y = uv.y * float(h) - 0.5f;
+        float fx = std::floor(x), fy = std::floor(y), tx = x - fx, ty = y - fy;
+        int x0 = to_int(fx), y0 = to_int(fy);
+        return (texel(x0, y0) * (1.f - tx) + texel(x0 + 1, y0) * tx) * (1.f - ty) +
+               (texel(x0, y0 + 1) * (1.f - tx) + texel(x0 + 1, y0 + 1) * tx) * ty;
+    }
+
+    float eval_1(Vec2f uv) const override { return eval(uv).luminance(); }
+    Color3f mean() const override { return m_mean; }
+
+private:
+    int wrap(int i, int n) const {
+        switch (m_wrap) {
+            case Wrap::Clamp: return std::clamp(i, 0, n - 1);
+            case Wrap::Repeat: return ((i % n) + n) % n;
+            default: {
+                int p = ((i % (2 * n)) + 2 * n) % (2 * n);
+                return p < n ? p : 2 * n - 1 - p;
+            }
+        }
+    }
+
+    Color3f texel(int x, int y) const {
+        const float *p = &m_image.rgb[3 * (size_t(wrap(y, m_image.height)) * m_image.width + wrap(x, m_image.width))];
+        return {p[0], p[1], p[2]};
+    }
+
+    ImageRGB m_image;
+    Color3f m_mean;
+    UvTransform m_to_uv;
+    bool m_bilinear = true;
+    Wrap m_wrap = Wrap::Repeat;
+};
+
+MVPT_REGISTER_PLUGIN("texture", "bitmap", [](const Properties &p, const LoadContext &ctx) {
+    return std::make_shared<BitmapTexture>(p, ctx);
+});
+
+} // namespace mvpt
