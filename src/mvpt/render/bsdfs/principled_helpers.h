@@ -1,0 +1,148 @@
+// Pieces shared by the `principled` and `principledthin` BSDFs: the GTR1
+// clearcoat distribution, Schlick Fresnel terms, the principled Fresnel blend
+// and the roughness mapping [Burley 2012, "Physically Based Shading at
+// Disney"; Burley 2015, "Extending the Disney BRDF to a BSDF with Integrated
+// Subsurface Scattering"], following Mitsuba 3's conventions.
+#pragma once
+
+#include "../../core/math.h"
+#include "../../scene/properties.h"
+#include "../texture.h"
+
+#include <string>
+#include <utility>
+
+namespace mvpt::principled {
+
+/// Whether a lobe parameter switches its lobe on (Mitsuba's `get_flag`): it is
+/// given, and not as a float equal to zero. (Deviation: an `<rgb>` of zeros also
+/// counts as off here; its lobe then evaluates to zero either way.)
+inline bool lobe_enabled(const Properties &props, const std::string &name) {
+    if (!props.has_texture(name)) return false;
+    if (!props.has(name)) return true; // a texture object
+    Color3f c = props.get_color(name, Color3f(0.f));
+    return !(c.r == 0.f && c.g == 0.f && c.b == 0.f);
+}
+
+/// Texture parameter that is only evaluated when its lobe is enabled (else 0).
+struct LobeParam {
+    std::shared_ptr<Texture> tex;
+    bool enabled = false;
+
+    LobeParam() = default;
+    LobeParam(const Properties &props, const std::string &name, float def)
+        : enabled(lobe_enabled(props, name)) {
+        tex = props.get_texture(name, def);
+    }
+    float eval_1(Vec2f uv) const { return enabled ? tex->eval_1(uv) : 0.f; }
+};
+
+/// Rec. 709 luminance of a linear RGB colour.
+inline float luminance(Color3f c) { return 0.212671f * c.r + 0.715160f * c.g + 0.072169f * c.b; }
+
+/// Schlick's weight (1 - cos)^5, with the argument clamped to [0, 1].
+inline float schlick_weight(float cos_i) {
+    float m = std::clamp(1.f - cos_i, 0.f, 1.f);
+    float m2 = m * m;
+    return m2 * m2 * m;
+}
+
+/// Schlick Fresnel R0 + (1 - R0) (1 - cos)^5; inside a denser medium the cosine
+/// of the refracted direction is used [Burley 2015, §5.1; Mitsuba `calc_schlick`].
+template <typename T> inline T schlick_fresnel(T r0, float cos_theta_i, float eta) {
+    bool outside = cos_theta_i >= 0.f;
+    float eta_it = outside ? eta : 1.f / eta, eta_ti = outside ? 1.f / eta : eta;
+    float cos_t = safe_sqrt(1.f - (1.f - cos_theta_i * cos_theta_i) * eta_ti * eta_ti);
+    float w = eta_it > 1.f ? schlick_weight(std::abs(cos_theta_i)) : schlick_weight(cos_t);
+    return r0 + (T(1.f) - r0) * w;
+}
+
+/// Normal-incidence reflectance of relative IOR `eta`.
+inline float schlick_r0(float eta) {
+    float r = (eta - 1.f) / (eta + 1.f);
+    return r * r;
+}
+
+/// Both `wi` and `wo` on the side of microfacet `m` that the macro surface
+/// allows: same side for reflection, opposite sides for transmission.
+inline bool mac_mic_compatible(Vec3f m, Vec3f wi, Vec3f wo, float cos_theta_i, bool reflection) {
+    Vec3f ms = cos_theta_i < 0.f ? -m : m;
+    if (dot(wi, ms) <= 0.f) return false;
+    return reflection ? dot(wo, ms) > 0.f : dot(wo, ms) < 0.f;
+}
+
+/// GGX alphas from roughness and anisotropy [Burley 2012, addenda B.2].
+inline std::pair<float, float> dist_params(float anisotropic, float roughness, bool has_anisotropic) {
+    float r2 = roughness * roughness;
+    if (!has_anisotropic) {
+        float a = std::max(0.001f, r2);
+        return {a, a};
+    }
+    float aspect = std::sqrt(1.f - 0.9f * anisotropic);
+    return {std::max(0.001f, r2 / aspect), std::max(0.001f, r2 * aspect)};
+}
+
+/// Principled Fresnel: the dielectric term blended with Schlick terms for the
+/// metallic and spec_tint parts on the front side; plain dielectric (scaled by
+/// the transmission weight `bsdf`) from inside [Mitsuba `principled_fresnel`].
+inline Color3f principled_fresnel(float F_dielectric, float metallic, float spec_tint, Color3f base_color, float lum,
+                                  float cos_theta_i, bool front_side, float bsdf, float eta, bool has_metallic,
+                                  bool has_spec_tint) {
+    if (!front_side) return Color3f(bsdf * F_dielectric);
+    float eta_it = cos_theta_i >= 0.f ? eta : 1.f / eta;
+    Color3f F_schlick(0.f);
+    if (has_metallic) F_schlick += schlick_fresnel(base_color, cos_theta_i, eta) * metallic;
+    if (has_spec_tint) {
+        Color3f c_tint = lum > 0.f ? base_color / lum : Color3f(1.f);
+        F_schlick += schlick_fresnel(c_tint * schlick_r0(eta_it), cos_theta_i, eta) * ((1.f - metallic) * spec_tint);
+    }
+    return Color3f((1.f - metallic) * (1.f - spec_tint) * F_dielectric) + F_schlick;
+}
+
+/// Thin-sheet Fresnel: the dielectric term blended with a tinted Schlick term.
+inline Color3f thin_fresnel(float F_dielectric, float spec_tint, Color3f base_color, float lum, float cos_theta_i,
+                            float eta_t, bool has_spec_tint) {
+    Color3f F_schlick(0.f);
+    if (has_spec_tint) {
+        Color3f c_tint = lum > 0.f ? base_color / lum : Color3f(1.f);
+        F_schlick = schlick_fresnel(c_tint * schlick_r0(eta_t), cos_theta_i, eta_t);
+    }
+    return Color3f(F_dielectric) * (1.f - spec_tint) + F_schlick * spec_tint;
+}
+
+/// Isotropic GTR1 ("Berry") normal distribution of the clearcoat lobe, sampled
+/// proportionally to D(m) cos(theta_m) [Burley 2012, addenda B.1 and B.2].
+class Gtr1 {
+public:
+    explicit Gtr1(float alpha) : m_alpha(alpha) {}
+
+    /// D(m) = (a^2 - 1) / (pi log(a^2) (1 + (a^2 - 1) cos^2 theta)).
+    float eval(Vec3f m) const {
+        float a2 = m_alpha * m_alpha, c = Frame::cos_theta(m);
+        float d = (a2 - 1.f) / (Pi * std::log(a2) * (1.f + (a2 - 1.f) * c * c));
+        return d * c > 1e-20f ? d : 0.f;
+    }
+    /// Density of `sample`: D(m) cos(theta_m) on the upper hemisphere.
+    float pdf(Vec3f m) const { return m.z < 0.f ? 0.f : Frame::cos_theta(m) * eval(m); }
+    /// Sample m; `u.x` drives the azimuth, `u.y` the elevation.
+    Vec3f sample(Vec2f u) const {
+        float phi = 2.f * Pi * u.x, a2 = m_alpha * m_alpha;
+        float cos2 = (1.f - std::pow(a2, 1.f - u.y)) / (1.f - a2);
+        float sin_t = std::sqrt(std::max(0.f, 1.f - cos2)), cos_t = std::sqrt(std::max(0.f, cos2));
+        return {std::cos(phi) * sin_t, std::sin(phi) * sin_t, cos_t};
+    }
+
+private:
+    float m_alpha;
+};
+
+/// Smith G1 of an isotropic GGX with roughness `alpha` (the clearcoat lobe's
+/// fixed alpha = 0.25 masking) [Walter et al. 2007, eq. 34].
+inline float smith_ggx1(Vec3f v, Vec3f wh, float alpha) {
+    if (dot(v, wh) * Frame::cos_theta(v) <= 0.f) return 0.f;
+    if (v.z == 1.f) return 1.f;
+    float c2 = v.z * v.z, tan2 = (1.f - c2) / c2;
+    return 2.f / (1.f + std::sqrt(1.f + alpha * alpha * tan2));
+}
+
+} // namespace mvpt::principled
