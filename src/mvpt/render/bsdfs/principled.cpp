@@ -67,9 +67,7 @@ public:
         if (!front_side && !(w.bsdf > 0.f)) return {bs, {}};
 
         auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
-        MicrofacetDistribution spec_distr(MicrofacetType::GGX, ax, ay);
-        float unused_pdf;
-        Vec3f m_spec = spec_distr.sample(front_side ? wi : -wi, u2, &unused_pdf);
+        Vec3f m_spec = sample_ggx_visible(front_side ? wi : -wi, ax, ay, u2);
         FresnelDielectric fr = fresnel_dielectric(dot(wi, m_spec), m_eta);
         LobeProbs p = lobe_probs(front_side, fr.F, w);
 
