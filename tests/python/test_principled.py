@@ -1,5 +1,6 @@
-"""Tests of the `principled` BSDF: χ² of sample against pdf, weight = eval/pdf,
-eval and pdf against Mitsuba 3's `principled`, and a small render against Mitsuba."""
+"""Tests of the `principled` and `principledthin` BSDFs: χ² of sample against pdf,
+weight = eval/pdf, eval and pdf against Mitsuba 3's plugins, and a small render
+against Mitsuba."""
 from __future__ import annotations
 
 import numpy as np
@@ -15,18 +16,18 @@ except ImportError:  # pragma: no cover - local stand-in with the same call sign
 
 # --------------------------------------------------------------------------- helpers
 
-def principled_xml(params: dict) -> str:
+def principled_xml(params: dict, type_: str = "principled") -> str:
     body = ""
     for k, v in params.items():
         if isinstance(v, (tuple, list)):
             body += f'<rgb name="{k}" value="{v[0]}, {v[1]}, {v[2]}"/>'
         else:
             body += f'<float name="{k}" value="{v}"/>'
-    return f'<bsdf type="principled">{body}</bsdf>'
+    return f'<bsdf type="{type_}">{body}</bsdf>'
 
 
-def mitsuba_dict(params: dict) -> dict:
-    d = {"type": "principled"}
+def mitsuba_dict(params: dict, type_: str = "principled") -> dict:
+    d = {"type": type_}
     for k, v in params.items():
         d[k] = {"type": "rgb", "value": list(v)} if isinstance(v, (tuple, list)) else v
     return d
@@ -108,22 +109,29 @@ if chi2_test is None:
 # enough for grid integration; incident directions from the front and (for
 # transmission) from inside.
 CHI2_CASES = [
-    ("default", {}, (0.3, 0.2, 0.8)),
-    ("metallic", {"metallic": 0.8, "roughness": 0.35, "base_color": (0.9, 0.6, 0.2)}, (0.6, -0.1, 0.5)),
-    ("spec_trans_front", {"spec_trans": 0.7, "roughness": 0.35}, (0.4, 0.3, 0.6)),
-    ("spec_trans_back", {"spec_trans": 0.7, "roughness": 0.35, "eta": 1.4}, (0.3, -0.4, -0.6)),
-    ("clearcoat", {"clearcoat": 0.9, "clearcoat_gloss": 0.3, "roughness": 0.6}, (-0.5, 0.2, 0.4)),
-    ("sheen", {"sheen": 0.8, "sheen_tint": 0.5, "base_color": (0.2, 0.5, 0.8)}, (0.1, 0.7, 0.3)),
-    ("anisotropic", {"anisotropic": 0.8, "roughness": 0.4, "metallic": 0.5}, (0.5, 0.5, 0.4)),
-    ("all", {"metallic": 0.2, "spec_trans": 0.4, "clearcoat": 0.6, "clearcoat_gloss": 0.2, "sheen": 0.3,
+    ("principled", "default", {}, (0.3, 0.2, 0.8)),
+    ("principled", "metallic", {"metallic": 0.8, "roughness": 0.35, "base_color": (0.9, 0.6, 0.2)}, (0.6, -0.1, 0.5)),
+    ("principled", "spec_trans_front", {"spec_trans": 0.7, "roughness": 0.35}, (0.4, 0.3, 0.6)),
+    ("principled", "spec_trans_back", {"spec_trans": 0.7, "roughness": 0.35, "eta": 1.4}, (0.3, -0.4, -0.6)),
+    ("principled", "clearcoat", {"clearcoat": 0.9, "clearcoat_gloss": 0.3, "roughness": 0.6}, (-0.5, 0.2, 0.4)),
+    ("principled", "sheen", {"sheen": 0.8, "sheen_tint": 0.5, "base_color": (0.2, 0.5, 0.8)}, (0.1, 0.7, 0.3)),
+    ("principled", "anisotropic", {"anisotropic": 0.8, "roughness": 0.4, "metallic": 0.5}, (0.5, 0.5, 0.4)),
+    ("principled", "all", {"metallic": 0.2, "spec_trans": 0.4, "clearcoat": 0.6, "clearcoat_gloss": 0.2, "sheen": 0.3,
              "anisotropic": 0.5, "spec_tint": 0.3, "flatness": 0.4, "roughness": 0.45,
              "base_color": (0.9, 0.5, 0.2)}, (-0.2, 0.6, 0.5)),
+    ("principledthin", "thin_default", {}, (0.3, 0.2, 0.8)),
+    ("principledthin", "thin_spec_trans", {"spec_trans": 0.7, "roughness": 0.4, "eta": 1.33}, (0.5, -0.2, 0.6)),
+    ("principledthin", "thin_diff_trans_back", {"diff_trans": 1.2, "spec_trans": 0.4, "roughness": 0.5,
+                                                "anisotropic": 0.6}, (-0.3, 0.4, -0.5)),
+    ("principledthin", "thin_all", {"diff_trans": 0.6, "spec_trans": 0.5, "sheen": 0.5, "flatness": 0.5,
+                                    "spec_tint": 0.4, "roughness": 0.35, "base_color": (0.3, 0.7, 0.2)},
+     (0.1, 0.6, 0.3)),
 ]
 
 
-@pytest.mark.parametrize("name,params,wi", CHI2_CASES, ids=[c[0] for c in CHI2_CASES])
-def test_chi2_sample_matches_pdf(name, params, wi):
-    probe = _core.BsdfProbe(principled_xml(params))
+@pytest.mark.parametrize("type_,name,params,wi", CHI2_CASES, ids=[c[1] for c in CHI2_CASES])
+def test_chi2_sample_matches_pdf(type_, name, params, wi):
+    probe = _core.BsdfProbe(principled_xml(params, type_))
     wi = unit(wi)
 
     def sample_fn(n):
@@ -139,9 +147,9 @@ def test_chi2_sample_matches_pdf(name, params, wi):
 
 # --------------------------------------------------------------------------- weight
 
-@pytest.mark.parametrize("name,params,wi", CHI2_CASES, ids=[c[0] for c in CHI2_CASES])
-def test_weight_is_eval_over_pdf(name, params, wi):
-    probe = _core.BsdfProbe(principled_xml(params))
+@pytest.mark.parametrize("type_,name,params,wi", CHI2_CASES, ids=[c[1] for c in CHI2_CASES])
+def test_weight_is_eval_over_pdf(type_, name, params, wi):
+    probe = _core.BsdfProbe(principled_xml(params, type_))
     wi = unit(wi)
     wo, weight, pdf, stype = probe.sample(*wi, 20000, 3)
     pdf = np.asarray(pdf).reshape(-1)
@@ -153,31 +161,34 @@ def test_weight_is_eval_over_pdf(name, params, wi):
     np.testing.assert_allclose(pdf, pd, rtol=1e-5)
     np.testing.assert_allclose(weight, ev / pd[:, None], rtol=1e-4, atol=1e-7)
     # Transmission samples go to the other side, reflections stay.
-    trans = (stype[ok] == 16)  # BsdfGlossyTransmission
+    trans = (stype[ok] == 16) | (stype[ok] == 4)  # BsdfGlossyTransmission, BsdfDiffuseTransmission
     assert np.all(wo[trans, 2] * wi[2] < 0) and np.all(wo[~trans, 2] * wi[2] > 0)
 
 
 # --------------------------------------------------------------------------- Mitsuba
 
 MITSUBA_CASES = CHI2_CASES + [
-    ("sharp_clearcoat", {"clearcoat": 1.0, "clearcoat_gloss": 0.9, "roughness": 0.1}, None),
-    ("glass_like", {"spec_trans": 1.0, "eta": 1.33, "roughness": 0.08}, None),
-    ("specular_tint_flat", {"specular": 0.8, "spec_tint": 0.7, "flatness": 0.9, "sheen": 0.5,
-                            "base_color": (0.1, 0.7, 0.3)}, None),
-    ("rgb_valued_weights", {"metallic": (0.1, 0.5, 0.9), "roughness": (0.2, 0.3, 0.4)}, None),
+    ("principled", "sharp_clearcoat", {"clearcoat": 1.0, "clearcoat_gloss": 0.9, "roughness": 0.1}, None),
+    ("principled", "glass_like", {"spec_trans": 1.0, "eta": 1.33, "roughness": 0.08}, None),
+    ("principled", "specular_tint_flat", {"specular": 0.8, "spec_tint": 0.7, "flatness": 0.9, "sheen": 0.5,
+                                          "base_color": (0.1, 0.7, 0.3)}, None),
+    ("principled", "rgb_valued_weights", {"metallic": (0.1, 0.5, 0.9), "roughness": (0.2, 0.3, 0.4)}, None),
+    ("principledthin", "thin_sharp", {"spec_trans": 0.9, "roughness": 0.1, "eta": 1.6, "spec_tint": 0.5,
+                                      "base_color": (0.9, 0.2, 0.4)}, None),
+    ("principledthin", "thin_full_diff_trans", {"diff_trans": 2.0, "sheen": 0.7, "sheen_tint": 0.6}, None),
 ]
 
 
-@pytest.mark.parametrize("name,params,wi", MITSUBA_CASES, ids=[c[0] for c in MITSUBA_CASES])
-def test_eval_pdf_match_mitsuba(name, params, wi):
+@pytest.mark.parametrize("type_,name,params,wi", MITSUBA_CASES, ids=[c[1] for c in MITSUBA_CASES])
+def test_eval_pdf_match_mitsuba(type_, name, params, wi):
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
-    probe = _core.BsdfProbe(principled_xml(params))
-    bsdf = mi.load_dict(mitsuba_dict(params))
+    probe = _core.BsdfProbe(principled_xml(params, type_))
+    bsdf = mi.load_dict(mitsuba_dict(params, type_))
     ctx = mi.BSDFContext()
     si = mi.SurfaceInteraction3f()
     si.uv = mi.Point2f(0.5, 0.5)
-    rng = np.random.default_rng(abs(hash(name)) % 2**32)
+    rng = np.random.default_rng(sum(map(ord, name)))
     wis = random_dirs(rng, 12)
     # Include the mirror directions, where the sharp lobes peak.
     n_checked = 0

@@ -161,30 +161,13 @@ public:
 
         // Diffuse with retro-reflection, fake subsurface and sheen [Burley 2015, §5.3].
         if (diffuse_active) {
-            float Fo = schlick_weight(std::abs(cos_theta_o)), Fi = schlick_weight(std::abs(cos_theta_i));
-            float f_diff = (1.f - 0.5f * Fi) * (1.f - 0.5f * Fo);
-            float cos_theta_d = dot(wh, wo);
-            float Rr = 2.f * w.roughness * cos_theta_d * cos_theta_d;
-            float f_retro = Rr * (Fo + Fi + Fo * Fi * (Rr - 1.f));
-            float f = f_diff + f_retro;
-            if (m_flatness.enabled) {
-                // Hanrahan-Krueger-like fake subsurface [Burley 2012, §5.3].
-                float Fss90 = Rr / 2.f;
-                float Fss = lerp(Fo, 1.f, Fss90) * lerp(Fi, 1.f, Fss90);
-                float f_ss = 1.25f * (Fss * (1.f / (std::abs(cos_theta_o) + std::abs(cos_theta_i)) - 0.5f) + 0.5f);
-                f = lerp(flatness, f, f_ss);
-            }
-            value += base_color * (w.brdf * std::abs(cos_theta_o) * InvPi * f);
-
+            float abs_cos_o = std::abs(cos_theta_o), cos_theta_d = dot(wh, wo);
+            float f = disney_diffuse(std::abs(cos_theta_i), abs_cos_o, cos_theta_d, w.roughness, flatness,
+                                     m_flatness.enabled);
+            value += base_color * (w.brdf * abs_cos_o * InvPi * f);
             if (sheen_active) {
-                float Fd = schlick_weight(std::abs(cos_theta_d));
-                Color3f c_sheen(1.f);
-                if (m_sheen_tint.enabled) {
-                    float sheen_tint = m_sheen_tint.eval_1(si.uv), lum = luminance(base_color);
-                    Color3f c_tint = lum > 0.f ? base_color / lum : Color3f(1.f);
-                    c_sheen = lerp(sheen_tint, Color3f(1.f), c_tint);
-                }
-                value += c_sheen * (sheen * (1.f - w.metallic) * Fd * std::abs(cos_theta_o));
+                Color3f c_sheen = sheen_color(base_color, m_sheen_tint.eval_1(si.uv), m_sheen_tint.enabled);
+                value += c_sheen * (sheen * (1.f - w.metallic) * schlick_weight(std::abs(cos_theta_d)) * abs_cos_o);
             }
         }
         return value;

@@ -111,6 +111,31 @@ inline Color3f thin_fresnel(float F_dielectric, float spec_tint, Color3f base_co
     return Color3f(F_dielectric) * (1.f - spec_tint) + F_schlick * spec_tint;
 }
 
+/// Diffuse factor (without base_color / pi): Burley's Fresnel-shaped diffuse plus
+/// retro-reflection, blended towards the Hanrahan-Krueger-like fake subsurface
+/// term by `flatness` [Burley 2012, §5.3; Burley 2015, §5.3]. `cos_theta_d` is
+/// the cosine between the half vector and wo.
+inline float disney_diffuse(float abs_cos_i, float abs_cos_o, float cos_theta_d, float roughness, float flatness,
+                            bool has_flatness) {
+    float Fo = schlick_weight(abs_cos_o), Fi = schlick_weight(abs_cos_i);
+    float f_diff = (1.f - 0.5f * Fi) * (1.f - 0.5f * Fo);
+    float Rr = 2.f * roughness * cos_theta_d * cos_theta_d;
+    float f_retro = Rr * (Fo + Fi + Fo * Fi * (Rr - 1.f));
+    if (!has_flatness) return f_diff + f_retro;
+    float Fss90 = Rr / 2.f;
+    float Fss = lerp(Fo, 1.f, Fss90) * lerp(Fi, 1.f, Fss90);
+    float f_ss = 1.25f * (Fss * (1.f / (abs_cos_o + abs_cos_i) - 0.5f) + 0.5f);
+    return lerp(flatness, f_diff + f_retro, f_ss);
+}
+
+/// Sheen colour: white, tinted towards the luminance-normalised base colour.
+inline Color3f sheen_color(Color3f base_color, float sheen_tint, bool has_sheen_tint) {
+    if (!has_sheen_tint) return Color3f(1.f);
+    float lum = luminance(base_color);
+    Color3f c_tint = lum > 0.f ? base_color / lum : Color3f(1.f);
+    return lerp(sheen_tint, Color3f(1.f), c_tint);
+}
+
 /// Sample a GGX normal from the distribution of normals visible from `wi` (upper
 /// hemisphere) exactly, by projecting a disk sample onto the hemisphere of the
 /// stretched configuration [Heitz 2018, "Sampling the GGX Distribution of Visible
