@@ -257,7 +257,9 @@ private:
             p.spec_reflect = F;
             p.spec_trans = m_spec_trans.enabled ? 1.f - F : 0.f;
         }
-        float rcp_total = 1.f / (p.spec_reflect + p.spec_trans + p.clearcoat + p.diffuse);
+        float total = p.spec_reflect + p.spec_trans + p.clearcoat + p.diffuse;
+        if (!(total > 0.f)) return LobeProbs{}; // every sampling rate zeroed: nothing to sample
+        float rcp_total = 1.f / total;
         p.spec_reflect *= rcp_total;
         p.spec_trans *= rcp_total;
         p.clearcoat *= rcp_total;

@@ -211,7 +211,9 @@ private:
         }
         p.diffuse_reflect = m_diff_refl_srate * (1.f - w.spec_trans) * (1.f - w.diff_trans);
         if (m_diff_trans.enabled) p.diffuse_trans = m_diff_trans_srate * (1.f - w.spec_trans) * w.diff_trans;
-        float rcp_total = 1.f / (p.spec_reflect + p.spec_trans + p.diffuse_reflect + p.diffuse_trans);
+        float total = p.spec_reflect + p.spec_trans + p.diffuse_reflect + p.diffuse_trans;
+        if (!(total > 0.f)) return LobeProbs{}; // every sampling rate zeroed: nothing to sample
+        float rcp_total = 1.f / total;
         p.spec_reflect *= rcp_total;
         p.spec_trans *= rcp_total;
         p.diffuse_reflect *= rcp_total;
