@@ -134,11 +134,11 @@ def test_eval_pdf_match_mitsuba(type_, name, params, wi):
     si.uv = mi.Point2f(0.5, 0.5)
     rng = np.random.default_rng(sum(map(ord, name)))
     wis = random_dirs(rng, 12)
-    # Include the mirror directions, where the sharp lobes peak.
     n_checked = 0
     for wi_ in wis:
         if abs(wi_[2]) < 1e-2:
             continue
+        # Random directions plus the mirror direction, where the sharp lobes peak.
         wos = np.concatenate([random_dirs(rng, 120), np.array([[-wi_[0], -wi_[1], wi_[2]]], np.float32)])
         wos = wos[np.abs(wos[:, 2]) > 1e-3]
         f = probe.eval(*wi_, wos)
@@ -193,6 +193,8 @@ RENDER_SCENE = """
 
 
 def test_render_matches_mitsuba():
+    """A principled rectangle under a small area light, 32x32 at 1024 spp (standard
+    error of each image mean ~0.2%): image means agree with Mitsuba within 1%."""
     mi = pytest.importorskip("mitsuba")
     import mvpt
 
