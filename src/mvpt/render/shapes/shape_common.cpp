@@ -10,8 +10,10 @@ void attach_shape_children(Shape &shape, const Properties &props) {
     if (const ChildObject *b = props.child_of_kind("bsdf")) {
         shape.bsdf = std::static_pointer_cast<Bsdf>(b->object);
     } else {
-        // Mitsuba's default material: diffuse with reflectance 0.5.
+        // Mitsuba's default material: diffuse with reflectance 0.5, black on emitters (its shape.cpp).
         Properties dp("bsdf", "diffuse", props.loc());
+        for (auto &c : props.children())
+            if (c.kind == "emitter") dp.set("reflectance", 0.0, props.loc(), "float");
         shape.bsdf = std::static_pointer_cast<Bsdf>((*PluginRegistry::find("bsdf", "diffuse"))(dp, {}));
     }
     if (const ChildObject *e = props.child_of_kind("emitter")) {
