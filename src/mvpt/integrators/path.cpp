@@ -27,6 +27,10 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
     SurfaceInteraction prev_si;
     float prev_bsdf_pdf = 1.f;
     bool prev_bsdf_delta = true;
+    // Mitsuba 3 keeps a path's radiance only if it scattered at a non-null surface, hit
+    // an emitter, or could see the environment (so a camera ray that passes through
+    // masks into nothing contributes nothing).
+    bool valid = !m_cfg.hide_emitters && scene.environment() != nullptr;
 
     for (uint32_t depth = 0;; ++depth) {
         sampler.set_dimension(DimCameraEnd + depth * DimsPerVertex);
@@ -36,6 +40,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
 
         // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
         const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
+        if (emitter && !m_cfg.hide_emitters && hit) valid = true;
         if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
             Spectrum le = hit ? emitter->eval(si, -ray.d) : emitter->eval_environment(ray.d);
             if (!le.is_black()) {
@@ -75,6 +80,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
         float u_lobe = sampler.next_1d();
         Vec2f u_dir = sampler.next_2d();
         auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, u_dir);
+        if (!(bs.sampled_type & BsdfNull)) valid = true;
         if (bsdf_weight.is_black()) break;
         Vec3f wo_world = si.to_world(bs.wo);
         ray = si.spawn_ray(wo_world);
@@ -94,7 +100,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
             throughput *= 1.f / q;
         }
     }
-    return result;
+    return valid ? result : Spectrum(0.f);
 }
 
 namespace {
