@@ -11,6 +11,7 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <tuple>
 
 namespace mvpt {
 
@@ -112,9 +113,14 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                             Spectrum L = integrator.li(m_scene, ray, sampler, rc);
                             size_t pi = size_t(y) * film.crop_width + x;
                             if (!L.is_finite()) {
+                                // Never reaches the film: counted, and the first one kept for replay.
                                 ++rc.nonfinite;
+                                ++*fb.nonfinite;
                                 std::lock_guard<std::mutex> lock(nonfinite_mutex);
-                                if (m_stats.nonfinite_view < 0) {
+                                auto key = std::make_tuple(int64_t(pass), int64_t(view), int64_t(py), int64_t(px));
+                                if (m_stats.nonfinite_view < 0 ||
+                                    key < std::make_tuple(m_stats.nonfinite_sample, m_stats.nonfinite_view,
+                                                          m_stats.nonfinite_y, m_stats.nonfinite_x)) {
                                     m_stats.nonfinite_view = view; m_stats.nonfinite_x = px;
                                     m_stats.nonfinite_y = py; m_stats.nonfinite_sample = pass;
                                 }
@@ -130,6 +136,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             });
         });
         last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
+        m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
         m_stats.passes = pass + 1;
         m_stats.samples = 0;
         for (auto &fb : m_films)
@@ -139,8 +146,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             p.pass = pass + 1;
             p.elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
             p.samples = m_stats.samples;
-            p.fraction = m_opts.time_budget > 0.0 ? std::min(1.0, p.elapsed / m_opts.time_budget)
-                                                  : double(pass + 1) / double(max_target);
+            p.fraction = double(pass + 1) / double(max_target);
+            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
             progress(p);
         }
     }
@@ -163,6 +170,7 @@ void Renderer::develop() {
         r.rgb.resize(3 * n);
         r.variance.resize(3 * n);
         r.sample_count = fb.count;
+        r.nonfinite = fb.nonfinite->load();
         for (size_t p = 0; p < n; ++p) {
             double k = fb.count[p];
             r.samples += fb.count[p];
