@@ -163,6 +163,11 @@ def _render(scene_path: Path, args, stem: str) -> int:
     except ValueError as e:
         _error(f"--views: {e}")
         return EXIT_USAGE
+    if not args.quiet:
+        n = len(views) if views else len(scene.views)
+        budget = [f"{args.spp} spp" if args.spp else "each sensor's spp"] + ([f"{args.time:g} s"] if args.time else [])
+        print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
+              f"after the current pass and writes the images)", flush=True)
     bar = ProgressBar(enabled=False if args.quiet else None)
     result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
                         views=views, progress=bar)

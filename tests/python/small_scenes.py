@@ -58,3 +58,34 @@ def views(n: int, res: int = 16, spp: int = 4, sampler: str = "independent") -> 
         out += sensor(id=f"v{i}", res=res, spp=spp, sampler=sampler,
                       origin=f"{3.5 * math.sin(a):.4f}, 1.5, {3.5 * math.cos(a):.4f}")
     return out
+
+
+# A closed room (an inward-facing cube around everything): long paths, so one pass of
+# `slow_scene()` takes a noticeable time (~0.2 s for 12 views of 64x64 on one core of 2).
+ROOM = GEOMETRY + textwrap.dedent("""\
+    <shape type="cube">
+        <transform name="to_world"><scale value="5"/></transform>
+        <boolean name="flip_normals" value="true"/>
+        <ref id="white"/>
+    </shape>
+""")
+
+
+def slow_scene(n_views: int = 12, res: int = 64, spp: int = 4) -> str:
+    """`n_views` views of the closed room with unbounded path depth (Russian roulette ends paths)."""
+    return scene(views(n_views, res=res, spp=spp), geometry=ROOM, max_depth=-1)
+
+
+def overflow_scene(res: int = 16) -> str:
+    """Finite inputs whose samples overflow: a huge, bright emitter (radiance near FLT_MAX) right
+    above the floor makes next-event estimates L / pdf infinite (the pdf is ~d^2 / area < 1)."""
+    geometry = textwrap.dedent("""\
+        <shape type="rectangle">
+            <transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
+        </shape>
+        <shape type="rectangle">
+            <transform name="to_world"><scale value="20"/><rotate x="1" angle="90"/><translate y="1"/></transform>
+            <emitter type="area"><rgb name="radiance" value="3e38"/></emitter>
+        </shape>
+    """)
+    return scene(sensor(res=res, spp=2, origin="0, 0.5, 3", fov="60"), geometry=geometry, max_depth=3)

@@ -79,20 +79,29 @@ ImageRGB read_image(const fs::path &path, bool raw) {
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext == ".exr") {
         try {
-            Imf::RgbaInputFile file(path.c_str());
-            Imath::Box2i dw = file.dataWindow();
+            // Full float precision (Imf::RgbaInputFile would round every value to half).
+            Imf::InputFile file(path.c_str());
+            Imath::Box2i dw = file.header().dataWindow();
             img.width = dw.max.x - dw.min.x + 1;
             img.height = dw.max.y - dw.min.y + 1;
-            Imf::Array2D<Imf::Rgba> px(img.height, img.width);
-            file.setFrameBuffer(&px[0][0] - dw.min.x - dw.min.y * img.width, 1, img.width);
-            file.readPixels(dw.min.y, dw.max.y);
-            img.rgb.resize(size_t(img.width) * img.height * 3);
-            for (int y = 0; y < img.height; ++y)
-                for (int x = 0; x < img.width; ++x) {
-                    const Imf::Rgba &p = px[y][x];
-                    float *o = &img.rgb[3 * (size_t(y) * img.width + x)];
-                    o[0] = p.r; o[1] = p.g; o[2] = p.b;
-                }
+            const Imf::ChannelList &channels = file.header().channels();
+            bool rgb = channels.findChannel("R") && channels.findChannel("G") && channels.findChannel("B");
+            if (!rgb && !channels.findChannel("Y")) throw std::runtime_error("no R, G, B or Y channels");
+            img.rgb.assign(size_t(img.width) * img.height * 3, 0.f);
+            const size_t xs = 3 * sizeof(float), ys = xs * img.width;
+            char *base = (char *)img.rgb.data() - (dw.min.x * xs + dw.min.y * ys);
+            Imf::FrameBuffer fb;
+            if (rgb) {
+                for (int c = 0; c < 3; ++c)
+                    fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+                file.setFrameBuffer(fb);
+                file.readPixels(dw.min.y, dw.max.y);
+            } else {
+                fb.insert("Y", Imf::Slice(Imf::FLOAT, base, xs, ys));
+                file.setFrameBuffer(fb);
+                file.readPixels(dw.min.y, dw.max.y);
+                for (size_t i = 0; i < img.rgb.size(); i += 3) img.rgb[i + 1] = img.rgb[i + 2] = img.rgb[i];
+            }
         } catch (const std::exception &e) {
             throw std::runtime_error(std::string("cannot read EXR: ") + e.what());
         }
