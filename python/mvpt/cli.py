@@ -169,8 +169,13 @@ def _render(scene_path: Path, args, stem: str) -> int:
         print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
               f"after the current pass and writes the images)", flush=True)
     bar = ProgressBar(enabled=False if args.quiet else None)
-    result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
-                        views=views, progress=bar)
+    try:
+        result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
+                            views=views, progress=bar)
+    except (RuntimeError, MemoryError, ValueError) as e:
+        bar.finish(done=False)
+        _error(str(e) or type(e).__name__)
+        return EXIT_ERROR
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}

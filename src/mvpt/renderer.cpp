@@ -11,7 +11,9 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <tuple>
+#include <unistd.h>
 
 namespace mvpt {
 
@@ -36,6 +38,18 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
                                         std::to_string(cams.size()) + " views)");
     if (m_opts.spp < 0) throw std::invalid_argument("spp must be >= 0");
     if (!(m_opts.time_budget >= 0.0)) throw std::invalid_argument("time budget must be >= 0");
+    // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM killer) fail
+    // mid-render: per pixel, the sums (2 x 3 doubles) and count here plus the developed images.
+    double bytes = 0.0;
+    for (int v : m_views) {
+        const FilmDesc &f = cams[v]->film;
+        bytes += double(f.crop_width) * f.crop_height * (6 * sizeof(double) + sizeof(uint32_t) + 7 * sizeof(float));
+    }
+    double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+    if (physical > 0 && bytes > 0.8 * physical)
+        throw std::runtime_error("the films of the " + std::to_string(m_views.size()) + " views need " +
+                                 std::to_string(int64_t(bytes / (1 << 20))) + " MiB but the machine has " +
+                                 std::to_string(int64_t(physical / (1 << 20))) + " MiB of memory");
     m_films.resize(m_views.size());
     for (size_t i = 0; i < m_views.size(); ++i) {
         const FilmDesc &f = cams[m_views[i]]->film;

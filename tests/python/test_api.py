@@ -201,3 +201,16 @@ def test_scene_info():
     (v,) = s.views
     assert (v["id"], v["width"], v["height"], v["spp"]) == ("a", 8, 8, 3)
     assert s.integrator == "path" and s.shape_count == 3 and s.light_count == 1
+
+
+def test_film_too_large_for_memory(tmp_path, capsys):
+    """A 65536^2 film would need hundreds of GiB: a clear error before anything is allocated."""
+    s = mvpt.load_string(scene(sensor(res=65536)))
+    with pytest.raises(RuntimeError, match=r"the films of the 1 views need \d+ MiB but the machine has \d+ MiB"):
+        mvpt.render(s, spp=1)
+    from mvpt import cli
+    path = tmp_path / "huge.xml"
+    path.write_text(scene(sensor(res=65536)))
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "out"), "-q"]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mvpt: error: the films")

@@ -69,6 +69,10 @@ CASES = {
     "ref_self": Case(scene(body='    <bsdf type="diffuse" id="loop"><ref id="loop"/></bsdf>\n'
                                '    <shape type="cube"><ref id="loop"/></shape>\n'),
                      '<ref id="loop"/></bsdf>', r"refers to an object that contains it \(declared at .*scene\.xml:\d+:5\)"),
+    "ref_before_untyped_object": Case(scene(body='    <shape type="cube"><ref id="later"/></shape>\n    <bsdf id="later"/>\n'),
+                                      '<bsdf id="later"/>', r"<bsdf> is missing its 'type' attribute"),
+    "deep_nesting": Case(scene(body="    " + "<shape>" * 256 + '<shape id="deep">' + "<shape>" * 43 + "</shape>" * 300 + "\n"),
+                         '<shape id="deep">', r"nested more than 256 levels"),
     "include_missing": Case(scene(body='    <include filename="missing.xml"/>\n'), '<include filename="missing.xml"',
                             r"included file 'missing.xml' not found"),
     "include_cycle": Case(scene(body='    <include filename="a.xml"/>\n'), '<include filename="scene.xml"',
@@ -238,6 +242,15 @@ def test_define_overrides_default_and_bad_define(tmp_path):
     assert mvpt.load_file(path, res=8).views[0]["width"] == 8
     with pytest.raises(mvpt.SceneError, match=r"integer 'width': expected an integer, got 'abc'"):
         mvpt.load_file(path, res="abc")
+
+
+def test_unused_define(tmp_path):
+    """As Mitsuba: a define the scene never uses as $name is an error (usually a typo)."""
+    path = tmp_path / "scene.xml"
+    path.write_text(scene(sensor(res="$res")))
+    assert mvpt.load_file(path, res=8).views[0]["width"] == 8
+    with pytest.raises(mvpt.SceneError, match=r"the define rez=8 is not used: the scene has no \$rez"):
+        mvpt.load_file(path, res=8, rez=8)
 
 
 def test_missing_scene_file(tmp_path):

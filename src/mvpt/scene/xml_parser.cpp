@@ -188,6 +188,14 @@ public:
         return out;
     }
 
+    /// Like Mitsuba: a caller's define that the scene never uses as $name is an error (a typo, usually).
+    void check_defines_used(const std::string &display_path) const {
+        for (const std::string &name : m_from_caller)
+            if (!m_used.count(name))
+                throw SceneError({display_path, 0, 0}, "the define " + name + "=" + m_vars.at(name) +
+                                                           " is not used: the scene has no $" + name);
+    }
+
 private:
     void expand_children(const pugi::xml_node &parent, const SourceText &src, const fs::path &dir, XmlNode &out,
                          int depth) {
@@ -225,7 +233,9 @@ private:
             n.attrs = std::move(attrs);
             n.loc = loc;
             n.dir = dir;
+            if (++m_nesting > 256) throw SceneError(loc, "elements nested more than 256 levels deep");
             expand_children(c, src, dir, n, depth);
+            --m_nesting;
             out.children.push_back(std::move(n));
         }
     }
@@ -239,6 +249,7 @@ private:
             while (j < s.size() && (std::isalnum((unsigned char)s[j]) || s[j] == '_')) ++j;
             std::string name = s.substr(i + 1, j - i - 1);
             auto it = m_vars.find(name);
+            if (it != m_vars.end()) m_used.insert(name);
             if (name.empty() || it == m_vars.end())
                 throw SceneError(loc, "undefined variable '$" + name + "': add <default name=\"" + name +
                                           "\" value=\"...\"/> or pass -D " + name + "=...");
@@ -250,6 +261,8 @@ private:
 
     std::map<std::string, std::string> m_vars;
     std::set<std::string> m_from_caller;
+    mutable std::set<std::string> m_used; ///< variables substituted at least once
+    int m_nesting = 0;
     std::vector<std::shared_ptr<SourceText>> m_sources;
     std::vector<fs::path> m_stack;   ///< files being expanded, outermost first
 };
@@ -363,12 +376,16 @@ XmlNode parse_scene_file(const fs::path &path, std::map<std::string, std::string
     ss << f.rdbuf();
     if (!f && !f.eof()) throw SceneError({path.string(), 0, 0}, "cannot read scene file");
     Expander e(std::move(defines));
-    return e.parse_text(ss.str(), path.string(), fs::absolute(path).parent_path(), 0, nullptr, path);
+    XmlNode root = e.parse_text(ss.str(), path.string(), fs::absolute(path).parent_path(), 0, nullptr, path);
+    e.check_defines_used(path.string());
+    return root;
 }
 
 XmlNode parse_scene_string(const std::string &xml, const fs::path &base_dir, std::map<std::string, std::string> defines) {
     Expander e(std::move(defines));
-    return e.parse_text(xml, "<string>", fs::absolute(base_dir), 0);
+    XmlNode root = e.parse_text(xml, "<string>", fs::absolute(base_dir), 0);
+    e.check_defines_used("<string>");
+    return root;
 }
 
 SceneTree instantiate_scene(const XmlNode &root, const fs::path &scene_dir) {
