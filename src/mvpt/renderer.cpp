@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <cfloat>
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -192,7 +193,7 @@ void Renderer::develop() {
                 double mean = k > 0 ? fb.sum[3 * p + c] / k : 0.0;
                 double var = k > 1 ? std::max(0.0, (fb.sum_sq[3 * p + c] - k * mean * mean) / (k * (k - 1))) : 0.0;
                 r.rgb[3 * p + c] = float(mean);
-                r.variance[3 * p + c] = float(var);
+                r.variance[3 * p + c] = float(std::min(var, double(FLT_MAX))); // finite even for huge samples
             }
         }
         m_results.push_back(std::move(r));

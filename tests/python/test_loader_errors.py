@@ -42,6 +42,10 @@ CASES = {
     "unclosed_tag": Case(scene(body='    <shape type="cube">\n        <ref id="white"/>\n'),
                          '<shape type="cube">\n        <ref', r"<shape> .*not closed|never closed"),
     "unclosed_at_eof": Case(scene().replace("</scene>\n", ""), '<scene version', r"<scene> .*not closed|never closed"),
+    "unclosed_inner": Case(scene(body='    <shape type="cube">\n        <bsdf type="diffuse">\n    </shape>\n'),
+                           '<bsdf type="diffuse">\n    </shape>', r"<bsdf> is not closed \(expected </bsdf> before the </shape> at .*:\d+:5\)"),
+    "extra_close_tag": Case(scene(body='    <shape type="cube"/>\n    </shape>\n'), '</shape>\n</scene>',
+                            r"</shape> closes no open element \(expected </scene>\)"),
     "bad_attribute_syntax": Case(scene(sensor(fov="40").replace('value="40"', "value=40")),
                                  "40/>", r"malformed XML: bad attribute syntax \(expected name=\"value\"\)"),
     "bad_start_tag": Case(scene(body='    <shape type="cube"/ >\n'), ' >\n', r"malformed XML: bad start tag"),
@@ -104,6 +108,10 @@ CASES = {
     "obj_inf_vertex": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="inf.obj"/>\n    </shape>\n'),
                            '<shape type="obj">', r"inf\.obj.*not finite",
                            files={"inf.obj": "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"}),
+    "corrupt_texture": Case(_with_shape('<bsdf type="diffuse">\n            <texture type="bitmap" name="reflectance">\n'
+                                        '                <string name="filename" value="bad.png"/>\n'
+                                        '            </texture>\n        </bsdf>'),
+                            '<string name="filename"', r"cannot read image 'bad.png'", files={"bad.png": b"\x89PNG garbage"}),
     "missing_texture": Case(_with_shape('<bsdf type="diffuse">\n            <texture type="bitmap" name="reflectance">\n'
                                         '                <string name="filename" value="nothere.png"/>\n'
                                         '            </texture>\n        </bsdf>'),
@@ -178,7 +186,7 @@ def test_load_error(name, tmp_path):
     with pytest.raises(mvpt.SceneError) as info:
         mvpt.load_file(path, **case.defines)
     msg = str(info.value)
-    if name == "missing_texture" and "unknown texture type 'bitmap'" in msg:
+    if "texture" in name and "unknown texture type 'bitmap'" in msg:
         pytest.skip("the bitmap texture plugin does not exist yet")
     _check_message(msg, case, tmp_path)
     assert isinstance(info.value, ValueError)
@@ -191,7 +199,7 @@ def test_cli_load_error(name, tmp_path, capsys):
     out = tmp_path / "out"
     rc = cli.main(["render", str(path), "-o", str(out)])
     captured = capsys.readouterr()
-    if name == "missing_texture" and "unknown texture type 'bitmap'" in captured.err:
+    if "texture" in name and "unknown texture type 'bitmap'" in captured.err:
         pytest.skip("the bitmap texture plugin does not exist yet")
     assert rc == 1
     lines = captured.err.splitlines()

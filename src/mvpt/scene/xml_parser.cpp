@@ -86,8 +86,11 @@ struct SourceText {
                 size_t at = i;
                 std::string name = read_name(i + 2);
                 skip_past(">");
-                if (open.empty())
-                    throw SceneError(loc(ptrdiff_t(at)), "malformed XML: </" + name + "> closes an element that was never opened");
+                bool is_open = std::any_of(open.begin(), open.end(), [&](const auto &o) { return o.first == name; });
+                if (!is_open)
+                    throw SceneError(loc(ptrdiff_t(at)), "malformed XML: </" + name + "> closes no open element" +
+                                                             (open.empty() ? std::string()
+                                                                           : " (expected </" + open.back().first + ">)"));
                 if (open.back().first != name)
                     throw SceneError(loc(ptrdiff_t(open.back().second)),
                                      "malformed XML: <" + open.back().first + "> is not closed (expected </" +
