@@ -214,3 +214,22 @@ def test_film_too_large_for_memory(tmp_path, capsys):
     assert cli.main(["render", str(path), "-o", str(tmp_path / "out"), "-q"]) == 1
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("mvpt: error: the films")
+
+
+def test_ctrl_c_during_render(slow):
+    """SIGINT (Ctrl-C) in the main thread while render() waits: cancelled at a pass boundary."""
+    import os
+    import signal
+
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    t0 = time.monotonic()
+    timer.start()
+    try:
+        # Only the interrupt can end this render (10^6 passes), so it arrives while rendering.
+        r = mvpt.render(slow, spp=1_000_000)
+    finally:
+        timer.cancel()
+    assert r.stats["cancelled"] is True and r.stats["passes"] >= 1
+    assert time.monotonic() - t0 < 10
+    for count in r.sample_count.values():
+        assert (count == r.stats["passes"]).all()

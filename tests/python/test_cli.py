@@ -18,7 +18,7 @@ import pytest
 import mvpt
 from mvpt import _core, cli
 
-from small_scenes import scene, sensor, slow_scene
+from small_scenes import overflow_scene, scene, sensor, slow_scene
 
 ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
 CLI = [sys.executable, "-m", "mvpt.cli"]
@@ -47,15 +47,33 @@ def _exr_channels(path: Path) -> dict:
 
 def test_demo(tmp_path, capsys):
     out = tmp_path / "out"
-    assert cli.main(["demo", "-o", str(out), "-D", "res=16", "--spp", "2"]) == 0
+    assert cli.main(["demo", "-o", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["demo.json", "demo_cam.exr", "demo_cam.png"]
     with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
-        expected = mvpt.render(mvpt.load_file(demo, res=16), spp=2)
-    exr = _core.read_image(str(out / "demo_cam.exr"))
-    assert exr.tobytes() == expected.images["cam"].tobytes()
-    assert _core.read_image(str(out / "demo_cam.png")).shape == (16, 16, 3)
+        expected = mvpt.render(mvpt.load_file(demo))
+    (vid,) = expected.images
+    exr = _core.read_image(str(out / f"demo_{vid}.exr"))
+    assert exr.tobytes() == expected.images[vid].tobytes()  # float32 EXR: bit-exact
+    png = _core.read_image(str(out / f"demo_{vid}.png"))
+    assert png.shape == exr.shape
+    # The PNG is the sRGB-encoded 8-bit preview of the same image (clamped to [0, 1]).
+    assert np.abs(png - np.clip(exr, 0, 1)).max() < 0.02
     printed = capsys.readouterr().out
-    assert "cam" in printed and "16x16" in printed
+    assert vid in printed and f"{exr.shape[1]}x{exr.shape[0]}" in printed
+
+
+def test_nonfinite_samples_reported(tmp_path, capsys):
+    path = tmp_path / "overflow.xml"
+    path.write_text(overflow_scene())
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    data = json.loads((out / "overflow.json").read_text())
+    n, first = data["nonfinite_samples"], data["first_nonfinite"]
+    assert n > 0 and data["views"]["cam"]["nonfinite_samples"] == n
+    assert (f"warning: {n:,} non-finite samples were dropped (first: view cam, pixel ({first['x']}, {first['y']}), "
+            f"sample {first['sample']})") in printed
+    assert np.isfinite(_core.read_image(str(out / "overflow_cam.exr"))).all()
 
 
 def test_render_end_to_end(tmp_path):
