@@ -51,6 +51,8 @@ def resolve_views(scene: _core.Scene, views: Optional[Sequence]) -> list:
 
     A string is an id when a view has that id, otherwise a digit string is an index."""
     ids = [v["id"] for v in scene.views]
+    if isinstance(views, (str, int, np.integer)):
+        views = [views]
     index = []
     for v in views or []:
         if isinstance(v, (bool, np.bool_)):
@@ -87,6 +89,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"time must be >= 0 seconds, got {time}")
     if int(threads) < 0:
         raise ValueError(f"threads must be >= 0, got {threads}")
+    if not float(poll) > 0.0:
+        raise ValueError(f"poll must be > 0 seconds, got {poll}")
     if seed is not None and not 0 <= int(seed) < 2**32:
         raise ValueError(f"seed must lie in [0, 2^32), got {seed}")
     index = resolve_views(scene, views)

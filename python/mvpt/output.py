@@ -54,8 +54,13 @@ def write_json_atomic(path: Path, data: dict) -> None:
 def output_paths(out_dir, stem: str, view_ids) -> dict:
     """{view id: (exr path, png path)} and the JSON path, as `write_outputs` names them."""
     out = Path(out_dir)
-    per_view = {vid: (out / f"{_safe(stem)}_{_safe(vid)}.exr", out / f"{_safe(stem)}_{_safe(vid)}.png")
-                for vid in view_ids}
+    per_view, used = {}, set()
+    for i, vid in enumerate(view_ids):
+        name = f"{_safe(stem)}_{_safe(vid)}"
+        if name in used:  # ids that differ only in characters unsafe in file names
+            name += f"_{i}"
+        used.add(name)
+        per_view[vid] = (out / f"{name}.exr", out / f"{name}.png")
     return per_view, out / f"{_safe(stem)}.json"
 
 

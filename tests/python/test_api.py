@@ -173,6 +173,7 @@ def test_views_argument(small):
     assert list(mvpt.render(small, spp=1, views=[1]).images) == ["v1"]
     assert list(mvpt.render(small, spp=1, views=["1"]).images) == ["v1"]  # a digit string that is no id: index
     assert list(mvpt.render(small, spp=1, views=[1, "v1", "1"]).images) == ["v1"]  # no repeats
+    assert list(mvpt.render(small, spp=1, views="v1").images) == ["v1"]  # one id, not its characters
     with pytest.raises(ValueError, match="unknown view 'v7'"):
         mvpt.render(small, views=["v7"])
     with pytest.raises(ValueError, match="out of range"):

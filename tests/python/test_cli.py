@@ -279,3 +279,11 @@ def test_subprocess_bad_view_exit_code(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.splitlines() == [
         "mvpt: error: --views: unknown view 'centre'; the scene's views are left, right"]
+
+
+def test_unsafe_view_ids_get_distinct_files(tmp_path):
+    path = tmp_path / "scene.xml"
+    path.write_text(scene(sensor("a/b") + sensor("a_b", origin="1, 1, 4")))
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "--spp", "1", "-o", str(out), "-q"]) == 0
+    assert sorted(p.name for p in out.glob("*.exr")) == ["scene_a_b.exr", "scene_a_b_1.exr"]
