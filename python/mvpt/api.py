@@ -79,10 +79,11 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
 
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
     seconds (0: none; the render stops within about one pass of it). The render runs
-    natively with the GIL released; `progress(dict)` is called every `poll` seconds with
-    pass, fraction, elapsed and samples. Ctrl-C (or KeyboardInterrupt raised by `progress`)
-    cancels at the next pass boundary and the images of the finished passes are returned
-    with stats["cancelled"] set; any other exception from `progress` cancels and is re-raised."""
+    natively with the GIL released; `progress(dict)` is called every `poll` seconds and
+    once at the end, with the pass count, fraction done, elapsed seconds and samples so far.
+    Ctrl-C (or KeyboardInterrupt raised by `progress`) cancels at the next pass boundary
+    and the images of the finished passes are returned with stats["cancelled"] set; any
+    other exception from `progress` cancels the render and is re-raised."""
     if int(spp) < 0:
         raise ValueError(f"spp must be >= 0, got {spp}")
     if not float(time) >= 0.0:
@@ -102,6 +103,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         while not job.wait(poll):
             if progress is not None:
                 progress(job.progress())
+        if progress is not None:
+            progress(job.progress())  # the final state
     except BaseException as e:  # KeyboardInterrupt included: stop cleanly, keep the passes done
         interrupted = e
         job.cancel()

@@ -64,6 +64,16 @@ def test_time_budget_within_one_pass(slow):
     assert (counts == s["passes"]).all()
 
 
+def test_progress_reports(small):
+    seen = []
+    r = mvpt.render(small, spp=3, progress=seen.append)
+    assert seen, "progress is called at least once, at the end"
+    assert seen[-1]["pass"] == 3 and seen[-1]["fraction"] == 1.0
+    assert seen[-1]["samples"] == r.stats["samples"] and seen[-1]["elapsed"] > 0
+    fractions = [p["fraction"] for p in seen]
+    assert fractions == sorted(fractions)
+
+
 def test_time_budget_and_spp_whichever_first(small):
     r = mvpt.render(small, spp=2, time=30.0)
     assert r.stats["passes"] == 2 and r.stats["wall_time"] < 5
