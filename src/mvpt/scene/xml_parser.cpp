@@ -136,24 +136,8 @@ public:
         for (auto &[k, v] : m_vars) m_from_caller.insert(k);
     }
 
-    /// Parse one file's text; `path` (empty for strings) identifies it for include-cycle checks
-    /// and `included_at` is the <include> element that pulled it in.
-    XmlNode parse_text(const std::string &text, const std::string &display_path, const fs::path &dir, int depth,
-                       const FileLoc *included_at = nullptr, const fs::path &path = {}) {
-        fs::path key;
-        if (!path.empty()) {
-            std::error_code ec;
-            key = fs::weakly_canonical(path, ec);
-            if (ec) key = fs::absolute(path);
-            for (size_t i = 0; i < m_stack.size(); ++i)
-                if (m_stack[i] == key) {
-                    std::string chain;
-                    for (size_t j = i; j < m_stack.size(); ++j) chain += m_stack[j].filename().string() + " -> ";
-                    throw SceneError(included_at ? *included_at : FileLoc{display_path, 0, 0},
-                                     "include cycle: " + chain + key.filename().string());
-                }
-        }
-        if (depth > 32) throw SceneError(included_at ? *included_at : FileLoc{display_path, 0, 0}, "<include> nested more than 32 levels");
+    XmlNode parse_text(const std::string &text, const std::string &display_path, const fs::path &dir, int depth) {
+        if (depth > 32) throw SceneError({display_path, 0, 0}, "<include> nested more than 32 levels (a cycle?)");
         auto src = std::make_shared<SourceText>(display_path, text);
         m_sources.push_back(src);
         pugi::xml_document doc;
@@ -181,14 +165,31 @@ public:
         if (major < 2)
             throw SceneError(ver->loc, "scene version " + ver->second +
                                            " is the Mitsuba 0.x format; mvpt reads Mitsuba 3 scenes (version 3.x)");
-        if (!key.empty()) m_stack.push_back(key);
         XmlNode out;
         out.tag = "scene";
         out.loc = root_loc;
         out.dir = dir;
         expand_children(root, *src, dir, out, depth);
-        if (!key.empty()) m_stack.pop_back();
         return out;
+    }
+
+    /// Push `path` on the stack of files being expanded; an include cycle is an error at `included_at`.
+    fs::path enter_file(const fs::path &path, const FileLoc *included_at) {
+        std::error_code ec;
+        fs::path key = fs::weakly_canonical(path, ec);
+        if (ec) key = fs::absolute(path);
+        for (size_t i = 0; i < m_stack.size(); ++i)
+            if (m_stack[i] == key) {
+                std::string chain;
+                for (size_t j = i; j < m_stack.size(); ++j) chain += m_stack[j].filename().string() + " -> ";
+                throw SceneError(included_at ? *included_at : FileLoc{path.string(), 0, 0},
+                                 "include cycle: " + chain + key.filename().string());
+            }
+        m_stack.push_back(key);
+        return key;
+    }
+    void leave_file(const fs::path &key) {
+        if (!m_stack.empty() && m_stack.back() == key) m_stack.pop_back();
     }
 
     /// Like Mitsuba: a caller's define that the scene never uses as $name is an error (a typo, usually).
@@ -227,7 +228,9 @@ private:
                 std::ifstream f(full, std::ios::binary);
                 std::stringstream ss;
                 ss << f.rdbuf();
-                XmlNode inc = parse_text(ss.str(), full.string(), full.parent_path(), depth + 1, &loc, full);
+                fs::path key = enter_file(full, &loc);
+                XmlNode inc = parse_text(ss.str(), full.string(), full.parent_path(), depth + 1);
+                leave_file(key);
                 for (auto &ic : inc.children) out.children.push_back(std::move(ic));
                 continue;
             }
@@ -264,10 +267,10 @@ private:
 
     std::map<std::string, std::string> m_vars;
     std::set<std::string> m_from_caller;
-    mutable std::set<std::string> m_used; ///< variables substituted at least once
-    int m_nesting = 0;
     std::vector<std::shared_ptr<SourceText>> m_sources;
     std::vector<fs::path> m_stack;   ///< files being expanded, outermost first
+    mutable std::set<std::string> m_used; ///< variables substituted at least once
+    int m_nesting = 0;
 };
 
 // ---------------------------------------------------------------------------
@@ -379,7 +382,9 @@ XmlNode parse_scene_file(const fs::path &path, std::map<std::string, std::string
     ss << f.rdbuf();
     if (!f && !f.eof()) throw SceneError({path.string(), 0, 0}, "cannot read scene file");
     Expander e(std::move(defines));
-    XmlNode root = e.parse_text(ss.str(), path.string(), fs::absolute(path).parent_path(), 0, nullptr, path);
+    fs::path key = e.enter_file(path, nullptr);
+    XmlNode root = e.parse_text(ss.str(), path.string(), fs::absolute(path).parent_path(), 0);
+    e.leave_file(key);
     e.check_defines_used(path.string());
     return root;
 }
