@@ -55,11 +55,12 @@ def test_time_budget_within_one_pass(slow):
     assert one_pass > 0.02, "the test scene is too fast to check the budget"
     assert s["passes"] >= 2 and not s["cancelled"]
     # The last pass starts only if it is predicted to end within the budget: the render
-    # overshoots by at most the duration of one pass (plus bookkeeping between passes).
-    assert s["wall_time"] <= budget + one_pass + 0.05, s
+    # overshoots by at most the duration of one pass (plus bookkeeping between passes, and
+    # scheduling delays on a loaded machine: the slack).
+    assert s["wall_time"] <= budget + one_pass + 0.1, s
     assert wall <= budget + one_pass + 0.3, (wall, s)
-    # ... and it does not stop early: one more pass would have ended past the budget.
-    assert s["wall_time"] >= budget - one_pass - 0.05, s
+    # ... and it does not stop early: it stops only when elapsed + last pass > budget.
+    assert s["wall_time"] >= budget - one_pass, s
     counts = np.concatenate([c.ravel() for c in r.sample_count.values()])
     assert (counts == s["passes"]).all()
 

@@ -143,7 +143,7 @@ def test_ctrl_c_writes_finished_passes(tmp_path):
     try:
         first = proc.stdout.readline()
         assert first.startswith("rendering 4 views"), first + proc.stderr.read()
-        time.sleep(0.7)  # a few passes
+        time.sleep(1.0)  # a few passes (~0.1 s each)
         proc.send_signal(signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=60)
     finally:
