@@ -46,7 +46,8 @@ def test_per_sensor_sample_count():
 
 
 def test_time_budget_within_one_pass(slow):
-    budget = 1.0
+    # A budget of several passes, however loaded the machine is.
+    budget = max(1.0, 4 * mvpt.render(slow, spp=1, threads=2).stats["max_pass_seconds"])
     t0 = time.monotonic()
     r = mvpt.render(slow, time=budget, threads=2)
     wall = time.monotonic() - t0
@@ -134,9 +135,11 @@ def test_gil_released_while_rendering(slow):
         stop.set()
         t.join()
     during = np.array([x for x in stamps if t0 <= x <= t1])
-    assert r.stats["passes"] >= 2
+    duration = t1 - t0
+    assert duration > 0.5 and r.stats["passes"] >= 1
     assert len(during) > 20, "the other thread hardly ran during the render"
-    assert np.diff(np.concatenate([[t0], during, [t1]])).max() < 0.5
+    # Holding the GIL in wait(1 s) would leave one gap as long as the whole render.
+    assert np.diff(np.concatenate([[t0], during, [t1]])).max() < duration / 2
 
 
 def test_nonfinite_samples_counted_not_written():
