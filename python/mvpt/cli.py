@@ -11,7 +11,7 @@ import time
 from importlib import resources
 from pathlib import Path
 
-from . import api
+from . import __version__, api
 from ._core import SceneError
 from .output import write_outputs
 
@@ -210,6 +210,7 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
 
 def main(argv=None) -> int:
     parser = _Parser(prog="mvpt", description="Render many views of one scene (Mitsuba 3 XML).")
+    parser.add_argument("--version", action="version", version=f"mvpt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p_render = sub.add_parser("render", help="render every view of a scene")
     p_render.add_argument("scene", type=Path)

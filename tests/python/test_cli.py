@@ -287,3 +287,9 @@ def test_unsafe_view_ids_get_distinct_files(tmp_path):
     out = tmp_path / "out"
     assert cli.main(["render", str(path), "--spp", "1", "-o", str(out), "-q"]) == 0
     assert sorted(p.name for p in out.glob("*.exr")) == ["scene_a_b.exr", "scene_a_b_1.exr"]
+
+
+def test_python_dash_m_mvpt_and_version():
+    proc = subprocess.run([sys.executable, "-m", "mvpt", "--version"], capture_output=True, text=True,
+                          timeout=60, env=ENV)
+    assert proc.returncode == 0 and proc.stdout.strip() == f"mvpt {mvpt.__version__}"
