@@ -252,7 +252,15 @@ def test_ctrl_c_during_render(slow):
 
 def test_ray_embree_cannot_trace_is_a_miss():
     """A camera 1e19 away gives rays that Embree rejects (|origin| > 1.8e18; its debug builds
-    abort on them): they count as misses, the process survives and the image is finite."""
-    s = mvpt.load_string(scene(sensor(origin="1e19, 1, 4")))
-    r = mvpt.render(s, spp=2)
-    assert np.isfinite(r.images["cam"]).all()
+    abort on them): they count as misses, the process survives and the image is finite.
+    Run in a subprocess so that a regression fails this test instead of killing the session."""
+    import os
+    import subprocess
+    import sys
+    code = ("import sys, numpy as np, mvpt; sys.path.insert(0, sys.argv[1]); from small_scenes import scene, sensor; "
+            "r = mvpt.render(mvpt.load_string(scene(sensor(origin='1e19, 1, 4'))), spp=2); "
+            "assert np.isfinite(r.images['cam']).all(); print('ok')")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    proc = subprocess.run([sys.executable, "-c", code, os.path.dirname(__file__)], capture_output=True, text=True,
+                          timeout=60, env=env)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
