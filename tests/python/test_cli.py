@@ -47,19 +47,25 @@ def _exr_channels(path: Path) -> dict:
 
 def test_demo(tmp_path, capsys):
     out = tmp_path / "out"
-    assert cli.main(["demo", "-o", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["demo.json", "demo_cam.exr", "demo_cam.png"]
+    assert cli.main(["demo", "-o", str(out), "--spp", "4"]) == 0  # the default 16 spp takes ~4x longer
     with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
-        expected = mvpt.render(mvpt.load_file(demo))
-    (vid,) = expected.images
-    exr = _core.read_image(str(out / f"demo_{vid}.exr"))
-    assert exr.tobytes() == expected.images[vid].tobytes()  # float32 EXR: bit-exact
-    png = _core.read_image(str(out / f"demo_{vid}.png"))
+        scene = mvpt.load_file(demo)
+        ids = [v["id"] for v in scene.views]
+        assert len(ids) == 9
+        # One view is enough to compare with: a view's image does not depend on the others.
+        expected = mvpt.render(scene, spp=4, views=[ids[4]])
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(["demo.json"] + [f"demo_{v}.{ext}" for v in ids for ext in ("exr", "png")])
+    exr = _core.read_image(str(out / f"demo_{ids[4]}.exr"))
+    assert exr.tobytes() == expected.images[ids[4]].tobytes()  # float32 EXR: bit-exact
+    png = _core.read_image(str(out / f"demo_{ids[4]}.png"))
     assert png.shape == exr.shape
     # The PNG is the sRGB-encoded 8-bit preview of the same image (clamped to [0, 1]).
     assert np.abs(png - np.clip(exr, 0, 1)).max() < 0.02
+    data = json.loads((out / "demo.json").read_text())
+    assert list(data["views"]) == ids and data["settings"]["views"] == ids
     printed = capsys.readouterr().out
-    assert vid in printed and f"{exr.shape[1]}x{exr.shape[0]}" in printed
+    assert all(f"\n{v} " in printed for v in ids) and f"{exr.shape[1]}x{exr.shape[0]}" in printed
 
 
 def test_nonfinite_samples_reported(tmp_path, capsys):
