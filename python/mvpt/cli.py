@@ -1,12 +1,15 @@
 """The `mvpt` command line: `mvpt render scene.xml -D spp=64 -o out/`, `mvpt demo`.
 
 Exit codes: 0 done, 1 bad scene or unwritable output, 2 bad command line, 130 interrupted
-(Ctrl-C; the passes finished so far are still written, and the JSON says "cancelled")."""
+by Ctrl-C (143 by SIGTERM); an interrupted render stops after the current pass and still
+writes the passes finished so far, with "cancelled" in the JSON."""
 from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
+import threading
 import time
 from importlib import resources
 from pathlib import Path
@@ -16,6 +19,16 @@ from ._core import SceneError
 from .output import write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+# The signal that stopped the render (SIGINT or SIGTERM): the exit code is 128 + its number.
+_stopped_by = signal.SIGINT
+
+
+def _on_sigterm(signum, frame):
+    """SIGTERM (batch schedulers, `kill`) stops like Ctrl-C: after the current pass, with outputs."""
+    global _stopped_by
+    _stopped_by = signal.SIGTERM
+    raise KeyboardInterrupt
 
 
 def _error(msg: str) -> None:
@@ -189,7 +202,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
         print(f"wrote {len(paths)} files to {args.output}{'/' if not str(args.output).endswith('/') else ''}")
     if cancelled:
         print("mvpt: interrupted; wrote the passes finished so far", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return 128 + int(_stopped_by)
     return EXIT_OK
 
 
@@ -221,6 +234,10 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:
         return int(e.code) if isinstance(e.code, int) else EXIT_USAGE
+    global _stopped_by
+    _stopped_by = signal.SIGINT
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
     try:
         if args.command == "render":
             return _render(args.scene, args, args.scene.stem)
@@ -228,7 +245,10 @@ def main(argv=None) -> int:
             return _render(demo, args, "demo")
     except KeyboardInterrupt:
         print("\nmvpt: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return 128 + int(_stopped_by)
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -140,7 +140,8 @@ def test_aovs(tmp_path):
     assert ch["variance.R"].max() > 0
 
 
-def test_ctrl_c_writes_finished_passes(tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_writes_finished_passes(tmp_path, sig):
     path = tmp_path / "slow.xml"
     path.write_text(slow_scene(4, res=64))
     out = tmp_path / "out"
@@ -150,12 +151,12 @@ def test_ctrl_c_writes_finished_passes(tmp_path):
         first = proc.stdout.readline()
         assert first.startswith("rendering 4 views"), first + proc.stderr.read()
         time.sleep(1.0)  # a few passes (~0.1 s each)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
         stdout, stderr = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
-    assert proc.returncode == 130, stderr
+    assert proc.returncode == 128 + int(sig), stderr
     assert "Traceback" not in stderr and "interrupted" in stderr
     data = json.loads((out / "slow.json").read_text())
     assert data["cancelled"] is True and 1 <= data["passes"] < 100000
