@@ -248,7 +248,7 @@ def main(argv=None) -> int:
         return 128 + int(_stopped_by)
     finally:
         if in_main_thread:
-            signal.signal(signal.SIGTERM, previous)
+            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":
