@@ -1,5 +1,6 @@
 // The XML front end reports errors at the right file:line:col (the '<' of an element, or
 // the name of the offending attribute) without needing the Python layer.
+#include "mvpt/scene/suggest.h"
 #include "mvpt/scene/xml_parser.h"
 
 #include <gtest/gtest.h>
@@ -76,4 +77,13 @@ TEST(ParserErrors, IncludeCycleNamesTheChain) {
         EXPECT_EQ(e.message(), "include cycle: a.xml -> b.xml -> a.xml");
     }
     fs::remove_all(dir);
+}
+
+TEST(ParserErrors, DidYouMean) {
+    EXPECT_EQ(edit_distance("flaot", "float"), 1u); // a swap is one edit
+    EXPECT_EQ(edit_distance("radiuss", "radius"), 1u);
+    EXPECT_EQ(edit_distance("", "abc"), 3u);
+    EXPECT_EQ(did_you_mean("radiuss", {"center", "radius", "to_world"}), " (did you mean 'radius'?)");
+    EXPECT_EQ(did_you_mean("spheroid", {"sphere", "cube"}), ""); // too far: no guess
+    EXPECT_EQ(did_you_mean("x", {"x"}), "");                  // never the name itself
 }

@@ -1,5 +1,6 @@
 #include "parse_values.h"
 
+#include "suggest.h"
 #include "xml_parser.h"
 
 #include <algorithm>
@@ -142,8 +143,9 @@ Transform parse_transform_ops(const XmlNode &node) {
                 throw SceneError(op.loc, "<lookat> 'up' is parallel to the view direction");
             m = Transform::look_at(o, tg, up);
         } else {
-            throw SceneError(op.loc, "unknown transform operation <" + tag +
-                                         "> (expected translate, rotate, scale, matrix or lookat)");
+            std::string hint = did_you_mean(tag, {"translate", "rotate", "scale", "matrix", "lookat"}, "<", ">");
+            throw SceneError(op.loc, "unknown transform operation <" + tag + ">" +
+                                         (hint.empty() ? " (expected translate, rotate, scale, matrix or lookat)" : hint));
         }
         t = m * t;
     }
@@ -225,7 +227,15 @@ void parse_value_node(const XmlNode &n, Properties &props) {
         if (!AnimatedTransform::from_keys(keys, at, err)) throw SceneError(n.loc, err);
         props.set(name_of(), at, n.loc, tag);
     } else {
-        throw SceneError(n.loc, "unknown element <" + tag + ">");
+        static const std::vector<std::string> known = {"float", "integer", "boolean", "string", "rgb", "spectrum",
+                                                       "point", "vector", "transform", "animation", "ref", "bsdf",
+                                                       "emitter", "shape", "sensor", "film", "rfilter", "sampler",
+                                                       "integrator", "texture", "include", "default"};
+        std::string hint = did_you_mean(tag, known, "<", ">");
+        throw SceneError(n.loc, "unknown element <" + tag + ">" +
+                                    (hint.empty() ? " (expected a value such as <float>, <rgb>, <transform> or an object "
+                                                    "such as <bsdf>, <shape>, <texture>)"
+                                                  : hint));
     }
 }
 

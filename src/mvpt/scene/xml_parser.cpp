@@ -2,6 +2,7 @@
 
 #include "parse_values.h"
 #include "plugin.h"
+#include "suggest.h"
 
 #include <pugixml.hpp>
 
@@ -345,9 +346,13 @@ public:
         fill_properties(node, props);
         const PluginFactory *f = PluginRegistry::find(node.tag, type);
         if (!f) {
+            std::vector<std::string> types = PluginRegistry::types(node.tag);
             std::string known;
-            for (auto &t : PluginRegistry::types(node.tag)) known += (known.empty() ? "" : ", ") + t;
-            throw SceneError(node.loc, "unknown " + node.tag + " type '" + type + "' (known: " + known + ")");
+            for (auto &t : types) known += (known.empty() ? "" : ", ") + t;
+            std::string hint = did_you_mean(type, types);
+            throw SceneError(node.loc, "unknown " + node.tag + " type '" + type + "'" +
+                                           (!hint.empty() ? hint : types.empty() ? " (mvpt has no " + node.tag + " plugins yet)"
+                                                                                 : " (known: " + known + ")"));
         }
         LoadContext ctx;
         ctx.search_dirs = {node.dir};
