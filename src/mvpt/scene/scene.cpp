@@ -2,7 +2,6 @@
 
 #include "plugin.h"
 
-#include <cmath>
 #include <cstdio>
 
 namespace mvpt {
