@@ -5,8 +5,6 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
-#include <ImfRgbaFile.h>
-#include <ImfArray.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb_image_write.h>
@@ -78,30 +76,27 @@ ImageRGB read_image(const fs::path &path, bool raw) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext == ".exr") {
+        // Read R, G, B (or a single Y) as 32-bit floats, whatever the stored type.
         try {
-            // Full float precision (Imf::RgbaInputFile would round every value to half).
             Imf::InputFile file(path.c_str());
             Imath::Box2i dw = file.header().dataWindow();
             img.width = dw.max.x - dw.min.x + 1;
             img.height = dw.max.y - dw.min.y + 1;
-            const Imf::ChannelList &channels = file.header().channels();
-            bool rgb = channels.findChannel("R") && channels.findChannel("G") && channels.findChannel("B");
-            if (!rgb && !channels.findChannel("Y")) throw std::runtime_error("no R, G, B or Y channels");
-            img.rgb.assign(size_t(img.width) * img.height * 3, 0.f);
-            const size_t xs = 3 * sizeof(float), ys = xs * img.width;
-            char *base = (char *)img.rgb.data() - (dw.min.x * xs + dw.min.y * ys);
+            const Imf::ChannelList &cl = file.header().channels();
+            bool rgb = cl.findChannel("R") && cl.findChannel("G") && cl.findChannel("B");
+            if (!rgb && !cl.findChannel("Y")) throw std::runtime_error("no R, G, B or Y channels");
+            size_t n = size_t(img.width) * img.height;
+            img.rgb.assign(3 * n, 0.f);
             Imf::FrameBuffer fb;
-            if (rgb) {
-                for (int c = 0; c < 3; ++c)
-                    fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
-                file.setFrameBuffer(fb);
-                file.readPixels(dw.min.y, dw.max.y);
-            } else {
-                fb.insert("Y", Imf::Slice(Imf::FLOAT, base, xs, ys));
-                file.setFrameBuffer(fb);
-                file.readPixels(dw.min.y, dw.max.y);
-                for (size_t i = 0; i < img.rgb.size(); i += 3) img.rgb[i + 1] = img.rgb[i + 2] = img.rgb[i];
-            }
+            char *base = (char *)img.rgb.data() - (size_t(dw.min.x) + size_t(dw.min.y) * img.width) * 3 * sizeof(float);
+            const char *names[3] = {"R", "G", "B"};
+            for (int c = 0; c < (rgb ? 3 : 1); ++c)
+                fb.insert(rgb ? names[c] : "Y", Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 3 * sizeof(float),
+                                                           3 * sizeof(float) * img.width));
+            file.setFrameBuffer(fb);
+            file.readPixels(dw.min.y, dw.max.y);
+            if (!rgb)
+                for (size_t i = 0; i < n; ++i) img.rgb[3 * i + 1] = img.rgb[3 * i + 2] = img.rgb[3 * i];
         } catch (const std::exception &e) {
             throw std::runtime_error(std::string("cannot read EXR: ") + e.what());
         }
