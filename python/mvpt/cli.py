@@ -18,7 +18,7 @@ from . import __version__, api
 from ._core import SceneError
 from .output import write_outputs
 
-EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
 # The signal that stopped the render (SIGINT or SIGTERM): the exit code is 128 + its number.
 _stopped_by = signal.SIGINT
