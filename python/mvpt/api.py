@@ -22,7 +22,8 @@ def _defines(kwargs: dict) -> dict:
 def load_file(path: str | os.PathLike, **defines) -> _core.Scene:
     """Load a Mitsuba 3 XML scene; keyword arguments override its <default> values.
 
-    Raises mvpt.SceneError (a ValueError) naming file:line:col on bad input."""
+    Raises mvpt.SceneError (a ValueError) naming file:line:col on bad input; the error
+    also has the attributes file, line, column and message."""
     return _core.load_file(os.fspath(path), _defines(defines))
 
 
@@ -45,54 +46,115 @@ class RenderResult:
         return list(self.images.keys())
 
 
+def resolve_views(scene: _core.Scene, views: Optional[Sequence]) -> list:
+    """Scene indices of `views` (ids, or indices as ints or digit strings), without repeats.
+
+    A string is an id when a view has that id, otherwise a digit string is an index."""
+    ids = [v["id"] for v in scene.views]
+    if isinstance(views, (str, int, np.integer)):
+        views = [views]
+    index = []
+    for v in views or []:
+        if isinstance(v, (bool, np.bool_)):
+            raise ValueError(f"unknown view {v!r}")
+        if isinstance(v, (int, np.integer)):
+            i = int(v)
+        elif str(v) in ids:
+            i = ids.index(str(v))
+        elif str(v).strip().isdigit():
+            i = int(str(v))
+        else:
+            raise ValueError(f"unknown view {str(v)!r}; the scene's views are {', '.join(ids)}")
+        if not 0 <= i < len(ids):
+            raise ValueError(f"view index {i} is out of range: the scene has {len(ids)} views (0..{len(ids) - 1})")
+        if i not in index:
+            index.append(i)
+    return index
+
+
 def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[int] = None,
            threads: int = 0, views: Optional[Sequence] = None,
            progress: Optional[Callable[[dict], None]] = None, poll: float = 0.1) -> RenderResult:
-    """Render all views (or `views`: indices or ids) of `scene`.
+    """Render all views (or `views`: ids or indices) of `scene`.
 
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
-    seconds (0: none). The render runs natively with the GIL released; Ctrl-C (or an
-    exception from `progress`) cancels it at the next pass boundary and the images of
-    the passes finished so far are returned, with stats["cancelled"] set."""
-    info = scene.views
-    ids = [v["id"] for v in info]
-    index = []
-    for v in views or []:
-        if isinstance(v, (int, np.integer)):
-            index.append(int(v))
-        elif str(v) in ids:
-            index.append(ids.index(str(v)))
-        else:
-            raise ValueError(f"unknown view {v!r}; the scene's views are {ids}")
-    job = _core.RenderJob(scene, spp=int(spp), time=float(time), seed=seed, threads=int(threads), views=index)
+    seconds (0: none; the render stops within about one pass of it). The render runs
+    natively with the GIL released; `progress(dict)` is called every `poll` seconds and
+    once at the end, with the pass count, fraction done, elapsed seconds and samples so far.
+    Ctrl-C (or KeyboardInterrupt raised by `progress`) cancels at the next pass boundary
+    and the images of the finished passes are returned with stats["cancelled"] set; any
+    other exception from `progress` cancels the render and is re-raised."""
+    if int(spp) < 0:
+        raise ValueError(f"spp must be >= 0, got {spp}")
+    if not float(time) >= 0.0:
+        raise ValueError(f"time must be >= 0 seconds, got {time}")
+    if int(threads) < 0:
+        raise ValueError(f"threads must be >= 0, got {threads}")
+    if not float(poll) > 0.0:
+        raise ValueError(f"poll must be > 0 seconds, got {poll}")
+    if seed is not None and not 0 <= int(seed) < 2**32:
+        raise ValueError(f"seed must lie in [0, 2^32), got {seed}")
+    index = resolve_views(scene, views)
+    job = _core.RenderJob(scene, spp=int(spp), time=float(time), seed=None if seed is None else int(seed),
+                          threads=int(threads), views=index)
     job.start()
     interrupted = None
     try:
         while not job.wait(poll):
             if progress is not None:
                 progress(job.progress())
+        if progress is not None:
+            progress(job.progress())  # the final state
     except BaseException as e:  # KeyboardInterrupt included: stop cleanly, keep the passes done
         interrupted = e
         job.cancel()
         while not job.wait(poll):
             pass
     result = RenderResult()
-    for r in job.results():
+    results = job.results()
+    for r in results:
         result.images[r["id"]] = r["image"]
         result.variance[r["id"]] = r["variance"]
         result.sample_count[r["id"]] = r["sample_count"]
-    stats = job.stats()
+    result.stats = _stats(scene, job.stats(), results, index,
+                          dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads)))
     if interrupted is not None:
-        stats["cancelled"] = True
-    stats["views"] = {r["id"]: {"samples": int(r["samples"]),
-                                "spp": float(r["samples"]) / max(1, r["image"].shape[0] * r["image"].shape[1]),
-                                "mean": [float(x) for x in r["image"].reshape(-1, 3).mean(axis=0)]}
-                      for r in job.results()}
-    s = stats["seconds"]
-    stats["samples_per_second"] = stats["samples"] / s if s > 0 else 0.0
-    stats["rays_per_second"] = (stats["rays"] + stats["shadow_rays"]) / s if s > 0 else 0.0
-    stats["integrator"] = scene.integrator
-    result.stats = stats
-    if interrupted is not None and not isinstance(interrupted, KeyboardInterrupt):
-        raise interrupted
+        result.stats["cancelled"] = True
+        if not isinstance(interrupted, KeyboardInterrupt):
+            raise interrupted
     return result
+
+
+def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict:
+    """The statistics of one render, as returned in RenderResult.stats and written to JSON."""
+    ids = [v["id"] for v in scene.views]
+    seconds = raw["seconds"]
+    rate = (lambda n: n / seconds if seconds > 0 else 0.0)
+    total_rays = raw["rays"] + raw["shadow_rays"]
+    views = {}
+    for i, r in zip(index or range(len(ids)), results):
+        img = r["image"]
+        pixels = max(1, r["width"] * r["height"])
+        views[r["id"]] = {
+            "id": r["id"], "index": i, "width": r["width"], "height": r["height"],
+            "spp": float(r["samples"]) / pixels, "samples": int(r["samples"]),
+            "mean": [float(x) for x in img.reshape(-1, 3).mean(axis=0, dtype=np.float64)],
+            "nonfinite_samples": int(r["nonfinite"]),
+        }
+    settings = dict(settings, views=list(views), integrator=scene.integrator)
+    first = raw.get("first_nonfinite")
+    if first is not None:
+        first = dict(first, view_id=ids[first["view"]])
+    return {
+        "settings": settings,
+        "wall_time": seconds, "seconds": seconds, "max_pass_seconds": raw["max_pass_seconds"],
+        "passes": raw["passes"], "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
+        "samples": raw["samples"], "samples_per_second": rate(raw["samples"]),
+        "rays": {"camera": raw["camera_rays"], "intersect": raw["rays"], "shadow": raw["shadow_rays"],
+                 "total": total_rays},
+        "rays_per_second": rate(total_rays),
+        "nonfinite_samples": raw["nonfinite_samples"],
+        "first_nonfinite": first,
+        "integrator": scene.integrator,
+        "views": views,
+    }

@@ -1,120 +1,254 @@
-"""The `mvpt` command line: `mvpt render scene.xml -D spp=64 -o out/`, `mvpt demo`."""
+"""The `mvpt` command line: `mvpt render scene.xml -D spp=64 -o out/`, `mvpt demo`.
+
+Exit codes: 0 done, 1 bad scene or unwritable output, 2 bad command line, 130 interrupted
+by Ctrl-C (143 by SIGTERM); an interrupted render stops after the current pass and still
+writes the passes finished so far, with "cancelled" in the JSON."""
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
+import threading
 import time
 from importlib import resources
 from pathlib import Path
 
-from . import api
+from . import __version__, api
 from ._core import SceneError
 from .output import write_outputs
 
+EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+
+# The signal that stopped the render (SIGINT or SIGTERM): the exit code is 128 + its number.
+_stopped_by = signal.SIGINT
+
+
+def _on_sigterm(signum, frame):
+    """SIGTERM (batch schedulers, `kill`) stops like Ctrl-C: after the current pass, with outputs."""
+    global _stopped_by
+    _stopped_by = signal.SIGTERM
+    raise KeyboardInterrupt
+
+
+def _error(msg: str) -> None:
+    print(f"mvpt: error: {msg}", file=sys.stderr)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports bad input as one `mvpt: error: ...` line (exit code 2)."""
+
+    def error(self, message):
+        _error(message)
+        raise SystemExit(EXIT_USAGE)
+
+
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got '{text}'")
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {v}")
+    return v
+
+
+def _seconds(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'")
+    if not (v >= 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected a non-negative number of seconds, got {text}")
+    return v
+
+
+def _seed(text: str) -> int:
+    v = _count(text)
+    if v >= 2**32:
+        raise argparse.ArgumentTypeError(f"expected a seed below 2^32, got {v}")
+    return v
+
+
+def _define(text: str) -> tuple:
+    name, eq, value = text.partition("=")
+    if not eq or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got '{text}'")
+    return name.strip(), value
+
+
+def _hms(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "--:--"
+    s = int(round(seconds))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}" if s >= 3600 else f"{s // 60:02d}:{s % 60:02d}"
+
 
 class ProgressBar:
-    """One-line progress bar with ETA on a terminal (silent when not a TTY unless forced)."""
+    """One-line progress bar with elapsed time and ETA, redrawn in place on a terminal.
 
-    def __init__(self, stream=sys.stderr, enabled=None):
-        self.stream = stream
-        self.enabled = stream.isatty() if enabled is None else enabled
+    Silent when the stream is not a TTY (unless `enabled` forces it)."""
+
+    def __init__(self, stream=None, enabled=None, width: int = 30):
+        self.stream = stream if stream is not None else sys.stderr
+        self.enabled = self.stream.isatty() if enabled is None else enabled
+        self.width = width
         self.start = time.monotonic()
+        self.last = None
 
     def __call__(self, p: dict) -> None:
-        if not self.enabled:
-            return
-        frac = min(max(p["fraction"], 0.0), 1.0)
+        self.last = p
+        if self.enabled:
+            self._draw(p)
+
+    def _draw(self, p: dict) -> None:
+        frac = min(max(float(p.get("fraction", 0.0)), 0.0), 1.0)
         elapsed = time.monotonic() - self.start
         eta = elapsed * (1 - frac) / frac if frac > 0 else float("nan")
-        width = 30
-        bar = "#" * int(frac * width) + "." * (width - int(frac * width))
-        self.stream.write(f"\r[{bar}] {100 * frac:5.1f}%  pass {p['pass']}  "
-                          f"{elapsed:6.1f}s elapsed  ETA {eta:6.1f}s ")
+        filled = int(frac * self.width)
+        bar = "#" * filled + "." * (self.width - filled)
+        self.stream.write(f"\r[{bar}] {100 * frac:5.1f}%  pass {p.get('pass', 0)}  "
+                          f"elapsed {_hms(elapsed)}  ETA {_hms(eta)} ")
         self.stream.flush()
 
-    def finish(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
+    def finish(self, done: bool = True) -> None:
+        """Draw the final state and end the line."""
+        if not self.enabled:
+            return
+        if self.last is not None or done:
+            p = dict(self.last or {})
+            if done:
+                p["fraction"] = 1.0
+            self._draw(p)
+        self.stream.write("\n")
+        self.stream.flush()
 
 
-def _parse_defines(items):
-    out = {}
-    for item in items or []:
-        if "=" not in item:
-            raise SystemExit(f"mvpt: -D expects name=value, got '{item}'")
-        k, v = item.split("=", 1)
-        out[k] = v
-    return out
+def _table(rows: list, header: list, align: str) -> str:
+    """Plain-text table; `align` has one of '<' or '>' per column."""
+    cells = [header] + [[str(c) for c in r] for r in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
+    lines = ["  ".join(f"{c:{a}{w}}" for c, a, w in zip(r, align, widths)).rstrip() for r in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines) + "\n"
 
 
-def _print_summary(result, stream=sys.stdout) -> None:
+def _si(x: float) -> str:
+    for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
+        if abs(x) >= scale:
+            return f"{x / scale:.2f} {unit}"
+    return f"{x:.0f}"
+
+
+def print_summary(result, stream=None) -> None:
+    """The table printed after a render: one row per view, then the totals."""
+    stream = stream if stream is not None else sys.stdout
     s = result.stats
-    stream.write(f"{'view':>12} {'spp':>8} {'mean R':>10} {'mean G':>10} {'mean B':>10}\n")
+    rows = []
     for vid, v in s["views"].items():
         m = v["mean"]
-        stream.write(f"{vid:>12} {v['spp']:8.1f} {m[0]:10.4f} {m[1]:10.4f} {m[2]:10.4f}\n")
-    stream.write(f"{s['passes']} passes, {s['seconds']:.2f} s, {s['samples_per_second'] / 1e6:.3f} M samples/s, "
-                 f"{s['rays_per_second'] / 1e6:.2f} M rays/s, {s['threads']} threads"
-                 f"{', cancelled' if s.get('cancelled') else ''}\n")
+        rows.append([vid, f"{v['width']}x{v['height']}", f"{v['spp']:.1f}", f"{v['samples']:,}",
+                     f"{m[0]:.4f}", f"{m[1]:.4f}", f"{m[2]:.4f}", f"{v['nonfinite_samples']:,}"])
+    stream.write(_table(rows, ["view", "size", "spp", "samples", "mean R", "mean G", "mean B", "non-finite"],
+                        "<>>>>>>>"))
+    r = s["rays"]
+    state = "cancelled after" if s.get("cancelled") else "done in"
+    stream.write(f"{state} {s['passes']} passes, {s['wall_time']:.2f} s (longest pass {s['max_pass_seconds']:.3f} s), "
+                 f"{s['threads']} threads, integrator '{s['integrator']}'\n")
+    stream.write(f"samples: {s['samples']:,} ({_si(s['samples_per_second'])}/s)   "
+                 f"rays: {r['total']:,} ({_si(s['rays_per_second'])}/s; camera {r['camera']:,}, "
+                 f"intersect {r['intersect']:,}, shadow {r['shadow']:,})\n")
     if s.get("nonfinite_samples"):
-        f = s.get("first_nonfinite", {})
-        stream.write(f"warning: {s['nonfinite_samples']} non-finite samples were dropped "
-                     f"(first: view {f.get('view')}, pixel ({f.get('x')}, {f.get('y')}), sample {f.get('sample')})\n")
+        f = s.get("first_nonfinite") or {}
+        stream.write(f"warning: {s['nonfinite_samples']:,} non-finite samples were dropped (first: view "
+                     f"{f.get('view_id')}, pixel ({f.get('x')}, {f.get('y')}), sample {f.get('sample')})\n")
 
 
 def _render(scene_path: Path, args, stem: str) -> int:
+    defines = dict(args.define or [])
     try:
-        scene = api.load_file(scene_path, **_parse_defines(args.define))
+        scene = api.load_file(scene_path, **defines)
     except SceneError as e:
-        print(f"mvpt: error: {e}", file=sys.stderr)
-        return 2
-    views = [v for v in args.views.split(",")] if args.views else None
+        _error(str(e))
+        return EXIT_ERROR
+    try:
+        views = api.resolve_views(scene, args.views.split(",")) if args.views else None
+    except ValueError as e:
+        _error(f"--views: {e}")
+        return EXIT_USAGE
+    if not args.quiet:
+        n = len(views) if views else len(scene.views)
+        budget = [f"{args.spp} spp" if args.spp else "each sensor's spp"] + ([f"{args.time:g} s"] if args.time else [])
+        print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
+              f"after the current pass and writes the images)", flush=True)
     bar = ProgressBar(enabled=False if args.quiet else None)
     try:
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
                             views=views, progress=bar)
-    except ValueError as e:
-        bar.finish()
-        print(f"mvpt: error: {e}", file=sys.stderr)
-        return 2
-    bar.finish()
-    settings = {"scene": str(scene_path), "defines": _parse_defines(args.define), "spp": args.spp,
-                "time": args.time, "seed": args.seed, "threads": args.threads, "views": views}
-    paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
+    except (RuntimeError, MemoryError, ValueError) as e:
+        bar.finish(done=False)
+        _error(str(e) or type(e).__name__)
+        return EXIT_ERROR
+    cancelled = bool(result.stats.get("cancelled"))
+    bar.finish(done=not cancelled)
+    settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
+    try:
+        paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
+    except (OSError, RuntimeError, ValueError) as e:
+        _error(str(e))
+        return EXIT_ERROR
     if not args.quiet:
-        _print_summary(result)
-        print(f"wrote {len(paths)} files to {args.output}/")
-    return 130 if result.stats.get("cancelled") and args.time == 0 and args.spp == 0 else 0
+        print_summary(result)
+        print(f"wrote {len(paths)} files to {args.output}{'/' if not str(args.output).endswith('/') else ''}")
+    if cancelled:
+        print("mvpt: interrupted; wrote the passes finished so far", file=sys.stderr)
+        return 128 + int(_stopped_by)
+    return EXIT_OK
 
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("-D", "--define", action="append", metavar="NAME=VALUE",
+    p.add_argument("-D", "--define", action="append", type=_define, metavar="NAME=VALUE",
                    help="override a <default> of the scene (repeatable)")
-    p.add_argument("--spp", type=int, default=0, help="samples per pixel (default: the scene's sample_count)")
-    p.add_argument("--time", type=float, default=0.0, help="wall-clock budget in seconds")
-    p.add_argument("--seed", type=int, default=None, help="random seed (default: the sampler's seed)")
-    p.add_argument("--threads", type=int, default=0, help="worker threads (default: all cores)")
-    p.add_argument("--views", default=None, help="comma-separated view ids or indices to render")
-    p.add_argument("-o", "--output", default="out", help="output directory (default: out)")
+    p.add_argument("--spp", type=_count, default=0, help="samples per pixel (default: each sensor's sample_count)")
+    p.add_argument("--time", type=_seconds, default=0.0,
+                   help="wall-clock budget in seconds (the render ends within about one pass of it)")
+    p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
+    p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
+    p.add_argument("--views", default=None, metavar="LIST",
+                   help="comma-separated view ids or indices to render (an id wins over an index)")
+    p.add_argument("-o", "--output", type=Path, default=Path("out"), help="output directory (default: out)")
     p.add_argument("--aovs", action="store_true", help="add variance and sample-count channels to the EXRs")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="mvpt", description="Render many views of one scene (Mitsuba 3 XML).")
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = _Parser(prog="mvpt", description="Render many views of one scene (Mitsuba 3 XML).")
+    parser.add_argument("--version", action="version", version=f"mvpt {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p_render = sub.add_parser("render", help="render every view of a scene")
     p_render.add_argument("scene", type=Path)
     _add_render_options(p_render)
-    p_demo = sub.add_parser("demo", help="render the built-in 9-view demo scene")
+    p_demo = sub.add_parser("demo", help="render the built-in demo scene")
     _add_render_options(p_demo)
-    args = parser.parse_args(argv)
-
-    if args.command == "render":
-        return _render(args.scene, args, args.scene.stem)
-    with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
-        return _render(demo, args, "demo")
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:
+        return int(e.code) if isinstance(e.code, int) else EXIT_USAGE
+    global _stopped_by
+    _stopped_by = signal.SIGINT
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    try:
+        if args.command == "render":
+            return _render(args.scene, args, args.scene.stem)
+        with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
+            return _render(demo, args, "demo")
+    except KeyboardInterrupt:
+        print("\nmvpt: interrupted", file=sys.stderr)
+        return 128 + int(_stopped_by)
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":

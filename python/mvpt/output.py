@@ -1,10 +1,14 @@
-"""Per-view outputs: float EXR (RGB plus optional AOVs), sRGB PNG preview, JSON summary."""
+"""Per-view outputs: float EXR (RGB plus optional AOVs), sRGB PNG preview, JSON summary.
+
+Every file is written to a temporary name in the output directory and renamed into place,
+so a reader never sees a partial file and no temporary file is left behind."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
-import tempfile
+import secrets
 from pathlib import Path
 
 import numpy as np
@@ -16,12 +20,29 @@ def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
 
 
+def _json_clean(x):
+    """JSON-safe copy: NumPy scalars to Python numbers, non-finite floats to None."""
+    if isinstance(x, dict):
+        return {str(k): _json_clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_clean(v) for v in x]
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, os.PathLike):
+        return os.fspath(x)
+    return x
+
+
 def write_json_atomic(path: Path, data: dict) -> None:
+    """Write `data` as JSON to `path` through a temporary file and a rename."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name, dir=path.parent)
+    tmp = str(path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies, as for the images
     try:
         with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=2, sort_keys=True)
+            json.dump(_json_clean(data), f, indent=2, sort_keys=True, allow_nan=False)
             f.write("\n")
         os.replace(tmp, path)
     except BaseException:
@@ -30,26 +51,43 @@ def write_json_atomic(path: Path, data: dict) -> None:
         raise
 
 
+def output_paths(out_dir, stem: str, view_ids) -> dict:
+    """{view id: (exr path, png path)} and the JSON path, as `write_outputs` names them."""
+    out = Path(out_dir)
+    per_view, used = {}, set()
+    for i, vid in enumerate(view_ids):
+        name = f"{_safe(stem)}_{_safe(vid)}"
+        if name in used:  # ids that differ only in characters unsafe in file names
+            name += f"_{i}"
+        used.add(name)
+        per_view[vid] = (out / f"{name}.exr", out / f"{name}.png")
+    return per_view, out / f"{_safe(stem)}.json"
+
+
 def write_outputs(result, out_dir, stem: str, aovs: bool = False, settings: dict | None = None) -> list:
-    """Write <stem>_<view>.exr/.png for every view and <stem>.json; returns the paths."""
+    """Write <stem>_<view>.exr/.png for every view and <stem>.json; returns the paths.
+
+    The EXR has channels R, G, B and, with `aovs`, variance.R/G/B (variance of the pixel
+    mean) and sample_count.Y. The JSON holds `result.stats`, its settings updated with
+    `settings` (e.g. the scene file and -D defines of the command line)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    per_view, json_path = output_paths(out, stem, result.images.keys())
     written = []
     for vid, img in result.images.items():
-        base = out / f"{_safe(stem)}_{_safe(vid)}"
+        exr, png = per_view[vid]
         img = np.ascontiguousarray(img, dtype=np.float32)
-        channels = {"R": np.ascontiguousarray(img[..., 0]), "G": np.ascontiguousarray(img[..., 1]),
-                    "B": np.ascontiguousarray(img[..., 2])}
+        channels = {c: np.ascontiguousarray(img[..., i]) for i, c in enumerate("RGB")}
         if aovs:
             var = result.variance[vid]
-            channels["variance.R"] = np.ascontiguousarray(var[..., 0])
-            channels["variance.G"] = np.ascontiguousarray(var[..., 1])
-            channels["variance.B"] = np.ascontiguousarray(var[..., 2])
+            for i, c in enumerate("RGB"):
+                channels[f"variance.{c}"] = np.ascontiguousarray(var[..., i], dtype=np.float32)
             channels["sample_count.Y"] = np.ascontiguousarray(result.sample_count[vid], dtype=np.float32)
-        _core.write_exr(str(base) + ".exr", channels)
-        _core.write_png(str(base) + ".png", img)
-        written += [str(base) + ".exr", str(base) + ".png"]
-    summary = {"settings": settings or {}, "stats": result.stats}
-    write_json_atomic(out / f"{_safe(stem)}.json", summary)
-    written.append(str(out / f"{_safe(stem)}.json"))
+        _core.write_exr(str(exr), channels)
+        _core.write_png(str(png), img)
+        written += [str(exr), str(png)]
+    summary = dict(result.stats)
+    summary["settings"] = dict(summary.get("settings", {}), **(settings or {}))
+    write_json_atomic(json_path, summary)
+    written.append(str(json_path))
     return written

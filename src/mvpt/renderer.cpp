@@ -8,9 +8,13 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <cfloat>
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
+#include <tuple>
+#include <unistd.h>
 
 namespace mvpt {
 
@@ -35,6 +39,18 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
                                         std::to_string(cams.size()) + " views)");
     if (m_opts.spp < 0) throw std::invalid_argument("spp must be >= 0");
     if (!(m_opts.time_budget >= 0.0)) throw std::invalid_argument("time budget must be >= 0");
+    // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM killer) fail
+    // mid-render: per pixel, the sums (2 x 3 doubles) and count here plus the developed images.
+    double bytes = 0.0;
+    for (int v : m_views) {
+        const FilmDesc &f = cams[v]->film;
+        bytes += double(f.crop_width) * f.crop_height * (6 * sizeof(double) + sizeof(uint32_t) + 7 * sizeof(float));
+    }
+    double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+    if (physical > 0 && bytes > 0.8 * physical)
+        throw std::runtime_error("the films of the " + std::to_string(m_views.size()) + " views need " +
+                                 std::to_string(int64_t(bytes / (1 << 20))) + " MiB but the machine has " +
+                                 std::to_string(int64_t(physical / (1 << 20))) + " MiB of memory");
     m_films.resize(m_views.size());
     for (size_t i = 0; i < m_views.size(); ++i) {
         const FilmDesc &f = cams[m_views[i]]->film;
@@ -112,9 +128,14 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                             Spectrum L = integrator.li(m_scene, ray, sampler, rc);
                             size_t pi = size_t(y) * film.crop_width + x;
                             if (!L.is_finite()) {
+                                // Never reaches the film: counted, and the first one kept for replay.
                                 ++rc.nonfinite;
+                                ++*fb.nonfinite;
                                 std::lock_guard<std::mutex> lock(nonfinite_mutex);
-                                if (m_stats.nonfinite_view < 0) {
+                                auto key = std::make_tuple(int64_t(pass), int64_t(view), int64_t(py), int64_t(px));
+                                if (m_stats.nonfinite_view < 0 ||
+                                    key < std::make_tuple(m_stats.nonfinite_sample, m_stats.nonfinite_view,
+                                                          m_stats.nonfinite_y, m_stats.nonfinite_x)) {
                                     m_stats.nonfinite_view = view; m_stats.nonfinite_x = px;
                                     m_stats.nonfinite_y = py; m_stats.nonfinite_sample = pass;
                                 }
@@ -130,6 +151,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             });
         });
         last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
+        m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
         m_stats.passes = pass + 1;
         m_stats.samples = 0;
         for (auto &fb : m_films)
@@ -139,8 +161,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             p.pass = pass + 1;
             p.elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
             p.samples = m_stats.samples;
-            p.fraction = m_opts.time_budget > 0.0 ? std::min(1.0, p.elapsed / m_opts.time_budget)
-                                                  : double(pass + 1) / double(max_target);
+            p.fraction = double(pass + 1) / double(max_target);
+            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
             progress(p);
         }
     }
@@ -163,6 +185,7 @@ void Renderer::develop() {
         r.rgb.resize(3 * n);
         r.variance.resize(3 * n);
         r.sample_count = fb.count;
+        r.nonfinite = fb.nonfinite->load();
         for (size_t p = 0; p < n; ++p) {
             double k = fb.count[p];
             r.samples += fb.count[p];
@@ -170,7 +193,7 @@ void Renderer::develop() {
                 double mean = k > 0 ? fb.sum[3 * p + c] / k : 0.0;
                 double var = k > 1 ? std::max(0.0, (fb.sum_sq[3 * p + c] - k * mean * mean) / (k * (k - 1))) : 0.0;
                 r.rgb[3 * p + c] = float(mean);
-                r.variance[3 * p + c] = float(var);
+                r.variance[3 * p + c] = float(std::min(var, double(FLT_MAX))); // finite even for huge samples
             }
         }
         m_results.push_back(std::move(r));

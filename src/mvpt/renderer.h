@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,23 +38,25 @@ struct ViewResult {
     std::vector<float> variance; ///< variance of the pixel mean, 3 floats per pixel
     std::vector<uint32_t> sample_count;
     uint64_t samples = 0;
-    uint64_t nonfinite = 0;
+    uint64_t nonfinite = 0; ///< non-finite samples dropped (recorded as zero)
 };
 
 struct RenderStats {
     double seconds = 0.0;
+    double max_pass_seconds = 0.0; ///< longest pass, to judge how closely a time budget can be met
     int passes = 0;
     bool cancelled = false;
     uint64_t samples = 0;
     RayCounters counters;
-    /// First non-finite sample, for replay: view, x, y, sample index (-1 if none).
+    /// First non-finite sample in (sample index, view, y, x) order, for replay (-1 if none);
+    /// independent of the thread count.
     int64_t nonfinite_view = -1, nonfinite_x = -1, nonfinite_y = -1, nonfinite_sample = -1;
     int threads = 0;
 };
 
 struct RenderProgress {
     int pass = 0;
-    double fraction = 0.0; ///< of the spp or time budget
+    double fraction = 0.0; ///< of the spp or the time budget, whichever is further along
     double elapsed = 0.0;
     uint64_t samples = 0;
 };
@@ -72,6 +75,7 @@ private:
     struct FilmBuffer {
         std::vector<double> sum, sum_sq;
         std::vector<uint32_t> count;
+        std::unique_ptr<std::atomic<uint64_t>> nonfinite = std::make_unique<std::atomic<uint64_t>>(0);
     };
     void develop();
 

@@ -98,6 +98,9 @@ public:
             std::vector<float> count(r.sample_count.begin(), r.sample_count.end());
             d["sample_count"] = make_array(std::move(count), {h, w});
             d["samples"] = r.samples;
+            d["nonfinite"] = r.nonfinite;
+            d["width"] = r.width;
+            d["height"] = r.height;
             out.append(d);
         }
         return out;
@@ -108,6 +111,7 @@ public:
         const RenderStats &s = m_renderer.stats();
         nb::dict d;
         d["seconds"] = s.seconds;
+        d["max_pass_seconds"] = s.max_pass_seconds;
         d["passes"] = s.passes;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;
@@ -162,7 +166,23 @@ nb::list view_info(const Scene &s) {
 
 NB_MODULE(_core, m) {
     m.doc() = "mvpt native core";
-    static nb::exception<SceneError> scene_error(m, "SceneError", PyExc_ValueError);
+    // SceneError (a ValueError) carries the location as attributes: file, line, column, message.
+    // (A plain PyObject*, deliberately never released: no destructor runs after interpreter shutdown.)
+    static PyObject *scene_error = PyErr_NewExceptionWithDoc(
+        "mvpt._core.SceneError", "Bad scene input; str() is 'file:line:col: message'.", PyExc_ValueError, nullptr);
+    m.attr("SceneError") = nb::borrow(scene_error);
+    nb::register_exception_translator([](const std::exception_ptr &p, void *) {
+        try {
+            std::rethrow_exception(p);
+        } catch (const SceneError &e) {
+            nb::object exc = nb::borrow(scene_error)(e.what());
+            exc.attr("file") = e.loc().file;
+            exc.attr("line") = e.loc().line;
+            exc.attr("column") = e.loc().col;
+            exc.attr("message") = e.message();
+            PyErr_SetObject(scene_error, exc.ptr());
+        }
+    });
 
     nb::class_<Scene>(m, "Scene")
         .def_prop_ro("views", &view_info)

@@ -1,5 +1,6 @@
 #include "parse_values.h"
 
+#include "suggest.h"
 #include "xml_parser.h"
 
 #include <algorithm>
@@ -11,12 +12,13 @@ namespace mvpt {
 
 void check_attrs(const XmlAttrs &attrs, std::initializer_list<const char *> allowed, const std::string &tag,
                  const FileLoc &loc) {
-    for (auto &[name, value] : attrs) {
-        bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char *a) { return name == a; });
+    for (const XmlAttr &attr : attrs) {
+        bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char *a) { return attr.first == a; });
         if (!ok) {
             std::string list;
             for (const char *a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-            throw SceneError(loc, "<" + tag + "> has an unknown attribute '" + name + "' (expected: " + list + ")");
+            throw SceneError(attr.loc.line > 0 ? attr.loc : loc,
+                             "<" + tag + "> has an unknown attribute '" + attr.first + "' (expected: " + list + ")");
         }
     }
 }
@@ -75,23 +77,24 @@ Vec3f parse_xyz(const XmlNode &n, const std::string &what, float def) {
     if (const std::string *v = n.attr("value")) {
         if (n.attr("x") || n.attr("y") || n.attr("z"))
             throw SceneError(n.loc, "<" + n.tag + "> takes either 'value' or x/y/z attributes, not both");
-        auto l = parse_float_list(*v, n.loc, what);
+        auto l = parse_float_list(*v, n.attr_loc("value"), what);
         if (l.size() == 1) return Vec3f(float(l[0]));
-        if (l.size() != 3) throw SceneError(n.loc, what + ": expected 3 numbers, got " + std::to_string(l.size()));
+        if (l.size() != 3)
+            throw SceneError(n.attr_loc("value"), what + ": expected 3 numbers, got " + std::to_string(l.size()));
         return {float(l[0]), float(l[1]), float(l[2])};
     }
     Vec3f r(def);
     const char *names[3] = {"x", "y", "z"};
     for (int i = 0; i < 3; ++i)
-        if (const std::string *a = n.attr(names[i])) r[i] = float(parse_float(*a, n.loc, what));
+        if (const std::string *a = n.attr(names[i])) r[i] = float(parse_float(*a, n.attr_loc(names[i]), what));
     return r;
 }
 
 Vec3f parse_vec3_attr(const XmlNode &n, const char *attr, const std::string &what) {
     const std::string *v = n.attr(attr);
     if (!v) throw SceneError(n.loc, "<" + n.tag + "> is missing its '" + attr + "' attribute");
-    auto l = parse_float_list(*v, n.loc, what + " '" + attr + "'");
-    if (l.size() != 3) throw SceneError(n.loc, what + " '" + attr + "': expected 3 numbers");
+    auto l = parse_float_list(*v, n.attr_loc(attr), what + " '" + attr + "'");
+    if (l.size() != 3) throw SceneError(n.attr_loc(attr), what + " '" + attr + "': expected 3 numbers");
     return {float(l[0]), float(l[1]), float(l[2])};
 }
 
@@ -113,18 +116,18 @@ Transform parse_transform_ops(const XmlNode &node) {
             check_attrs(op.attrs, {"x", "y", "z", "value", "angle"}, tag, op.loc);
             Vec3f axis = parse_xyz(op, "<rotate> axis", 0.f);
             if (squared_norm(axis) == 0) throw SceneError(op.loc, "<rotate> needs a non-zero axis (x, y, z)");
-            float angle = float(parse_float(required(op.attrs, "angle", tag, op.loc), op.loc, "<rotate> angle"));
+            float angle = float(parse_float(required(op.attrs, "angle", tag, op.loc), op.attr_loc("angle"), "<rotate> angle"));
             m = Transform::rotate(axis, angle);
         } else if (tag == "matrix") {
             check_attrs(op.attrs, {"value"}, tag, op.loc);
-            auto l = parse_float_list(required(op.attrs, "value", tag, op.loc), op.loc, "<matrix>");
+            auto l = parse_float_list(required(op.attrs, "value", tag, op.loc), op.attr_loc("value"), "<matrix>");
             Matrix4 mm;
             if (l.size() == 16) {
                 for (int i = 0; i < 16; ++i) mm.m[i / 4][i % 4] = l[i];
             } else if (l.size() == 9) {
                 for (int i = 0; i < 9; ++i) mm.m[i / 3][i % 3] = l[i];
             } else {
-                throw SceneError(op.loc, "<matrix> needs 16 (or 9) numbers, got " + std::to_string(l.size()));
+                throw SceneError(op.attr_loc("value"), "<matrix> needs 16 (or 9) numbers, got " + std::to_string(l.size()));
             }
             bool ok = true;
             Matrix4 inv = mm.inverse(&ok);
@@ -140,8 +143,9 @@ Transform parse_transform_ops(const XmlNode &node) {
                 throw SceneError(op.loc, "<lookat> 'up' is parallel to the view direction");
             m = Transform::look_at(o, tg, up);
         } else {
-            throw SceneError(op.loc, "unknown transform operation <" + tag +
-                                         "> (expected translate, rotate, scale, matrix or lookat)");
+            std::string hint = did_you_mean(tag, {"translate", "rotate", "scale", "matrix", "lookat"}, "<", ">");
+            throw SceneError(op.loc, "unknown transform operation <" + tag + ">" +
+                                         (hint.empty() ? " (expected translate, rotate, scale, matrix or lookat)" : hint));
         }
         t = m * t;
     }
@@ -161,12 +165,14 @@ void parse_value_node(const XmlNode &n, Properties &props) {
         check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
         no_children();
         std::string name = name_of();
-        props.set(name, parse_float(required(n.attrs, "value", tag, n.loc), n.loc, "float '" + name + "'"), n.loc, tag);
+        props.set(name, parse_float(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "float '" + name + "'"),
+                  n.loc, tag);
     } else if (tag == "integer") {
         check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
         no_children();
         std::string name = name_of();
-        props.set(name, parse_int(required(n.attrs, "value", tag, n.loc), n.loc, "integer '" + name + "'"), n.loc, tag);
+        props.set(name, parse_int(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "integer '" + name + "'"),
+                  n.loc, tag);
     } else if (tag == "boolean") {
         check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
         no_children();
@@ -176,7 +182,7 @@ void parse_value_node(const XmlNode &n, Properties &props) {
         bool b;
         if (lv == "true" || lv == "1") b = true;
         else if (lv == "false" || lv == "0") b = false;
-        else throw SceneError(n.loc, "boolean '" + name + "': expected true or false, got '" + v + "'");
+        else throw SceneError(n.attr_loc("value"), "boolean '" + name + "': expected true or false, got '" + v + "'");
         props.set(name, b, n.loc, tag);
     } else if (tag == "string") {
         check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
@@ -187,11 +193,12 @@ void parse_value_node(const XmlNode &n, Properties &props) {
         no_children();
         std::string name = name_of(), v = required(n.attrs, "value", tag, n.loc);
         if (tag == "spectrum" && v.find(':') != std::string::npos)
-            throw SceneError(n.loc, "spectrum '" + name + "': wavelength-sampled spectra are not supported; use <rgb>");
-        auto l = parse_float_list(v, n.loc, tag + " '" + name + "'");
+            throw SceneError(n.attr_loc("value"), "spectrum '" + name + "': wavelength-sampled spectra are not supported; use <rgb>");
+        auto l = parse_float_list(v, n.attr_loc("value"), tag + " '" + name + "'");
         if (l.size() == 1) props.set(name, Color3f(float(l[0])), n.loc, tag);
         else if (l.size() == 3 && tag == "rgb") props.set(name, Color3f(float(l[0]), float(l[1]), float(l[2])), n.loc, tag);
-        else throw SceneError(n.loc, tag + " '" + name + "': expected 1" + (tag == "rgb" ? " or 3" : "") + " numbers");
+        else throw SceneError(n.attr_loc("value"), tag + " '" + name + "': expected 1" + (tag == "rgb" ? " or 3" : "") +
+                                                       " numbers, got " + std::to_string(l.size()));
     } else if (tag == "point" || tag == "vector") {
         check_attrs(n.attrs, {"name", "value", "x", "y", "z"}, tag, n.loc);
         no_children();
@@ -207,7 +214,7 @@ void parse_value_node(const XmlNode &n, Properties &props) {
             if (k.tag != "transform")
                 throw SceneError(k.loc, "<animation> may only contain <transform time=\"...\"> keyframes, got <" + k.tag + ">");
             check_attrs(k.attrs, {"time"}, "transform", k.loc);
-            float time = float(parse_float(required(k.attrs, "time", "transform", k.loc), k.loc, "keyframe time"));
+            float time = float(parse_float(required(k.attrs, "time", "transform", k.loc), k.attr_loc("time"), "keyframe time"));
             keys.emplace_back(time, parse_transform_ops(k));
         }
         if (keys.empty()) throw SceneError(n.loc, "<animation> needs at least one <transform time=\"...\"> keyframe");
@@ -220,7 +227,15 @@ void parse_value_node(const XmlNode &n, Properties &props) {
         if (!AnimatedTransform::from_keys(keys, at, err)) throw SceneError(n.loc, err);
         props.set(name_of(), at, n.loc, tag);
     } else {
-        throw SceneError(n.loc, "unknown element <" + tag + ">");
+        static const std::vector<std::string> known = {"float", "integer", "boolean", "string", "rgb", "spectrum",
+                                                       "point", "vector", "transform", "animation", "ref", "bsdf",
+                                                       "emitter", "shape", "sensor", "film", "rfilter", "sampler",
+                                                       "integrator", "texture", "include", "default"};
+        std::string hint = did_you_mean(tag, known, "<", ">");
+        throw SceneError(n.loc, "unknown element <" + tag + ">" +
+                                    (hint.empty() ? " (expected a value such as <float>, <rgb>, <transform> or an object "
+                                                    "such as <bsdf>, <shape>, <texture>)"
+                                                  : hint));
     }
 }
 

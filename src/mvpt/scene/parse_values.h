@@ -2,6 +2,7 @@
 #pragma once
 
 #include "properties.h"
+#include "xml_parser.h"
 
 #include <initializer_list>
 #include <string>
@@ -10,10 +11,7 @@
 
 namespace mvpt {
 
-struct XmlNode;
-using XmlAttrs = std::vector<std::pair<std::string, std::string>>;
-
-/// Error unless every attribute is one of `allowed`.
+/// Error (at the offending attribute) unless every attribute is one of `allowed`.
 void check_attrs(const XmlAttrs &attrs, std::initializer_list<const char *> allowed, const std::string &tag,
                  const FileLoc &loc);
 /// The value of attribute `name`, or an error naming the tag.

@@ -1,6 +1,7 @@
 #include "properties.h"
 
 #include "../render/texture.h"
+#include "suggest.h"
 
 #include <cmath>
 
@@ -30,6 +31,7 @@ void Properties::fail(const std::string &name, const std::string &msg) const {
 }
 
 const Properties::Entry *Properties::find(const std::string &name) const {
+    m_asked.insert(name);
     auto it = m_values.find(name);
     if (it == m_values.end()) return nullptr;
     it->second.queried = true;
@@ -115,6 +117,7 @@ AnimatedTransform Properties::get_animated_transform(const std::string &name) co
 }
 
 bool Properties::has_texture(const std::string &name) const {
+    m_asked.insert(name);
     if (has(name)) return true;
     for (auto &c : m_children)
         if (c.name == name && c.kind == "texture") return true;
@@ -122,6 +125,7 @@ bool Properties::has_texture(const std::string &name) const {
 }
 
 std::shared_ptr<Texture> Properties::get_texture(const std::string &name, Color3f def) const {
+    m_asked.insert(name);
     for (auto &c : m_children)
         if (c.name == name) {
             if (c.kind != "texture")
@@ -157,14 +161,17 @@ const ChildObject *Properties::child_of_kind(const std::string &kind) const {
 }
 
 void Properties::check_all_queried() const {
+    std::vector<std::string> asked(m_asked.begin(), m_asked.end());
     for (auto &[name, e] : m_values)
-        if (!e.queried)
-            throw SceneError(e.loc, m_kind + " '" + m_type + "' does not use a parameter named '" + name +
-                                        "' (<" + e.tag + ">); remove it or check its spelling");
+        if (!e.queried) {
+            std::string hint = did_you_mean(name, asked);
+            throw SceneError(e.loc, m_kind + " '" + m_type + "' does not use a parameter named '" + name + "' (<" +
+                                        e.tag + ">)" + (hint.empty() ? "; remove it or check its spelling" : hint));
+        }
     for (auto &c : m_children)
         if (!c.queried)
             throw SceneError(c.loc, m_kind + " '" + m_type + "' does not accept a nested " + c.kind +
-                                        (c.name.empty() ? std::string() : " named '" + c.name + "'"));
+                                        (c.name.empty() ? std::string() : " named '" + c.name + "'" + did_you_mean(c.name, asked)));
 }
 
 } // namespace mvpt

@@ -9,6 +9,7 @@
 
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <variant>
 #include <vector>
@@ -97,6 +98,7 @@ private:
     FileLoc m_loc;
     std::map<std::string, Entry> m_values;
     std::vector<ChildObject> m_children;
+    mutable std::set<std::string> m_asked; ///< names the plugin looked up (for "did you mean" hints)
 };
 
 } // namespace mvpt

@@ -11,6 +11,17 @@ namespace {
 void embree_error(void *, RTCError code, const char *str) {
     std::fprintf(stderr, "mvpt: Embree error %d: %s\n", int(code), str ? str : "");
 }
+
+/// Embree's RayK::valid(): |origin|, |direction| <= FLT_LARGE (1.844e18) and no NaN in the
+/// range. Its release builds may misbehave and its debug builds abort on other rays, so a
+/// NaN or absurdly distant ray is treated as a miss (its sample is then usually non-finite
+/// and counted as such).
+bool embree_can_trace(const Ray &ray) {
+    constexpr float large = 1.844e18f;
+    for (int i = 0; i < 3; ++i)
+        if (!(std::abs(ray.o[i]) <= large) || !(std::abs(ray.d[i]) <= large)) return false;
+    return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
+}
 } // namespace
 
 Scene::Scene() {
@@ -95,6 +106,7 @@ void Scene::build(const SceneTree &tree) {
 }
 
 bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
+    if (!embree_can_trace(ray)) return false;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
@@ -124,6 +136,7 @@ bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
 }
 
 bool Scene::occluded(const Ray &ray) const {
+    if (!embree_can_trace(ray)) return false;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay r;

@@ -2,10 +2,13 @@
 
 #include "parse_values.h"
 #include "plugin.h"
+#include "suggest.h"
 
 #include <pugixml.hpp>
 
 #include <algorithm>
+#include <cctype>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -23,8 +26,9 @@ const std::set<std::string> kUnsupportedTags = {"medium", "phase", "volume", "sp
 /// Maps byte offsets of one file to line:col.
 struct SourceText {
     std::string path;
+    std::string text;
     std::vector<size_t> line_starts{0};
-    explicit SourceText(std::string p, const std::string &text) : path(std::move(p)) {
+    SourceText(std::string p, std::string t) : path(std::move(p)), text(std::move(t)) {
         for (size_t i = 0; i < text.size(); ++i)
             if (text[i] == '\n') line_starts.push_back(i + 1);
     }
@@ -34,7 +38,98 @@ struct SourceText {
         size_t line = size_t(it - line_starts.begin());
         return {path, int(line), int(size_t(offset) - line_starts[line - 1] + 1)};
     }
+    /// Location of an element's '<' (pugixml's offset_debug points at its name).
+    FileLoc element_loc(const pugi::xml_node &n) const { return loc(n.offset_debug() - 1); }
+
+    /// The element's attributes with the location of each name, found by re-scanning the
+    /// start tag (pugixml keeps no attribute offsets; the tag has already been validated).
+    XmlAttrs attributes(const pugi::xml_node &n) const {
+        XmlAttrs out;
+        size_t i = size_t(n.offset_debug()) + std::strlen(n.name());
+        for (pugi::xml_attribute a : n.attributes()) {
+            FileLoc at;
+            while (i < text.size() && std::isspace((unsigned char)text[i])) ++i;
+            if (text.compare(i, std::strlen(a.name()), a.name()) == 0) {
+                at = loc(ptrdiff_t(i));
+                i = text.find_first_of("\"'", i);
+                if (i != std::string::npos) i = text.find(text[i], i + 1);
+                i = i == std::string::npos ? text.size() : i + 1;
+            } else {
+                i = text.size(); // unexpected layout: fall back to the element's location
+            }
+            out.emplace_back(a.name(), a.value(), at);
+        }
+        return out;
+    }
+
+    /// After pugixml reports mismatched tags: find the element that was left open by
+    /// replaying the start/end tags up to the error and name it.
+    [[noreturn]] void fail_unclosed(ptrdiff_t error_offset) const {
+        std::vector<std::pair<std::string, size_t>> open;
+        size_t i = 0, end = std::min(text.size(), size_t(std::max<ptrdiff_t>(error_offset, 0)) + 1);
+        auto skip_past = [&](const char *marker) {
+            size_t j = text.find(marker, i);
+            i = j == std::string::npos ? text.size() : j + std::strlen(marker);
+        };
+        auto read_name = [&](size_t j) {
+            size_t k = j;
+            while (k < text.size() && !std::isspace((unsigned char)text[k]) && text[k] != '>' && text[k] != '/') ++k;
+            return text.substr(j, k - j);
+        };
+        while (i < end) {
+            i = text.find('<', i);
+            if (i == std::string::npos || i >= end) break;
+            if (text.compare(i, 4, "<!--") == 0) { skip_past("-->"); continue; }
+            if (text.compare(i, 9, "<![CDATA[") == 0) { skip_past("]]>"); continue; }
+            if (text.compare(i, 2, "<?") == 0) { skip_past("?>"); continue; }
+            if (text.compare(i, 2, "<!") == 0) { skip_past(">"); continue; }
+            if (text.compare(i, 2, "</") == 0) {
+                size_t at = i;
+                std::string name = read_name(i + 2);
+                skip_past(">");
+                bool is_open = std::any_of(open.begin(), open.end(), [&](const auto &o) { return o.first == name; });
+                if (!is_open)
+                    throw SceneError(loc(ptrdiff_t(at)), "malformed XML: </" + name + "> closes no open element" +
+                                                             (open.empty() ? std::string()
+                                                                           : " (expected </" + open.back().first + ">)"));
+                if (open.back().first != name)
+                    throw SceneError(loc(ptrdiff_t(open.back().second)),
+                                     "malformed XML: <" + open.back().first + "> is not closed (expected </" +
+                                         open.back().first + "> before the </" + name + "> at " + loc(ptrdiff_t(at)).str() + ")");
+                open.pop_back();
+                continue;
+            }
+            size_t at = i;
+            std::string name = read_name(i + 1);
+            char quote = 0;
+            for (++i; i < text.size(); ++i) {
+                char c = text[i];
+                if (quote) { if (c == quote) quote = 0; }
+                else if (c == '"' || c == '\'') quote = c;
+                else if (c == '>') break;
+            }
+            bool self_closing = i < text.size() && text[i - 1] == '/';
+            if (!self_closing) open.emplace_back(name, at);
+            ++i;
+        }
+        if (!open.empty())
+            throw SceneError(loc(ptrdiff_t(open.back().second)),
+                             "malformed XML: <" + open.back().first + "> is not closed before the end of the file");
+        throw SceneError(loc(error_offset), "malformed XML: start and end tags do not match");
+    }
 };
+
+/// pugixml's status as a message that says what was expected.
+std::string describe(const pugi::xml_parse_result &res) {
+    switch (res.status) {
+        case pugi::status_bad_attribute: return "malformed XML: bad attribute syntax (expected name=\"value\")";
+        case pugi::status_bad_start_element: return "malformed XML: bad start tag (expected <name attribute=\"value\" ...> or />)";
+        case pugi::status_bad_end_element: return "malformed XML: bad end tag (expected </name>)";
+        case pugi::status_bad_comment: return "malformed XML: bad comment (expected <!-- ... -->)";
+        case pugi::status_unrecognized_tag: return "malformed XML: unrecognised tag after '<'";
+        default: return std::string("malformed XML: ") + res.description();
+    }
+}
 
 class Expander {
 public:
@@ -48,30 +143,62 @@ public:
         m_sources.push_back(src);
         pugi::xml_document doc;
         pugi::xml_parse_result res = doc.load_buffer(text.data(), text.size(), pugi::parse_default);
-        if (!res) throw SceneError(src->loc(res.offset), std::string("malformed XML: ") + res.description());
+        if (res.status == pugi::status_end_element_mismatch) src->fail_unclosed(res.offset);
+        if (res.status == pugi::status_no_document_element)
+            throw SceneError({display_path, 1, 1}, "the file has no root element (expected <scene version=\"3.0.0\">)");
+        if (!res) throw SceneError(src->loc(res.offset), describe(res));
         pugi::xml_node root = doc.document_element();
-        if (!root) throw SceneError({display_path, 1, 1}, "the file has no root element");
+        FileLoc root_loc = src->element_loc(root);
         if (std::string(root.name()) != "scene")
-            throw SceneError(src->loc(root.offset_debug()),
-                             "the root element must be <scene>, got <" + std::string(root.name()) + ">");
-        pugi::xml_attribute ver = root.attribute("version");
-        if (!ver)
-            throw SceneError(src->loc(root.offset_debug()), "<scene> needs a version attribute, e.g. version=\"3.0.0\"");
-        int major = std::atoi(ver.value());
+            throw SceneError(root_loc, "the root element must be <scene>, got <" + std::string(root.name()) + ">");
+        XmlAttrs root_attrs = src->attributes(root);
+        const XmlAttr *ver = nullptr;
+        for (auto &a : root_attrs) {
+            if (a.first == "version") ver = &a;
+            else if (a.first.rfind("xmlns", 0) != 0)
+                throw SceneError(a.loc.line > 0 ? a.loc : root_loc, "<scene> has an unknown attribute '" + a.first + "'");
+        }
+        if (!ver) throw SceneError(root_loc, "<scene> needs a version attribute, e.g. version=\"3.0.0\"");
+        int major = -1;
+        if (!ver->second.empty() && std::isdigit((unsigned char)ver->second[0])) major = std::atoi(ver->second.c_str());
+        if (major < 0)
+            throw SceneError(ver->loc, "scene version '" + ver->second + "' is not a version number (expected e.g. \"3.0.0\")");
         if (major < 2)
-            throw SceneError(src->loc(root.offset_debug()),
-                             "scene version " + std::string(ver.value()) +
-                                 " is the Mitsuba 0.x format; mvpt reads Mitsuba 3 scenes (version 3.x)");
-        for (auto a : root.attributes())
-            if (std::string(a.name()) != "version" && std::string(a.name()).rfind("xmlns", 0) != 0)
-                throw SceneError(src->loc(root.offset_debug()),
-                                 "<scene> has an unknown attribute '" + std::string(a.name()) + "'");
+            throw SceneError(ver->loc, "scene version " + ver->second +
+                                           " is the Mitsuba 0.x format; mvpt reads Mitsuba 3 scenes (version 3.x)");
         XmlNode out;
         out.tag = "scene";
-        out.loc = src->loc(root.offset_debug());
+        out.loc = root_loc;
         out.dir = dir;
         expand_children(root, *src, dir, out, depth);
         return out;
+    }
+
+    /// Push `path` on the stack of files being expanded; an include cycle is an error at `included_at`.
+    fs::path enter_file(const fs::path &path, const FileLoc *included_at) {
+        std::error_code ec;
+        fs::path key = fs::weakly_canonical(path, ec);
+        if (ec) key = fs::absolute(path);
+        for (size_t i = 0; i < m_stack.size(); ++i)
+            if (m_stack[i] == key) {
+                std::string chain;
+                for (size_t j = i; j < m_stack.size(); ++j) chain += m_stack[j].filename().string() + " -> ";
+                throw SceneError(included_at ? *included_at : FileLoc{path.string(), 0, 0},
+                                 "include cycle: " + chain + key.filename().string());
+            }
+        m_stack.push_back(key);
+        return key;
+    }
+    void leave_file(const fs::path &key) {
+        if (!m_stack.empty() && m_stack.back() == key) m_stack.pop_back();
+    }
+
+    /// Like Mitsuba: a caller's define that the scene never uses as $name is an error (a typo, usually).
+    void check_defines_used(const std::string &display_path) const {
+        for (const std::string &name : m_from_caller)
+            if (!m_used.count(name))
+                throw SceneError({display_path, 0, 0}, "the define " + name + "=" + m_vars.at(name) +
+                                                           " is not used: the scene has no $" + name);
     }
 
 private:
@@ -84,9 +211,9 @@ private:
                 continue;
             }
             std::string tag = c.name();
-            FileLoc loc = src.loc(c.offset_debug());
-            std::vector<std::pair<std::string, std::string>> attrs;
-            for (auto a : c.attributes()) attrs.emplace_back(a.name(), substitute(a.value(), loc));
+            FileLoc loc = src.element_loc(c);
+            XmlAttrs attrs = src.attributes(c);
+            for (auto &a : attrs) a.second = substitute(a.second, a.loc.line > 0 ? a.loc : loc);
 
             if (tag == "default") {
                 check_attrs(attrs, {"name", "value"}, tag, loc);
@@ -102,7 +229,9 @@ private:
                 std::ifstream f(full, std::ios::binary);
                 std::stringstream ss;
                 ss << f.rdbuf();
+                fs::path key = enter_file(full, &loc);
                 XmlNode inc = parse_text(ss.str(), full.string(), full.parent_path(), depth + 1);
+                leave_file(key);
                 for (auto &ic : inc.children) out.children.push_back(std::move(ic));
                 continue;
             }
@@ -111,7 +240,9 @@ private:
             n.attrs = std::move(attrs);
             n.loc = loc;
             n.dir = dir;
+            if (++m_nesting > 256) throw SceneError(loc, "elements nested more than 256 levels deep");
             expand_children(c, src, dir, n, depth);
+            --m_nesting;
             out.children.push_back(std::move(n));
         }
     }
@@ -125,6 +256,7 @@ private:
             while (j < s.size() && (std::isalnum((unsigned char)s[j]) || s[j] == '_')) ++j;
             std::string name = s.substr(i + 1, j - i - 1);
             auto it = m_vars.find(name);
+            if (it != m_vars.end()) m_used.insert(name);
             if (name.empty() || it == m_vars.end())
                 throw SceneError(loc, "undefined variable '$" + name + "': add <default name=\"" + name +
                                           "\" value=\"...\"/> or pass -D " + name + "=...");
@@ -137,6 +269,9 @@ private:
     std::map<std::string, std::string> m_vars;
     std::set<std::string> m_from_caller;
     std::vector<std::shared_ptr<SourceText>> m_sources;
+    std::vector<fs::path> m_stack;   ///< files being expanded, outermost first
+    mutable std::set<std::string> m_used; ///< variables substituted at least once
+    int m_nesting = 0;
 };
 
 // ---------------------------------------------------------------------------
@@ -150,6 +285,7 @@ public:
         for (auto &c : n.children) {
             if (kObjectTags.count(c.tag))
                 if (const std::string *id = c.attr("id")) {
+                    required(c.attrs, "type", c.tag, c.loc); // a <ref> may instantiate it before its turn
                     auto [it, fresh] = m_ids.emplace(*id, &c);
                     if (!fresh)
                         throw SceneError(c.loc, "duplicate id '" + *id + "' (first declared at " + it->second->loc.str() + ")");
@@ -176,6 +312,10 @@ public:
                 std::string id = required(c.attrs, "id", tag, c.loc);
                 auto it = m_ids.find(id);
                 if (it == m_ids.end()) throw SceneError(c.loc, "<ref> to unknown id '" + id + "'");
+                auto in_progress = m_cache.find(it->second);
+                if (in_progress != m_cache.end() && !in_progress->second)
+                    throw SceneError(c.loc, "<ref id=\"" + id + "\"> refers to an object that contains it (declared at " +
+                                                it->second->loc.str() + ")");
                 m_referenced.insert(id);
                 ChildObject co;
                 co.kind = it->second->tag;
@@ -206,9 +346,13 @@ public:
         fill_properties(node, props);
         const PluginFactory *f = PluginRegistry::find(node.tag, type);
         if (!f) {
+            std::vector<std::string> types = PluginRegistry::types(node.tag);
             std::string known;
-            for (auto &t : PluginRegistry::types(node.tag)) known += (known.empty() ? "" : ", ") + t;
-            throw SceneError(node.loc, "unknown " + node.tag + " type '" + type + "' (known: " + known + ")");
+            for (auto &t : types) known += (known.empty() ? "" : ", ") + t;
+            std::string hint = did_you_mean(type, types);
+            throw SceneError(node.loc, "unknown " + node.tag + " type '" + type + "'" +
+                                           (!hint.empty() ? hint : types.empty() ? " (mvpt has no " + node.tag + " plugins yet)"
+                                                                                 : " (known: " + known + ")"));
         }
         LoadContext ctx;
         ctx.search_dirs = {node.dir};
@@ -243,12 +387,18 @@ XmlNode parse_scene_file(const fs::path &path, std::map<std::string, std::string
     ss << f.rdbuf();
     if (!f && !f.eof()) throw SceneError({path.string(), 0, 0}, "cannot read scene file");
     Expander e(std::move(defines));
-    return e.parse_text(ss.str(), path.string(), fs::absolute(path).parent_path(), 0);
+    fs::path key = e.enter_file(path, nullptr);
+    XmlNode root = e.parse_text(ss.str(), path.string(), fs::absolute(path).parent_path(), 0);
+    e.leave_file(key);
+    e.check_defines_used(path.string());
+    return root;
 }
 
 XmlNode parse_scene_string(const std::string &xml, const fs::path &base_dir, std::map<std::string, std::string> defines) {
     Expander e(std::move(defines));
-    return e.parse_text(xml, "<string>", fs::absolute(base_dir), 0);
+    XmlNode root = e.parse_text(xml, "<string>", fs::absolute(base_dir), 0);
+    e.check_defines_used("<string>");
+    return root;
 }
 
 SceneTree instantiate_scene(const XmlNode &root, const fs::path &scene_dir) {

@@ -18,9 +18,18 @@
 
 namespace mvpt {
 
+/// One attribute of an element (value after `$var` substitution) and where its name starts.
+struct XmlAttr {
+    std::string first, second; ///< name, value
+    FileLoc loc;
+    XmlAttr(std::string name, std::string value, FileLoc l = {})
+        : first(std::move(name)), second(std::move(value)), loc(std::move(l)) {}
+};
+using XmlAttrs = std::vector<XmlAttr>;
+
 struct XmlNode {
     std::string tag;
-    std::vector<std::pair<std::string, std::string>> attrs; // after substitution
+    XmlAttrs attrs;
     std::vector<XmlNode> children;
     FileLoc loc;
     /// Directory of the file the node came from (relative paths resolve there first).
@@ -30,6 +39,12 @@ struct XmlNode {
         for (auto &a : attrs)
             if (a.first == name) return &a.second;
         return nullptr;
+    }
+    /// Location of attribute `name` (of the element itself when absent or unknown).
+    const FileLoc &attr_loc(const std::string &name) const {
+        for (auto &a : attrs)
+            if (a.first == name && a.loc.line > 0) return a.loc;
+        return loc;
     }
 };
 

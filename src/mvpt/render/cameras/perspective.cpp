@@ -15,6 +15,14 @@ public:
         auto at = props.get_animated_transform("to_world");
         if (at.is_animated()) props.fail("to_world", "animated sensors are not supported yet");
         m_to_world = at.eval(0.f);
+        // Rows of the linear part must be orthonormal: no scale or shear (Mitsuba's has_scale, tolerance 1e-3).
+        const Matrix4 &m = m_to_world.matrix();
+        for (int i = 0; i < 3; ++i)
+            for (int j = i; j < 3; ++j) {
+                double dot_ij = m.m[i][0] * m.m[j][0] + m.m[i][1] * m.m[j][1] + m.m[i][2] * m.m[j][2];
+                if (std::abs(dot_ij - (i == j ? 1.0 : 0.0)) > 1e-3)
+                    props.fail("to_world", "'to_world' of a sensor must be a rigid motion: scale or shear is not allowed");
+            }
         m_near = props.get_float("near_clip", 1e-2f);
         m_far = props.get_float("far_clip", 1e4f);
         if (!(m_near > 0.f) || !(m_far > m_near))

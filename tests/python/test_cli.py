@@ -1,0 +1,302 @@
+"""The `mvpt` command line: outputs per view, JSON summary, AOVs, Ctrl-C, atomic writes,
+progress bar on a terminal only, --views, -D, and one-line errors for bad input."""
+from __future__ import annotations
+
+import json
+import os
+import pty
+import signal
+import subprocess
+import sys
+import time
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mvpt
+from mvpt import _core, cli
+
+from small_scenes import overflow_scene, scene, sensor, slow_scene
+
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+CLI = [sys.executable, "-m", "mvpt.cli"]
+
+
+def _two_view_scene(tmp_path: Path) -> Path:
+    """Views 'left' and 'right'; the resolution is a <default> (16) for -D to override."""
+    xml = scene(sensor("left", res="$res", spp=2, origin="-1, 1, 4") + sensor("right", res="$res", spp=2, origin="1, 1, 4"))
+    xml = xml.replace('<scene version="3.0.0">', '<scene version="3.0.0">\n    <default name="res" value="16"/>')
+    path = tmp_path / "scene.xml"
+    path.write_text(xml)
+    return path
+
+
+def _leftovers(out: Path) -> list:
+    """Temporary or hidden files in `out` (there must never be any)."""
+    return [p.name for p in out.rglob("*") if p.name.startswith(".") or p.suffix == ".tmp" or ".tmp" in p.name]
+
+
+def _exr_channels(path: Path) -> dict:
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("scalar_rgb")
+    bmp = mi.Bitmap(str(path))
+    return {f.name: np.array(bmp, copy=False)[..., i] for i, f in enumerate(bmp.struct_())}
+
+
+def test_demo(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["demo", "-o", str(out), "--spp", "4"]) == 0  # the default 16 spp takes ~4x longer
+    with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
+        scene = mvpt.load_file(demo)
+        ids = [v["id"] for v in scene.views]
+        assert len(ids) == 9
+        # One view is enough to compare with: a view's image does not depend on the others.
+        expected = mvpt.render(scene, spp=4, views=[ids[4]])
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(["demo.json"] + [f"demo_{v}.{ext}" for v in ids for ext in ("exr", "png")])
+    exr = _core.read_image(str(out / f"demo_{ids[4]}.exr"))
+    assert exr.tobytes() == expected.images[ids[4]].tobytes()  # float32 EXR: bit-exact
+    png = _core.read_image(str(out / f"demo_{ids[4]}.png"))
+    assert png.shape == exr.shape
+    # The PNG is the sRGB-encoded 8-bit preview of the same image (clamped to [0, 1]).
+    assert np.abs(png - np.clip(exr, 0, 1)).max() < 0.02
+    data = json.loads((out / "demo.json").read_text())
+    assert list(data["views"]) == ids and data["settings"]["views"] == ids
+    printed = capsys.readouterr().out
+    assert all(f"\n{v} " in printed for v in ids) and f"{exr.shape[1]}x{exr.shape[0]}" in printed
+
+
+def test_nonfinite_samples_reported(tmp_path, capsys):
+    path = tmp_path / "overflow.xml"
+    path.write_text(overflow_scene())
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    data = json.loads((out / "overflow.json").read_text())
+    n, first = data["nonfinite_samples"], data["first_nonfinite"]
+    assert n > 0 and data["views"]["cam"]["nonfinite_samples"] == n
+    assert (f"warning: {n:,} non-finite samples were dropped (first: view cam, pixel ({first['x']}, {first['y']}), "
+            f"sample {first['sample']})") in printed
+    assert np.isfinite(_core.read_image(str(out / "overflow_cam.exr"))).all()
+
+
+def test_render_end_to_end(tmp_path):
+    """The real entry point in a subprocess: files per view, JSON, summary, -D over a <default>."""
+    path = _two_view_scene(tmp_path)
+    out = tmp_path / "out"
+    proc = subprocess.run(CLI + ["render", str(path), "-D", "res=32", "--spp", "4", "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, env=ENV)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""  # piped: no progress bar
+    assert sorted(p.name for p in out.iterdir()) == ["scene.json", "scene_left.exr", "scene_left.png",
+                                                     "scene_right.exr", "scene_right.png"]
+    expected = mvpt.render(mvpt.load_file(path, res=32), spp=4)
+    for vid in ("left", "right"):
+        exr = _core.read_image(str(out / f"scene_{vid}.exr"))
+        assert exr.shape == (32, 32, 3)
+        assert exr.tobytes() == expected.images[vid].tobytes(), vid
+        assert _core.read_image(str(out / f"scene_{vid}.png")).shape == (32, 32, 3)
+
+    data = json.loads((out / "scene.json").read_text())
+    assert {"settings", "wall_time", "passes", "samples", "samples_per_second", "rays", "rays_per_second",
+            "nonfinite_samples", "views", "cancelled", "threads"} <= set(data)
+    st = data["settings"]
+    assert st["scene"] == str(path) and st["defines"] == {"res": "32"} and st["spp"] == 4
+    assert st["views"] == ["left", "right"] and st["integrator"] == "path"
+    assert data["passes"] == 4 and data["cancelled"] is False
+    assert data["samples"] == 2 * 32 * 32 * 4
+    assert data["wall_time"] > 0 and data["samples_per_second"] == pytest.approx(data["samples"] / data["wall_time"])
+    assert data["rays"]["camera"] == data["samples"]
+    assert data["rays"]["total"] == data["rays"]["intersect"] + data["rays"]["shadow"] > data["samples"]
+    assert data["rays_per_second"] > 0 and data["nonfinite_samples"] == 0
+    for vid in ("left", "right"):
+        v = data["views"][vid]
+        assert (v["id"], v["width"], v["height"], v["spp"]) == (vid, 32, 32, 4.0)
+        assert v["mean"] == pytest.approx(expected.images[vid].reshape(-1, 3).mean(axis=0), rel=1e-5)
+
+    # The summary table: one row per view, then the totals.
+    lines = proc.stdout.splitlines()
+    header = next(i for i, l in enumerate(lines) if l.split()[:3] == ["view", "size", "spp"])
+    assert lines[header + 2].split()[:4] == ["left", "32x32", "4.0", "4,096"]
+    assert lines[header + 3].split()[:4] == ["right", "32x32", "4.0", "4,096"]
+    assert any("4 passes" in l for l in lines) and any("rays:" in l and "shadow" in l for l in lines)
+
+
+def test_aovs(tmp_path):
+    path = _two_view_scene(tmp_path)
+    assert cli.main(["render", str(path), "--spp", "3", "-o", str(tmp_path / "plain"), "-q"]) == 0
+    assert cli.main(["render", str(path), "--spp", "3", "-o", str(tmp_path / "aov"), "--aovs", "-q"]) == 0
+    plain = _exr_channels(tmp_path / "plain" / "scene_left.exr")
+    assert sorted(plain) == ["B", "G", "R"]
+    ch = _exr_channels(tmp_path / "aov" / "scene_left.exr")
+    assert sorted(ch) == ["B", "G", "R", "sample_count.Y", "variance.B", "variance.G", "variance.R"]
+    expected = mvpt.render(mvpt.load_file(path), spp=3)
+    assert (ch["sample_count.Y"] == 3).all()
+    for i, c in enumerate("RGB"):
+        assert np.array_equal(ch[f"variance.{c}"], expected.variance["left"][..., i])
+        assert np.array_equal(ch[c], expected.images["left"][..., i])
+    assert ch["variance.R"].max() > 0
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_writes_finished_passes(tmp_path, sig):
+    path = tmp_path / "slow.xml"
+    path.write_text(slow_scene(4, res=64))
+    out = tmp_path / "out"
+    proc = subprocess.Popen(CLI + ["render", str(path), "--spp", "100000", "--aovs", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    try:
+        first = proc.stdout.readline()
+        assert first.startswith("rendering 4 views"), first + proc.stderr.read()
+        time.sleep(1.0)  # a few passes (~0.1 s each)
+        proc.send_signal(sig)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 128 + int(sig), stderr
+    assert "Traceback" not in stderr and "interrupted" in stderr
+    data = json.loads((out / "slow.json").read_text())
+    assert data["cancelled"] is True and 1 <= data["passes"] < 100000
+    for i in range(4):
+        exr = out / f"slow_v{i}.exr"
+        img = _core.read_image(str(exr))
+        assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0
+        assert (out / f"slow_v{i}.png").exists()
+        assert data["views"][f"v{i}"]["spp"] == data["passes"]
+    assert "cancelled after" in stdout
+    assert _leftovers(out) == []
+    ch = _exr_channels(out / "slow_v0.exr")
+    assert (ch["sample_count.Y"] == data["passes"]).all()  # whole passes only
+
+
+def test_outputs_atomic(tmp_path, capsys):
+    path = _two_view_scene(tmp_path)
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "-o", str(out), "-q"]) == 0
+    assert _leftovers(out) == []
+    # The PNG of view 'right' cannot be written (a directory is in the way): one error line,
+    # exit code 1, and no temporary file left behind.
+    bad = tmp_path / "bad"
+    (bad / "scene_right.png").mkdir(parents=True)
+    capsys.readouterr()
+    assert cli.main(["render", str(path), "-o", str(bad), "-q"]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mvpt: error: ") and "scene_right.png" in err[0]
+    assert _leftovers(bad) == []
+    # The output "directory" is a file.
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert cli.main(["render", str(path), "-o", str(blocker), "-q"]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mvpt: error: ")
+    assert _leftovers(tmp_path) == []
+
+
+def _run_on_pty(args: list) -> tuple:
+    """Run the CLI with stderr on a pseudo-terminal; returns (exit code, stderr bytes)."""
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(CLI + args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave, env=ENV)
+    os.close(slave)
+    chunks = []
+    try:
+        while True:
+            try:
+                data = os.read(master, 4096)
+            except OSError:  # EIO: the child closed the terminal
+                break
+            if not data:
+                break
+            chunks.append(data)
+        proc.wait(timeout=60)
+    finally:
+        os.close(master)
+        if proc.poll() is None:
+            proc.kill()
+    return proc.returncode, b"".join(chunks).decode(errors="replace")
+
+
+def test_progress_bar_on_tty_only(tmp_path):
+    path = tmp_path / "slow.xml"
+    path.write_text(slow_scene(4, res=64))
+    rc, err = _run_on_pty(["render", str(path), "--time", "0.8", "-o", str(tmp_path / "tty")])
+    assert rc == 0, err
+    draws = [d for d in err.split("\r") if "ETA" in d]
+    assert len(draws) >= 3, err  # redrawn in place while rendering, then the final state
+    assert "elapsed" in draws[0] and "%" in draws[0]
+    assert "100.0%" in draws[-1]
+    piped = subprocess.run(CLI + ["render", str(path), "--time", "0.3", "-o", str(tmp_path / "pipe")],
+                           capture_output=True, text=True, timeout=60, env=ENV)
+    assert piped.returncode == 0 and "ETA" not in piped.stderr and "\r" not in piped.stderr
+
+
+def test_views_by_id_and_index(tmp_path):
+    """An id wins; a digit string that is no id is an index (the ids here are 1, 7, 3)."""
+    path = tmp_path / "scene.xml"
+    path.write_text(scene(sensor("1") + sensor("7", origin="1, 1, 4") + sensor("3", origin="-1, 1, 4")))
+
+    def rendered(views: str) -> list:
+        out = tmp_path / f"out_{views.replace(',', '_')}"
+        assert cli.main(["render", str(path), "--spp", "1", "--views", views, "-o", str(out), "-q"]) == 0
+        return sorted(p.stem.split("_", 1)[1] for p in out.glob("*.exr"))
+
+    assert rendered("1") == ["1"]
+    assert rendered("2") == ["3"]
+    assert rendered("7,0") == ["1", "7"]
+    assert rendered("3,2") == ["3"]  # id 3 and index 2 are the same view
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--views", "nope"], "unknown view 'nope'"),
+    (["--views", "5"], "out of range"),
+    (["--spp", "-1"], "--spp"),
+    (["--spp", "many"], "--spp"),
+    (["--time", "-1"], "--time"),
+    (["--threads", "-3"], "--threads"),
+    (["--seed", "-1"], "--seed"),
+    (["-D", "novalue"], "NAME=VALUE"),
+    (["--frobnicate"], "unrecognized arguments"),
+])
+def test_bad_command_line(tmp_path, capsys, args, needle):
+    path = _two_view_scene(tmp_path)
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "-o", str(out)] + args) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mvpt: error: ") and needle in lines[0], captured.err
+    assert captured.out == "" and not out.exists()
+
+
+def test_missing_arguments_and_files(tmp_path, capsys):
+    assert cli.main(["render"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
+    assert cli.main([]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
+    assert cli.main(["render", str(tmp_path / "nothere.xml"), "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("mvpt: error: ") and "not found" in err
+
+
+def test_subprocess_bad_view_exit_code(tmp_path):
+    path = _two_view_scene(tmp_path)
+    proc = subprocess.run(CLI + ["render", str(path), "--views", "centre", "-o", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=60, env=ENV)
+    assert proc.returncode == 2
+    assert proc.stderr.splitlines() == [
+        "mvpt: error: --views: unknown view 'centre'; the scene's views are left, right"]
+
+
+def test_unsafe_view_ids_get_distinct_files(tmp_path):
+    path = tmp_path / "scene.xml"
+    path.write_text(scene(sensor("a/b") + sensor("a_b", origin="1, 1, 4")))
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "--spp", "1", "-o", str(out), "-q"]) == 0
+    assert sorted(p.name for p in out.glob("*.exr")) == ["scene_a_b.exr", "scene_a_b_1.exr"]
+
+
+def test_python_dash_m_mvpt_and_version():
+    proc = subprocess.run([sys.executable, "-m", "mvpt", "--version"], capture_output=True, text=True,
+                          timeout=60, env=ENV)
+    assert proc.returncode == 0 and proc.stdout.strip() == f"mvpt {mvpt.__version__}"

@@ -1,0 +1,274 @@
+"""Bad scene files: each gives ONE clear mvpt.SceneError naming file:line:col and what was
+expected, and the CLI prints a single `mvpt: error: file:line:col: ...` line and exits non-zero.
+
+Every case names the text its error must point at (`at`, the first occurrence in the file
+`in_file`); the expected line and column are computed from where that text is, so a message
+that points at the wrong line fails."""
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+import mvpt
+from mvpt import cli
+
+from small_scenes import GEOMETRY, scene, sensor
+
+
+@dataclass
+class Case:
+    xml: str
+    at: str                      # text whose position the error must name
+    message: str                 # regex the message (after file:line:col: ) must match
+    files: dict = field(default_factory=dict)   # extra files: name -> text or bytes
+    in_file: str = "scene.xml"   # file that contains `at`
+    defines: dict = field(default_factory=dict)
+
+
+def _with_shape(inner: str) -> str:
+    return scene(body=f'    <shape type="cube">\n        {inner}\n    </shape>\n')
+
+
+GOOD_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+CASES = {
+    # --- XML syntax -------------------------------------------------------------------
+    "unclosed_tag": Case(scene(body='    <shape type="cube">\n        <ref id="white"/>\n'),
+                         '<shape type="cube">\n        <ref', r"<shape> .*not closed|never closed"),
+    "unclosed_at_eof": Case(scene().replace("</scene>\n", ""), '<scene version', r"<scene> .*not closed|never closed"),
+    "unclosed_inner": Case(scene(body='    <shape type="cube">\n        <bsdf type="diffuse">\n    </shape>\n'),
+                           '<bsdf type="diffuse">\n    </shape>', r"<bsdf> is not closed \(expected </bsdf> before the </shape> at .*:\d+:5\)"),
+    "extra_close_tag": Case(scene(body='    <shape type="cube"/>\n    </shape>\n'), '</shape>\n</scene>',
+                            r"</shape> closes no open element \(expected </scene>\)"),
+    "bad_attribute_syntax": Case(scene(sensor(fov="40").replace('value="40"', "value=40")),
+                                 "40/>", r"malformed XML: bad attribute syntax \(expected name=\"value\"\)"),
+    "bad_start_tag": Case(scene(body='    <shape type="cube"/ >\n'), ' >\n', r"malformed XML: bad start tag"),
+    "missing_version": Case(scene(header="<scene>"), "<scene>", r"version"),
+    "mitsuba_06": Case(scene(header='<scene version="0.6.0">'), 'version="0.6.0"', r"0\.6.*Mitsuba 3|Mitsuba 0"),
+    "root_not_scene": Case('<scena version="3.0.0">\n</scena>\n', "<scena", r"root element must be <scene>"),
+    "empty_file": Case("", "", r"no root element|empty"),
+    # --- structure ----------------------------------------------------------------------
+    "unknown_plugin_type": Case(scene(body='    <shape type="spheroid"/>\n'), '<shape type="spheroid"',
+                                r"unknown shape type 'spheroid'.*known:.*rectangle"),
+    "unknown_element": Case(_with_shape('<colour name="x" value="1"/>'), "<colour", r"unknown element <colour>"),
+    "unknown_attribute_object": Case(scene(body='    <shape type="cube" colour="red"/>\n'), 'colour="red"',
+                                     r"unknown attribute 'colour'.*expected: type, id, name"),
+    "unknown_attribute_value": Case(_with_shape('<boolean name="flip_normals" value="true" units="deg"/>'),
+                                    'units="deg"', r"<boolean> has an unknown attribute 'units'"),
+    "unused_parameter": Case(_with_shape('<bsdf type="diffuse">\n            <float name="radiuss" value="1"/>\n        </bsdf>'),
+                             '<float name="radiuss"', r"bsdf 'diffuse' does not use a parameter named 'radiuss'"),
+    # Misspelt names get the closest known name as a hint.
+    "typo_parameter": Case(_with_shape('<bsdf type="diffuse"><rgb name="reflectanse" value="0.5"/></bsdf>'),
+                           '<rgb name="reflectanse"', r"named 'reflectanse' \(<rgb>\) \(did you mean 'reflectance'\?\)"),
+    "typo_element": Case(_with_shape('<flaot name="x" value="1"/>'), "<flaot", r"unknown element <flaot> \(did you mean <float>\?\)"),
+    "typo_plugin_type": Case(scene(body='    <shape type="rectangel"/>\n'), '<shape type="rectangel"',
+                             r"unknown shape type 'rectangel' \(did you mean 'rectangle'\?\)"),
+    "typo_transform_op": Case(_with_shape('<transform name="to_world"><rotat y="1" angle="3"/></transform>'), "<rotat ",
+                              r"unknown transform operation <rotat> \(did you mean <rotate>\?\)"),
+    "unused_child": Case(_with_shape('<film type="hdrfilm"/>'), '<film type="hdrfilm"/>',
+                         r"shape 'cube' does not accept a nested film"),
+    "duplicate_parameter": Case(scene(sensor(film_extra='\n            <integer name="width" value="8"/>')),
+                                '<integer name="width" value="8"', r"parameter 'width' is given twice \(first at .*:\d+:\d+\)"),
+    "duplicate_id": Case(scene(body='    <bsdf type="diffuse" id="white"/>\n'), '<bsdf type="diffuse" id="white"/>',
+                         r"duplicate id 'white' \(first declared at .*scene.xml:\d+:\d+\)"),
+    "ref_unknown_id": Case(_with_shape('<ref id="nothere"/>'), '<ref id="nothere"', r"<ref> to unknown id 'nothere'"),
+    "ref_self": Case(scene(body='    <bsdf type="diffuse" id="loop"><ref id="loop"/></bsdf>\n'
+                               '    <shape type="cube"><ref id="loop"/></shape>\n'),
+                     '<ref id="loop"/></bsdf>', r"refers to an object that contains it \(declared at .*scene\.xml:\d+:5\)"),
+    "ref_before_untyped_object": Case(scene(body='    <shape type="cube"><ref id="later"/></shape>\n    <bsdf id="later"/>\n'),
+                                      '<bsdf id="later"/>', r"<bsdf> is missing its 'type' attribute"),
+    "deep_nesting": Case(scene(body="    " + "<shape>" * 256 + '<shape id="deep">' + "<shape>" * 43 + "</shape>" * 300 + "\n"),
+                         '<shape id="deep">', r"nested more than 256 levels"),
+    "include_missing": Case(scene(body='    <include filename="missing.xml"/>\n'), '<include filename="missing.xml"',
+                            r"included file 'missing.xml' not found"),
+    "include_cycle": Case(scene(body='    <include filename="a.xml"/>\n'), '<include filename="scene.xml"',
+                          r"include cycle: scene\.xml -> a\.xml -> scene\.xml",
+                          files={"a.xml": '<scene version="3.0.0">\n    <include filename="scene.xml"/>\n</scene>\n'},
+                          in_file="a.xml"),
+    "include_self": Case(scene(body='    <include filename="scene.xml"/>\n'), '<include filename="scene.xml"',
+                         r"include cycle: scene\.xml -> scene\.xml"),
+    "error_inside_include": Case(scene(body='    <include filename="a.xml"/>\n'), '<float name="radiuss"',
+                                 r"does not use a parameter named 'radiuss'",
+                                 files={"a.xml": '<scene version="3.0.0">\n    <bsdf type="diffuse" id="x">\n'
+                                                 '        <float name="radiuss" value="1"/>\n    </bsdf>\n</scene>\n'},
+                                 in_file="a.xml"),
+    "undefined_variable": Case(scene(sensor(res="$resolution")), 'value="$resolution"',
+                               r"undefined variable '\$resolution'.*<default name=\"resolution\""),
+    "area_emitter_outside_shape": Case(scene(body='    <emitter type="area"/>\n'), '<emitter type="area"/>',
+                                       r"'area' emitter must be placed inside a <shape>"),
+    "no_sensor": Case(scene(sensors=""), '<scene version', r"no <sensor>"),
+    # --- files ---------------------------------------------------------------------------
+    "missing_mesh": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="nothere.obj"/>\n    </shape>\n'),
+                         '<string name="filename"', r"file 'nothere.obj' not found"),
+    "empty_obj": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="empty.obj"/>\n    </shape>\n'),
+                      '<string name="filename"', r"empty\.obj.*contains no faces", files={"empty.obj": ""}),
+    "corrupt_obj_index": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="bad.obj"/>\n    </shape>\n'),
+                              '<string name="filename"', r"bad\.obj", files={"bad.obj": "v 0 0 0\nv 1 0 0\nf 1 2 9\n"}),
+    "corrupt_obj_binary": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="bin.obj"/>\n    </shape>\n'),
+                               '<string name="filename"', r"bin\.obj", files={"bin.obj": bytes(range(256)) * 8}),
+    # tinyobjloader reads 'nan' as 0 (silently); an overflowing exponent still reaches the mesh check.
+    "obj_inf_vertex": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="inf.obj"/>\n    </shape>\n'),
+                           '<shape type="obj">', r"inf\.obj.*not finite",
+                           files={"inf.obj": "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"}),
+    "corrupt_texture": Case(_with_shape('<bsdf type="diffuse">\n            <texture type="bitmap" name="reflectance">\n'
+                                        '                <string name="filename" value="bad.png"/>\n'
+                                        '            </texture>\n        </bsdf>'),
+                            '<string name="filename"', r"cannot read image 'bad.png'", files={"bad.png": b"\x89PNG garbage"}),
+    "missing_texture": Case(_with_shape('<bsdf type="diffuse">\n            <texture type="bitmap" name="reflectance">\n'
+                                        '                <string name="filename" value="nothere.png"/>\n'
+                                        '            </texture>\n        </bsdf>'),
+                            '<string name="filename"', r"file 'nothere.png' not found"),
+    # --- values --------------------------------------------------------------------------
+    "negative_resolution": Case(scene(sensor(res="-16")), '<integer name="width"', r"width.*between 1 and|resolution"),
+    "zero_resolution": Case(scene(sensor(film_extra="").replace('name="height" value="16"', 'name="height" value="0"')),
+                            '<integer name="height"', r"height|resolution"),
+    "fov_zero": Case(scene(sensor(fov="0")), '<float name="fov"', r"'fov' must lie in \(0, 180\)"),
+    "fov_180": Case(scene(sensor(fov="180")), '<float name="fov"', r"'fov' must lie in \(0, 180\)"),
+    "fov_negative": Case(scene(sensor(fov="-5")), '<float name="fov"', r"'fov' must lie in \(0, 180\)"),
+    "nan_value": Case(scene(sensor(fov="nan")), 'value="nan"', r"float 'fov': expected a finite number, got 'nan'"),
+    "inf_value": Case(scene(sensor(fov="inf")), 'value="inf"', r"float 'fov': expected a finite number, got 'inf'"),
+    "nan_in_rgb": Case(_with_shape('<bsdf type="diffuse"><rgb name="reflectance" value="0.5, nan, 0.5"/></bsdf>'),
+                       'value="0.5, nan', r"rgb 'reflectance': expected a finite number"),
+    "non_numeric": Case(scene(sensor(fov="forty")), 'value="forty"', r"float 'fov': expected a number, got 'forty'"),
+    "non_integer": Case(scene(sensor(spp="4.5")), 'value="4.5"', r"integer 'sample_count': expected an integer"),
+    "bad_boolean": Case(_with_shape('<boolean name="flip_normals" value="maybe"/>'), 'value="maybe"',
+                        r"expected true or false"),
+    "rgb_wrong_count": Case(_with_shape('<bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5"/></bsdf>'),
+                            'value="0.5, 0.5"', r"expected 1 or 3 numbers"),
+    "bad_crop_window": Case(scene(sensor(film_extra='\n            <integer name="crop_offset_x" value="10"/>'
+                                                    '\n            <integer name="crop_width" value="10"/>')),
+                            '<integer name="crop_width"', r"crop window .* does not fit in the 16x16 film"),
+    "near_clip_ge_far_clip": Case(scene(sensor(extra='\n        <float name="near_clip" value="10"/>'
+                                                     '\n        <float name="far_clip" value="1"/>')),
+                                  '<float name="near_clip"', r"near_clip < far_clip"),
+    "singular_matrix": Case(_with_shape('<transform name="to_world">\n            <matrix value="1 0 0 0  0 0 0 0  0 0 1 0  0 0 0 1"/>\n        </transform>'),
+                            "<matrix", r"<matrix> is singular"),
+    "zero_scale": Case(_with_shape('<transform name="to_world"><scale y="0"/></transform>'), '<scale y="0"', r"singular"),
+    "shear_sensor": Case(scene(sensor().replace(
+        '<lookat origin="0, 1, 4" target="0, 0.5, 0" up="0, 1, 0"/>',
+        '<matrix value="1 0.5 0 0  0 1 0 4  0 0 1 4  0 0 0 1"/>')), '<transform name="to_world"><matrix',
+        r"to_world.*(shear|scale)"),
+    "wrong_value_type": Case(scene(sensor().replace('<float name="fov" value="40"/>', '<string name="fov" value="40"/>')),
+                             '<string name="fov"', r"'fov' must be a float, got <string>"),
+    "wrong_child_type": Case(_with_shape('<bsdf type="diffuse"><transform name="reflectance"/></bsdf>'),
+                             '<transform name="reflectance"', r"'reflectance' must be an rgb colour or a float, got <transform>"),
+}
+
+
+def _write_case(case: Case, tmp_path: Path) -> Path:
+    path = tmp_path / "scene.xml"
+    path.write_text(case.xml)
+    for name, text in case.files.items():
+        p = tmp_path / name
+        p.write_bytes(text) if isinstance(text, bytes) else p.write_text(text)
+    return path
+
+
+def _expected_loc(case: Case, tmp_path: Path) -> tuple[str, int, int]:
+    text = case.xml if case.in_file == "scene.xml" else case.files[case.in_file]
+    offset = text.find(case.at)
+    assert offset >= 0, f"test bug: {case.at!r} not in {case.in_file}"
+    line = text.count("\n", 0, offset) + 1
+    col = offset - (text.rfind("\n", 0, offset) + 1) + 1
+    return str(tmp_path / case.in_file), line, col
+
+
+def _check_message(msg: str, case: Case, tmp_path: Path) -> None:
+    assert "\n" not in msg.strip(), f"error spans several lines: {msg!r}"
+    file, line, col = _expected_loc(case, tmp_path)
+    prefix = f"{file}:{line}:{col}: "
+    assert msg.startswith(prefix), f"expected the error at {prefix!r}, got {msg!r}"
+    assert re.search(case.message, msg[len(prefix):]), f"message {msg!r} does not match {case.message!r}"
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_load_error(name, tmp_path):
+    case = CASES[name]
+    path = _write_case(case, tmp_path)
+    with pytest.raises(mvpt.SceneError) as info:
+        mvpt.load_file(path, **case.defines)
+    msg = str(info.value)
+    if "texture" in name and "unknown texture type 'bitmap'" in msg:
+        pytest.skip("the bitmap texture plugin does not exist yet")
+    _check_message(msg, case, tmp_path)
+    assert isinstance(info.value, ValueError)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_cli_load_error(name, tmp_path, capsys):
+    case = CASES[name]
+    path = _write_case(case, tmp_path)
+    out = tmp_path / "out"
+    rc = cli.main(["render", str(path), "-o", str(out)])
+    captured = capsys.readouterr()
+    if "texture" in name and "unknown texture type 'bitmap'" in captured.err:
+        pytest.skip("the bitmap texture plugin does not exist yet")
+    assert rc == 1
+    lines = captured.err.splitlines()
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith("mvpt: error: ")
+    _check_message(lines[0][len("mvpt: error: "):], case, tmp_path)
+    assert captured.out == ""
+    assert not out.exists() or not any(out.iterdir()), "nothing may be written for a bad scene"
+
+
+@pytest.mark.parametrize("name", ["unclosed_tag", "unknown_plugin_type", "include_cycle", "corrupt_obj_binary"])
+def test_cli_subprocess_no_traceback(name, tmp_path):
+    """The real entry point: one line on stderr, exit code 1, no traceback, no crash."""
+    case = CASES[name]
+    path = _write_case(case, tmp_path)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    proc = subprocess.run([sys.executable, "-m", "mvpt.cli", "render", str(path), "-o", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=60, env=env)
+    assert proc.returncode == 1, proc.stderr
+    assert "Traceback" not in proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mvpt: error: "), proc.stderr
+    _check_message(lines[0][len("mvpt: error: "):], case, tmp_path)
+
+
+def test_scene_error_attributes(tmp_path):
+    """SceneError carries the location as attributes, for tools that want to jump to it."""
+    case = CASES["unused_parameter"]
+    path = _write_case(case, tmp_path)
+    with pytest.raises(mvpt.SceneError) as info:
+        mvpt.load_file(path)
+    file, line, col = _expected_loc(case, tmp_path)
+    assert (info.value.file, info.value.line, info.value.column) == (file, line, col)
+    assert "radiuss" in info.value.message and not info.value.message.startswith(file)
+
+
+def test_load_string_error_names_string():
+    with pytest.raises(mvpt.SceneError, match=r"^<string>:1:\d+: .*version"):
+        mvpt.load_string("<scene/>")
+
+
+def test_define_overrides_default_and_bad_define(tmp_path):
+    xml = scene(sensor(res="$res")).replace('<scene version="3.0.0">',
+                                            '<scene version="3.0.0">\n    <default name="res" value="16"/>')
+    path = tmp_path / "scene.xml"
+    path.write_text(xml)
+    assert mvpt.load_file(path).views[0]["width"] == 16
+    assert mvpt.load_file(path, res=8).views[0]["width"] == 8
+    with pytest.raises(mvpt.SceneError, match=r"integer 'width': expected an integer, got 'abc'"):
+        mvpt.load_file(path, res="abc")
+
+
+def test_unused_define(tmp_path):
+    """As Mitsuba: a define the scene never uses as $name is an error (usually a typo)."""
+    path = tmp_path / "scene.xml"
+    path.write_text(scene(sensor(res="$res")))
+    assert mvpt.load_file(path, res=8).views[0]["width"] == 8
+    with pytest.raises(mvpt.SceneError, match=r"the define rez=8 is not used: the scene has no \$rez"):
+        mvpt.load_file(path, res=8, rez=8)
+
+
+def test_missing_scene_file(tmp_path):
+    with pytest.raises(mvpt.SceneError, match="not found"):
+        mvpt.load_file(tmp_path / "nothere.xml")
