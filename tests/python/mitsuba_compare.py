@@ -292,6 +292,74 @@ def compare_estimates(name: str, pairs: Sequence[tuple], alpha: float = 0.01, bl
 
 
 # --------------------------------------------------------------------------------------
+# Scene preparation: includes inlined, films resized, box filters (in memory only)
+# --------------------------------------------------------------------------------------
+
+def _resolve_var(text: str, variables: dict) -> str:
+    import re
+    return re.sub(r"\$(\w+)", lambda m: str(variables.get(m.group(1), m.group(0))), text)
+
+
+def prepare_scene(path, defines: Optional[dict] = None, max_res: Optional[int] = None,
+                  box_filter: bool = True) -> tuple:
+    """(xml string, base dir) of `path` with every <include> inlined, each film scaled so its
+    larger side is `max_res` (aspect kept, crop windows scaled along) and every rfilter a box.
+
+    Files on disk are not touched. A box filter makes each sample land in exactly one pixel,
+    which the per-pixel variance estimates assume; downscaling keeps the full field of view.
+    Inlining follows Mitsuba's semantics (the included <scene>'s children replace the
+    <include>); relative names in included files then resolve against the scene's
+    directory and its <path> entries, as Mitsuba's file resolver does."""
+    import xml.etree.ElementTree as ET
+    path = Path(path).resolve()
+    base = path.parent
+    defines = {k: str(v) for k, v in (defines or {}).items()}
+
+    def inline(elem, cur_dir, depth=0):
+        if depth > 32:
+            raise ValueError(f"{path}: includes nested too deeply")
+        out = []
+        for c in list(elem):
+            if c.tag == "include":
+                name = Path(c.get("filename"))
+                cand = [cur_dir / name, base / name]
+                f = next((x for x in cand if x.is_file()), None)
+                if f is None:
+                    raise FileNotFoundError(f"{path}: included file {name} not found")
+                sub = ET.parse(f).getroot()
+                inline(sub, f.parent, depth + 1)
+                out.extend(list(sub))
+            else:
+                inline(c, cur_dir, depth + 1)
+                out.append(c)
+        for c in list(elem):
+            elem.remove(c)
+        elem.extend(out)
+
+    root = ET.parse(path).getroot()
+    inline(root, base)
+    variables = {d.get("name"): d.get("value") for d in root.iter("default")}
+    variables.update(defines)
+    for film in root.iter("film"):
+        ints = {c.get("name"): c for c in film if c.tag == "integer"}
+        if max_res and "width" in ints and "height" in ints:
+            w = int(_resolve_var(ints["width"].get("value"), variables))
+            h = int(_resolve_var(ints["height"].get("value"), variables))
+            scale = max_res / max(w, h)
+            if scale < 1:
+                for key in ("width", "height", "crop_offset_x", "crop_offset_y", "crop_width", "crop_height"):
+                    if key in ints:
+                        v = int(_resolve_var(ints[key].get("value"), variables))
+                        ints[key].set("value", str(max(1, int(round(v * scale))) if "offset" not in key
+                                                   else int(round(v * scale))))
+        if box_filter:
+            for rf in [c for c in film if c.tag == "rfilter"]:
+                film.remove(rf)
+            ET.SubElement(film, "rfilter", {"type": "box"})
+    return ET.tostring(root, encoding="unicode"), base
+
+
+# --------------------------------------------------------------------------------------
 # Renderers
 # --------------------------------------------------------------------------------------
 
@@ -322,11 +390,19 @@ def load_mitsuba(scene, defines: dict, base_dir=None):
     """Load with Mitsuba 3 scalar_rgb (path or XML string)."""
     mi = _mitsuba()
     d = {k: str(v) for k, v in defines.items()}
-    if _is_xml_string(scene):
-        if base_dir is not None:
-            mi.Thread.thread().file_resolver().prepend(str(base_dir))
+    if not _is_xml_string(scene):
+        return mi.load_file(str(scene), **d)
+    if base_dir is None:
         return mi.load_string(scene, **d)
-    return mi.load_file(str(scene), **d)
+    fr = mi.Thread.thread().file_resolver()
+    saved = [fr[i] for i in range(len(fr))]
+    fr.prepend(str(Path(base_dir).resolve()))
+    try:
+        return mi.load_string(scene, **d)
+    finally:
+        fr.clear()
+        for p in saved:
+            fr.append(p)
 
 
 def render_mvpt(scene_obj, spp: int, seed: int = 0, threads: int = 0) -> list:
@@ -365,16 +441,21 @@ def render_mitsuba(scene_obj, spp: int, seeds: int = 8, seed: int = 0) -> list:
 
 def compare_scene(scene, defines: Optional[dict] = None, spp: int = 256, mitsuba_spp: Optional[int] = None,
                   seeds: int = 8, seed: int = 0, alpha: float = 0.01, block: int = 8, mean_tol: float = 0.01,
-                  base_dir=None, name: Optional[str] = None, threads: int = 0) -> CompareResult:
+                  base_dir=None, name: Optional[str] = None, threads: int = 0, max_res: Optional[int] = None,
+                  box_filter: bool = False, mitsuba_defines: Optional[dict] = None) -> CompareResult:
     """Render every sensor of `scene` with mvpt and Mitsuba 3 and run the mean and block tests.
 
     spp: mvpt samples per pixel; mitsuba_spp: Mitsuba's total (split over `seeds` renders),
-    default `spp`. mvpt errors (mvpt.SceneError for unknown plugins) propagate unchanged."""
+    default `spp`. max_res / box_filter: see `prepare_scene` (applied when either is set).
+    mitsuba_defines: extra defines for Mitsuba only (parameters mvpt lacks). mvpt errors
+    (mvpt.SceneError, e.g. for unknown plugins) propagate unchanged."""
     defines = dict(defines or {})
     name = name or (Path(scene).name if not _is_xml_string(scene) else "<xml string>")
+    if (max_res or box_filter) and not _is_xml_string(scene):
+        scene, base_dir = prepare_scene(scene, defines, max_res, box_filter)
     t0 = time.perf_counter()
     s_mvpt = load_mvpt(scene, defines, base_dir)
-    s_mi = load_mitsuba(scene, defines, base_dir)
+    s_mi = load_mitsuba(scene, {**defines, **(mitsuba_defines or {})}, base_dir)
     t_load = time.perf_counter() - t0
     a = render_mvpt(s_mvpt, spp, seed, threads)
     b = render_mitsuba(s_mi, mitsuba_spp or spp, seeds, seed)
@@ -463,12 +544,15 @@ def main(argv=None) -> int:
     ap.add_argument("--alpha", type=float, default=0.01)
     ap.add_argument("--ref", nargs=2, metavar=("REF_RGB", "REF_VAR"), help="compare against stored references")
     ap.add_argument("--diff", metavar="DIR", help="write per-view diff EXRs here")
+    ap.add_argument("--max-res", type=int, default=None, help="scale films so the larger side is this")
+    ap.add_argument("--box", action="store_true", help="replace every rfilter by a box (in memory)")
     args = ap.parse_args(argv)
     defines = dict(d.split("=", 1) for d in args.defines)
     if args.ref:
         res = compare_to_reference(args.scene, args.ref[0], args.ref[1], defines, args.spp, alpha=args.alpha)
     else:
-        res = compare_scene(args.scene, defines, args.spp, args.mitsuba_spp, args.seeds, alpha=args.alpha)
+        res = compare_scene(args.scene, defines, args.spp, args.mitsuba_spp, args.seeds, alpha=args.alpha,
+                            max_res=args.max_res, box_filter=args.box)
     print(res.summary())
     print(f"seconds: {res.seconds}; max se of relative mean difference {res.max_mean_se_rel*100:.3f}%")
     if args.diff:
