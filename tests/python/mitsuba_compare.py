@@ -49,10 +49,11 @@ Mitsuba seed image averages S ≥ 16 samples per pixel and the block pools 64 pi
 quantities entering the test are averages of ≥ 64·S samples; test scenes keep spp such
 that blocks see hundreds of samples per pixel at most 64×64 resolution. Reference
 images (Mitsuba's test suite ``refs/*_ref_rgb.exr`` with per-sample variance
-``*_rgb_var.exr``) enter with variance ``var / ref_spp`` (ref_spp = 32000, the default of
-Mitsuba's ``render_ref_images``); its stored RGB variance is a linear transform of an
-XYZ variance and can be slightly negative, so its absolute value is used; the term is
-< 1 % of mvpt's at the sample counts used here, and ``ν_ref`` is taken as ∞.
+``*_rgb_var.exr``) are not used for the block test: they deviate from Mitsuba 3.9.1 itself
+(a constant emitter of radiance 1 is stored as R = 1.0011; dark blocks of instancing/
+differ by 15–30 %, measured with this module). Against them `compare_to_reference` applies
+the rule they were made for (Mitsuba's ``test_renders.py``: per-pixel z with the reference
+variance floored at 1e-4, Šidák over pixels, ≥ 99.75 % of pixels passing) plus test (a).
 
 CLI: ``python tests/python/mitsuba_compare.py scene.xml -D integrator=path --spp 256
 --diff out/`` compares one scene by hand and writes ``out/<view>_diff.exr`` (mvpt |
@@ -76,6 +77,12 @@ from scipy import stats
 SEED_STRIDE = 1 << 20
 #: Samples per pixel behind Mitsuba's test-suite reference images.
 REF_SPP = 32000
+#: Linear sRGB → CIE XYZ (D65), the map of Mitsuba's Bitmap conversion.
+RGB_TO_XYZ = np.array([[0.412453, 0.357580, 0.180423],
+                       [0.212671, 0.715160, 0.072169],
+                       [0.019334, 0.119193, 0.950227]])
+#: Fraction of pixels that must pass in Mitsuba's test-suite criterion (test_renders.py).
+REF_PASS_FRACTION = 0.9975
 
 
 # --------------------------------------------------------------------------------------
@@ -259,8 +266,11 @@ class CompareResult:
 
 
 def compare_estimates(name: str, pairs: Sequence[tuple], alpha: float = 0.01, block: int = 8,
-                      mean_tol: float = 0.01) -> CompareResult:
-    """Run tests (a) and (b) on [(index, view_id, mvpt ImageEstimate, reference ImageEstimate)]."""
+                      mean_tol: float = 0.01, sys_rel: float = 0.0) -> CompareResult:
+    """Run tests (a) and (b) on [(index, view_id, mvpt ImageEstimate, reference ImageEstimate)].
+
+    sys_rel: a known systematic relative uncertainty of the reference (0 for live Mitsuba
+    renders), added to each block's variance as (sys_rel · reference block mean)², exact dof."""
     res = CompareResult(name=name, alpha=alpha, block=block, mean_tol=mean_tol)
     n_tests = 0
     n_mean = 0
@@ -269,6 +279,11 @@ def compare_estimates(name: str, pairs: Sequence[tuple], alpha: float = 0.01, bl
         if a.mean.shape != b.mean.shape:
             raise ValueError(f"view {idx} '{vid}': mvpt image {a.mean.shape} vs reference {b.mean.shape}")
         ba, bb = block_stats(a, block), block_stats(b, block)
+        if sys_rel > 0:
+            extra = (sys_rel * bb.mean) ** 2
+            with np.errstate(divide="ignore", invalid="ignore"):
+                dof = np.where(np.isinf(bb.dof), np.inf, (bb.var + extra) ** 2 / (bb.var**2 / bb.dof))
+            bb = BlockStats(bb.mean, bb.var + extra, dof, bb.count)
         n_tests += ba.mean.size
         ma, mb = a.mean.reshape(-1, 3).mean(0), b.mean.reshape(-1, 3).mean(0)
         npx = a.mean.shape[0] * a.mean.shape[1]
@@ -394,7 +409,7 @@ def load_mitsuba(scene, defines: dict, base_dir=None):
         return mi.load_file(str(scene), **d)
     if base_dir is None:
         return mi.load_string(scene, **d)
-    fr = mi.Thread.thread().file_resolver()
+    fr = mi.file_resolver() if hasattr(mi, "file_resolver") else mi.Thread.thread().file_resolver()
     saved = [fr[i] for i in range(len(fr))]
     fr.prepend(str(Path(base_dir).resolve()))
     try:
@@ -474,18 +489,73 @@ def read_exr(path) -> np.ndarray:
     return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
 
 
-def compare_to_reference(scene, ref_rgb, ref_var, defines: Optional[dict] = None, spp: int = 256,
-                         ref_spp: int = REF_SPP, seed: int = 0, alpha: float = 0.01, block: int = 8,
-                         mean_tol: float = 0.01, name: Optional[str] = None) -> CompareResult:
-    """Compare mvpt's first view against a stored reference mean and per-sample variance image."""
-    name = name or Path(scene).name
-    s = load_mvpt(scene, dict(defines or {}))
-    a = render_mvpt(s, spp, seed)
+def reference_estimate(ref_rgb, ref_var, ref_spp: int = REF_SPP) -> ImageEstimate:
+    """A stored reference as an estimate: mean, |per-sample variance| / ref_spp, infinite dof."""
     ref = read_exr(ref_rgb)
     var = np.abs(read_exr(ref_var)) / ref_spp
-    eb = ImageEstimate(ref, var, np.full(ref.shape, np.inf), "reference")
-    ia, vid, ea = a[0]
-    return compare_estimates(name + " vs refs", [(ia, vid, ea, eb)], alpha, block, mean_tol)
+    return ImageEstimate(ref, var, np.full(ref.shape, np.inf), "reference")
+
+
+@dataclass
+class ReferenceResult:
+    """Outcome of Mitsuba's own test-suite criterion against a stored reference."""
+
+    name: str
+    passed: bool
+    fraction_ok: float
+    min_p: float
+    level: float
+    mean_rel_diff: np.ndarray
+    mean_ok: bool
+    seconds: float = 0.0
+
+    def summary(self) -> str:
+        rel = ", ".join(f"{c} {d*100:+.2f}%" for c, d in zip("RGB", self.mean_rel_diff))
+        return (f"{self.name}: {'PASS' if self.passed else 'FAIL'} — {self.fraction_ok*100:.2f}% of pixels pass "
+                f"(need {REF_PASS_FRACTION*100:.2f}%) at Šidák level {self.level:.2e}, min p {self.min_p:.2e}; "
+                f"image mean rel diff [{rel}]{'' if self.mean_ok else ' MEAN FAIL (> 1 % + noise)'}")
+
+    __str__ = summary
+
+
+def compare_to_reference(scene, ref_rgb, ref_var, defines: Optional[dict] = None, spp: int = 256,
+                         seed: int = 0, alpha: float = 0.01, mean_tol: float = 0.01,
+                         name: Optional[str] = None) -> ReferenceResult:
+    """mvpt's first view against a stored Mitsuba test-suite reference, by that suite's rule.
+
+    Mitsuba's test_renders.py: per pixel and channel z = |m − ref| · sqrt(spp / max(var, 1e-4))
+    with `var` the reference's per-sample variance, Šidák level over pixels, and at least
+    99.75 % of the pixels passing. This looser rule is used (instead of the block t-test)
+    because the stored references deviate from Mitsuba 3.9.1 itself: a constant emitter of
+    radiance 1 is stored as R = 1.0011, and some dark blocks of instancing/ differ by 15–30 %
+    between Mitsuba 3.9.1 and its reference (measured with this module, 256 spp); the strict
+    test runs against live Mitsuba renders. Plus test (a) on the image mean."""
+    name = name or Path(scene).name
+    s = load_mvpt(scene, dict(defines or {}))
+    (_, _, ea), *_ = render_mvpt(s, spp, seed)
+    return reference_criterion(name, ea, read_exr(ref_rgb), read_exr(ref_var), spp, alpha, mean_tol)
+
+
+def reference_criterion(name: str, ea: ImageEstimate, ref: np.ndarray, var: np.ndarray, spp: int,
+                        alpha: float = 0.01, mean_tol: float = 0.01) -> ReferenceResult:
+    """The rule of `compare_to_reference` applied to an estimate `ea` rendered with `spp`."""
+    if ref.shape != ea.mean.shape:
+        raise ValueError(f"{name}: mvpt image {ea.mean.shape} vs reference {ref.shape}")
+    # As test_renders.py, in XYZ: the files were written from XYZ with this linear map.
+    z = np.abs((ea.mean - ref) @ RGB_TO_XYZ.T) * np.sqrt(spp / np.maximum(var @ RGB_TO_XYZ.T, 1e-4))
+    p = 2.0 * stats.norm.sf(z)
+    npx = ref.shape[0] * ref.shape[1]
+    level = sidak(alpha, npx)
+    frac = float((p > level).sum()) / 3.0 / npx
+    ma, mb = ea.mean.reshape(-1, 3).mean(0), ref.reshape(-1, 3).mean(0)
+    se = np.sqrt(ea.var.reshape(-1, 3).sum(0) + np.maximum(var, 0).reshape(-1, 3).sum(0) / REF_SPP) / npx
+    tested = (np.abs(mb) >= 1e-3 * np.abs(mb).max()) & (np.abs(mb) > 1e-6)
+    z_mean = stats.norm.isf(sidak(alpha, max(1, int(tested.sum()))) / 2)
+    mean_ok = bool(np.all(~tested | (np.abs(ma - mb) <= mean_tol * np.abs(mb) + z_mean * se)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(tested, (ma - mb) / np.abs(mb), np.nan)
+    return ReferenceResult(name + " vs refs", frac >= REF_PASS_FRACTION and mean_ok, frac, float(p.min()), level,
+                           rel, mean_ok, ea.seconds)
 
 
 # --------------------------------------------------------------------------------------
@@ -550,6 +620,8 @@ def main(argv=None) -> int:
     defines = dict(d.split("=", 1) for d in args.defines)
     if args.ref:
         res = compare_to_reference(args.scene, args.ref[0], args.ref[1], defines, args.spp, alpha=args.alpha)
+        print(res.summary())
+        return 0 if res.passed else 1
     else:
         res = compare_scene(args.scene, defines, args.spp, args.mitsuba_spp, args.seeds, alpha=args.alpha,
                             max_res=args.max_res, box_filter=args.box)
