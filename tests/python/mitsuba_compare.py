@@ -383,9 +383,10 @@ def _mvpt():
     return mvpt
 
 
-def _mitsuba():
+def _mitsuba(variant: str = "scalar_rgb"):
     import mitsuba as mi
-    mi.set_variant("scalar_rgb")
+    if mi.variant() != variant:
+        mi.set_variant(variant)
     return mi
 
 
@@ -401,9 +402,9 @@ def load_mvpt(scene, defines: dict, base_dir=None):
     return mvpt.load_file(scene, **defines)
 
 
-def load_mitsuba(scene, defines: dict, base_dir=None):
-    """Load with Mitsuba 3 scalar_rgb (path or XML string)."""
-    mi = _mitsuba()
+def load_mitsuba(scene, defines: dict, base_dir=None, variant: str = "scalar_rgb"):
+    """Load with Mitsuba 3 (scalar_rgb unless told; path or XML string)."""
+    mi = _mitsuba(variant)
     d = {k: str(v) for k, v in defines.items()}
     if not _is_xml_string(scene):
         return mi.load_file(str(scene), **d)
