@@ -489,6 +489,23 @@ def compare_scene(scene, defines: Optional[dict] = None, spp: int = 256, mitsuba
     return res
 
 
+def compare_mitsuba_to_itself(scene, defines: Optional[dict] = None, spp: int = 256, seeds: int = 8,
+                              alpha: float = 0.01, block: int = 8, mean_tol: float = 0.01, max_res=None,
+                              box_filter: bool = False, name: Optional[str] = None) -> CompareResult:
+    """A/A calibration: Mitsuba against Mitsuba with independent seeds, both sides estimated
+    from seeds (fewer dof than mvpt's side). A scene failing here needs more samples."""
+    defines = dict(defines or {})
+    name = (name or (Path(scene).name if not _is_xml_string(scene) else "<xml string>")) + " (Mitsuba A/A)"
+    base_dir = None
+    if (max_res or box_filter) and not _is_xml_string(scene):
+        scene, base_dir = prepare_scene(scene, defines, max_res, box_filter)
+    s_mi = load_mitsuba(scene, defines, base_dir)
+    a = render_mitsuba(s_mi, spp, seeds, seed=0)
+    b = render_mitsuba(s_mi, spp, seeds, seed=seeds + 1)
+    pairs = [(ia, vid, ea, eb) for (ia, vid, ea), (_, _, eb) in zip(a, b)]
+    return compare_estimates(name, pairs, alpha, block, mean_tol)
+
+
 def read_exr(path) -> np.ndarray:
     """(H, W, 3) float64 of an RGB(A) EXR (read with Mitsuba's Bitmap)."""
     mi = _mitsuba()
@@ -615,8 +632,14 @@ def main(argv=None) -> int:
     ap.add_argument("--diff", metavar="DIR", help="write per-view diff EXRs here")
     ap.add_argument("--max-res", type=int, default=None, help="scale films so the larger side is this")
     ap.add_argument("--box", action="store_true", help="replace every rfilter by a box (in memory)")
+    ap.add_argument("--self", action="store_true", help="A/A calibration: Mitsuba against itself")
     args = ap.parse_args(argv)
     defines = dict(d.split("=", 1) for d in args.defines)
+    if args.self:
+        res = compare_mitsuba_to_itself(args.scene, defines, args.spp, args.seeds, args.alpha,
+                                        max_res=args.max_res, box_filter=args.box)
+        print(res.summary())
+        return 0 if res.passed else 1
     if args.ref:
         res = compare_to_reference(args.scene, args.ref[0], args.ref[1], defines, args.spp, alpha=args.alpha)
         print(res.summary())
