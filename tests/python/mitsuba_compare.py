@@ -33,8 +33,8 @@ samplers this over-estimates the true variance (conservative).
 *Mitsuba* in ``scalar_rgb`` cannot give a per-pixel RGB variance in one render: its
 ``moment`` integrator works (checked with 3.9.1) but records the moments of the **XYZ**
 sample values, and the RGB variance needs the XYZ cross-moments, which it does not
-store. The harness therefore renders ``K`` independent seeds (seeds spaced by 2^20, so
-no block-seed streams overlap) of ``S`` samples each and uses, per pixel, the sample
+store. The harness therefore renders ``K`` independent seeds (small consecutive integers:
+see SEED_BASE for why strides would repeat streams) of ``S`` samples each and uses, per pixel, the sample
 variance of the K seed images divided by K (``K − 1`` degrees of freedom). A per-pixel
 variance from K = 8 values is poor, but the block variance ``V = Σ v_p / n²`` pools
 n = 64 independent pixels (both renderers sample pixels independently), so its
@@ -78,8 +78,12 @@ from typing import Optional, Sequence
 import numpy as np
 from scipy import stats
 
-#: Mitsuba seeds are spaced this far apart so that per-block seed streams never overlap.
-SEED_STRIDE = 1 << 20
+#: Mitsuba seed of render k of sensor i: 1 + SEED_BASE·seed + i·K + k (small consecutive
+#: integers). scalar_rgb seeds pixel p of a render with seed·W·H + p (uint32, see its
+#: SamplingIntegrator::render), so large or power-of-two strides wrap around and repeat
+#: streams (seeds 2^21 and 10·2^20 give identical images); consecutive seeds never give a
+#: pixel the same stream twice.
+SEED_BASE = 1000
 #: Samples per pixel behind Mitsuba's test-suite reference images.
 REF_SPP = 32000
 #: Linear sRGB → CIE XYZ (D65), the map of Mitsuba's Bitmap conversion.
@@ -362,7 +366,10 @@ def prepare_scene(path, defines: Optional[dict] = None, max_res: Optional[int] =
     variables.update(defines)
     for film in root.iter("film"):
         ints = {c.get("name"): c for c in film if c.tag == "integer"}
-        if max_res and "width" in ints and "height" in ints:
+        for key, default in (("width", 768), ("height", 576)):  # hdrfilm's defaults
+            if max_res and key not in ints:
+                ints[key] = ET.SubElement(film, "integer", {"name": key, "value": str(default)})
+        if max_res:
             w = int(_resolve_var(ints["width"].get("value"), variables))
             h = int(_resolve_var(ints["height"].get("value"), variables))
             scale = max_res / max(w, h)
@@ -450,8 +457,13 @@ def render_mitsuba(scene_obj, spp: int, seeds: int = 8, seed: int = 0) -> list:
     out = []
     for i, sensor in enumerate(scene_obj.sensors()):
         t0 = time.perf_counter()
-        imgs = [np.array(mi.render(scene_obj, sensor=i, seed=(seed + k + 1) * SEED_STRIDE, spp=per_seed))
+        if seeds * (i + 1) >= SEED_BASE:
+            raise ValueError(f"too many sensors x seeds for SEED_BASE={SEED_BASE}")
+        imgs = [np.array(mi.render(scene_obj, sensor=i, seed=1 + SEED_BASE * seed + i * seeds + k, spp=per_seed))
                 for k in range(seeds)]
+        for k in range(1, seeds):  # repeated random streams would fake a small variance
+            if np.array_equal(imgs[k], imgs[k - 1]) and np.any(imgs[k]):
+                raise AssertionError(f"Mitsuba seeds {k - 1} and {k} of sensor {i} rendered identical images")
         e = estimate_from_seeds(imgs, "mitsuba")
         e.seconds = time.perf_counter() - t0
         e.samples = per_seed * seeds * e.mean.shape[0] * e.mean.shape[1]
@@ -501,7 +513,7 @@ def compare_mitsuba_to_itself(scene, defines: Optional[dict] = None, spp: int = 
         scene, base_dir = prepare_scene(scene, defines, max_res, box_filter)
     s_mi = load_mitsuba(scene, defines, base_dir)
     a = render_mitsuba(s_mi, spp, seeds, seed=0)
-    b = render_mitsuba(s_mi, spp, seeds, seed=seeds + 1)
+    b = render_mitsuba(s_mi, spp, seeds, seed=1)
     pairs = [(ia, vid, ea, eb) for (ia, vid, ea), (_, _, eb) in zip(a, b)]
     return compare_estimates(name, pairs, alpha, block, mean_tol)
 
