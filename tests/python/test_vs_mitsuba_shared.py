@@ -70,7 +70,7 @@ CASES = [
     case("m3tut-cbox/cbox.xml", {"conductor", "dielectric", "sphere"}, spp=512),
     case("m3data-matpreview/matpreview.xml", MATPREVIEW | {"plastic"}, {"max_depth": 8}, max_res=64),
     case("bitterli-cornell-box/scene.xml", {"twosided"}, BITTERLI, spp=512),
-    case("bitterli-veach-mis/scene.xml", {"twosided", "roughconductor", "sphere"}, BITTERLI, max_res=64),
+    case("bitterli-veach-mis/scene.xml", {"twosided", "roughconductor", "sphere"}, BITTERLI, max_res=64, spp=1024),
     case("bitterli-veach-bidir/scene.xml", {"twosided", "roughconductor", "dielectric"}, BITTERLI, spp=512),
     case("nik-cornell-box-picture/scene_picture.xml", {"twosided", "bitmap"}, {"max_depth": 12}, spp=512),
     # -- Mitsuba's regression scenes: vs Mitsuba and vs the stored references ---------------
