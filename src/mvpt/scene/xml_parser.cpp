@@ -139,6 +139,7 @@ public:
 
     XmlNode parse_text(const std::string &text, const std::string &display_path, const fs::path &dir, int depth) {
         if (depth > 32) throw SceneError({display_path, 0, 0}, "<include> nested more than 32 levels (a cycle?)");
+        if (depth == 0) m_root_dir = dir;
         auto src = std::make_shared<SourceText>(display_path, text);
         m_sources.push_back(src);
         pugi::xml_document doc;
@@ -171,6 +172,7 @@ public:
         out.loc = root_loc;
         out.dir = dir;
         expand_children(root, *src, dir, out, depth);
+        if (depth == 0) out.search_dirs = m_path_dirs;
         return out;
     }
 
@@ -221,10 +223,22 @@ private:
                 if (!m_from_caller.count(name)) m_vars[name] = value;
                 continue;
             }
+            if (tag == "path") {
+                check_attrs(attrs, {"value"}, tag, loc);
+                fs::path p = required(attrs, "value", tag, loc);
+                // Relative to the including file, else (Mitsuba's file resolver) to the scene's directory.
+                fs::path full = p.is_absolute() ? p : dir / p;
+                if (!p.is_absolute() && !fs::is_directory(full)) full = m_root_dir / p;
+                if (!fs::is_directory(full)) throw SceneError(loc, "<path> directory '" + p.string() + "' not found");
+                m_path_dirs.insert(m_path_dirs.begin(), fs::absolute(full).lexically_normal());
+                continue;
+            }
             if (tag == "include") {
                 check_attrs(attrs, {"filename"}, tag, loc);
                 fs::path p = required(attrs, "filename", tag, loc);
                 fs::path full = p.is_absolute() ? p : dir / p;
+                for (auto &d : m_path_dirs)
+                    if (!fs::is_regular_file(full) && !p.is_absolute() && fs::is_regular_file(d / p)) full = d / p;
                 if (!fs::is_regular_file(full)) throw SceneError(loc, "included file '" + p.string() + "' not found");
                 std::ifstream f(full, std::ios::binary);
                 std::stringstream ss;
@@ -268,6 +282,8 @@ private:
 
     std::map<std::string, std::string> m_vars;
     std::set<std::string> m_from_caller;
+    std::vector<fs::path> m_path_dirs;
+    fs::path m_root_dir;
     std::vector<std::shared_ptr<SourceText>> m_sources;
     std::vector<fs::path> m_stack;   ///< files being expanded, outermost first
     mutable std::set<std::string> m_used; ///< variables substituted at least once
@@ -279,7 +295,8 @@ private:
 
 class Instantiator {
 public:
-    explicit Instantiator(const fs::path &scene_dir) : m_scene_dir(scene_dir) {}
+    Instantiator(const fs::path &scene_dir, std::vector<fs::path> path_dirs)
+        : m_scene_dir(scene_dir), m_path_dirs(std::move(path_dirs)) {}
 
     void collect_ids(const XmlNode &n) {
         for (auto &c : n.children) {
@@ -356,6 +373,7 @@ public:
         }
         LoadContext ctx;
         ctx.search_dirs = {node.dir};
+        for (auto &d : m_path_dirs) ctx.search_dirs.push_back(d);
         if (node.dir != m_scene_dir) ctx.search_dirs.push_back(m_scene_dir);
         std::shared_ptr<Object> obj = (*f)(props, ctx);
         props.check_all_queried();
@@ -373,6 +391,7 @@ private:
     }
 
     fs::path m_scene_dir;
+    std::vector<fs::path> m_path_dirs;
     std::map<std::string, const XmlNode *> m_ids;
     std::set<std::string> m_referenced;
     std::map<const XmlNode *, std::shared_ptr<Object>> m_cache;
@@ -402,7 +421,7 @@ XmlNode parse_scene_string(const std::string &xml, const fs::path &base_dir, std
 }
 
 SceneTree instantiate_scene(const XmlNode &root, const fs::path &scene_dir) {
-    Instantiator inst(scene_dir);
+    Instantiator inst(scene_dir, root.search_dirs);
     inst.collect_ids(root);
     SceneTree tree;
     tree.scene_dir = scene_dir;

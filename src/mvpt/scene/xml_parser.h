@@ -34,6 +34,8 @@ struct XmlNode {
     FileLoc loc;
     /// Directory of the file the node came from (relative paths resolve there first).
     std::filesystem::path dir;
+    /// Root only: directories added by <path value="..."/>, searched after `dir` (latest first, as Mitsuba).
+    std::vector<std::filesystem::path> search_dirs;
 
     const std::string *attr(const std::string &name) const {
         for (auto &a : attrs)

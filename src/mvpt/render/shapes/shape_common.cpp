@@ -7,16 +7,16 @@ namespace mvpt {
 
 void attach_shape_children(Shape &shape, const Properties &props) {
     shape.id = props.id;
+    const ChildObject *e = props.child_of_kind("emitter");
     if (const ChildObject *b = props.child_of_kind("bsdf")) {
         shape.bsdf = std::static_pointer_cast<Bsdf>(b->object);
     } else {
-        // Mitsuba's default material: diffuse with reflectance 0.5, black on emitters (its shape.cpp).
+        // Mitsuba's default material: diffuse with reflectance 0.5, or 0 (black) on an emitter.
         Properties dp("bsdf", "diffuse", props.loc());
-        for (auto &c : props.children())
-            if (c.kind == "emitter") dp.set("reflectance", 0.0, props.loc(), "float");
+        if (e) dp.set("reflectance", Properties::Value(Color3f(0.f)), props.loc(), "rgb");
         shape.bsdf = std::static_pointer_cast<Bsdf>((*PluginRegistry::find("bsdf", "diffuse"))(dp, {}));
     }
-    if (const ChildObject *e = props.child_of_kind("emitter")) {
+    if (e) {
         auto light = std::static_pointer_cast<Light>(e->object);
         if (!light->is_area())
             throw SceneError(e->loc, "only an 'area' emitter can be attached to a shape, got '" + e->type + "'");
