@@ -69,8 +69,9 @@ void Scene::build(const SceneTree &tree) {
         } else if (c.kind == "integrator") {
             if (m_integrator) throw SceneError(c.loc, "the scene has more than one <integrator>");
             m_integrator = std::static_pointer_cast<Integrator>(c.object);
-        } else if (c.kind == "bsdf" || c.kind == "texture") {
-            // Declared for <ref> use; unreferenced ones are simply unused.
+        } else if (c.kind == "bsdf" || c.kind == "texture" || owned_elsewhere) {
+            // Declared for <ref> use (materials, textures, or a sampler/film shared by
+            // several sensors); unreferenced materials and textures are simply unused.
         } else {
             throw SceneError(c.loc, "a <" + c.kind + "> cannot be placed directly in <scene>");
         }
