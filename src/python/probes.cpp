@@ -4,6 +4,8 @@
 #include "mvpt/render/bsdf.h"
 #include "mvpt/scene/xml_parser.h"
 
+#include "arrays.h"
+
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/shared_ptr.h>
@@ -15,15 +17,9 @@ using namespace mvpt;
 
 namespace {
 
-using Vec3Array = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
-using OutArray = nb::ndarray<nb::numpy, float>;
-
-OutArray out_array(size_t n, size_t c) {
-    float *data = new float[n * c]();
-    nb::capsule owner(data, [](void *p) noexcept { delete[] static_cast<float *>(p); });
-    size_t shape[2] = {n, c};
-    return OutArray(data, c == 1 ? 1 : 2, shape, owner);
-}
+using mvpt_py::OutArray;
+using mvpt_py::out_array;
+using mvpt_py::Vec3Array;
 
 /// Instantiate the one top-level object of `kind` declared in a scene snippet.
 std::shared_ptr<Object> object_from_xml(const std::string &xml, const std::string &kind, const std::string &base_dir) {
