@@ -19,22 +19,7 @@ import mvpt
 mi = pytest.importorskip("mitsuba")
 mi.set_variant("scalar_rgb")
 
-
-def shared_scenes() -> Path:
-    env = os.environ.get("MVPT_SHARED")
-    if env:
-        return (Path(env) / "scenes").resolve()
-    # The repository's sibling `shared/` (main checkout), or its parent's (a worktree under wt/).
-    here = Path(__file__).resolve()
-    candidates = [here.parents[2] / ".." / "shared" / "scenes", here.parents[3] / ".." / "shared" / "scenes"]
-    return next((c.resolve() for c in candidates if c.exists()), candidates[0].resolve())
-
-
-def require_shared(rel: str) -> Path:
-    p = shared_scenes() / rel
-    if not p.exists():
-        pytest.skip(f"shared scene data not available: {p} (set MVPT_SHARED or provide /work/shared/scenes)")
-    return p
+from shared_data import require_shared, shared_scenes  # noqa: E402,F401  (re-exported to the shape tests)
 
 
 def mitsuba_reference(xml: str, base_dir: Path, sensor: int, spp: int, runs: int):

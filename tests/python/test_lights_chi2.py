@@ -6,8 +6,6 @@ subtend a small cone with sharp edges, which a full-sphere grid resolves with a
 handful of cells and whose Gauss-Legendre cell integrals miss slivers of the
 support; they use light_chi2.py (a grid on the cone around the light, cell
 integrals refined at the silhouette)."""
-from pathlib import Path
-import os
 
 import numpy as np
 import pytest
@@ -21,17 +19,7 @@ N_TESTS = 7
 ALPHA = sidak_alpha(0.01, N_TESTS)
 
 
-def shared_scenes() -> Path:
-    """`$MVPT_SHARED/scenes`, else `shared/scenes` next to the checkout (or next to
-    the directory holding a worktree)."""
-    env = os.environ.get("MVPT_SHARED")
-    if env:
-        return Path(env) / "scenes"
-    root = Path(__file__).resolve().parents[2]
-    for base in (root / "..", root / ".." / ".."):
-        if (base / "shared" / "scenes").is_dir():
-            return base / "shared" / "scenes"
-    return root / ".." / "shared" / "scenes"
+from shared_data import shared_scenes  # noqa: E402  (also used by test_lights_render)
 
 
 def sampled_dirs(probe, ref, n, seed=1):

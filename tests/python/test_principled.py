@@ -206,19 +206,7 @@ def test_render_matches_mitsuba():
     assert np.all(np.abs(m - m_ref) <= 0.01 * m_ref), f"means {m} vs Mitsuba {m_ref}"
 
 
-def shared_scenes():
-    """The shared scene folder (env MVPT_SHARED, else ../shared/scenes next to the checkout)."""
-    import os
-    from pathlib import Path
-
-    if os.environ.get("MVPT_SHARED"):
-        return Path(os.environ["MVPT_SHARED"])
-    here = Path(__file__).resolve()
-    for root in (here.parents[2], here.parents[3]):  # main checkout, or a worktree under wt/
-        cand = root / ".." / "shared" / "scenes"
-        if cand.is_dir():
-            return cand.resolve()
-    return None
+from shared_data import require_shared  # noqa: E402
 
 
 SPHERE_SCENE = """
@@ -261,10 +249,7 @@ def test_sphere_render_matches_mitsuba(type_):
     mi = pytest.importorskip("mitsuba")
     import mvpt
 
-    scenes = shared_scenes()
-    if scenes is None:
-        pytest.skip("shared scenes (/work/shared/scenes or $MVPT_SHARED) not available")
-    mesh = scenes / "m3data-testsuite" / "common" / "meshes" / "sphere.obj"
+    mesh = require_shared("m3data-testsuite/common/meshes/sphere.obj")
     # 1024 spp: the standard error of each image mean is ~0.3%, so 1% is > 2.5 sigma of the difference.
     xml = SPHERE_SCENE.format(spp=1024, mesh=mesh, bsdf=SPHERE_BSDFS[type_])
     try:  # same plugins, vectorised: faster than scalar_rgb on this scene

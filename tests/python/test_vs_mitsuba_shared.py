@@ -29,7 +29,6 @@ Out of scope, not listed below (reason):
   m3tut-cbox/simple.xml (direct integrator); bitterli-staircase2 (homogeneous medium, needs
   volpath); m06-living-room (143k triangles: too large for a test; bench material).
 """
-import os
 import sys
 from pathlib import Path
 
@@ -41,13 +40,12 @@ import mitsuba_compare as mc  # noqa: E402
 pytest.importorskip("mitsuba")
 mvpt = pytest.importorskip("mvpt")
 
-_REPO = Path(__file__).resolve().parents[2]
-# The repository's sibling shared/scenes (a checkout next to shared/), or one level up (a worktree in wt/).
-SHARED = next((p.resolve() for p in ([Path(os.environ["MVPT_SHARED"])] if "MVPT_SHARED" in os.environ else
-                                     [_REPO / ".." / "shared" / "scenes", _REPO / ".." / ".." / "shared" / "scenes"])
-               if p.is_dir()), _REPO / ".." / "shared" / "scenes")
+from shared_data import shared_scenes  # noqa: E402
+
+SHARED = shared_scenes()
 if not SHARED.is_dir():
-    pytest.skip(f"shared scenes not found at {SHARED} (set MVPT_SHARED)", allow_module_level=True)
+    pytest.skip(f"shared scenes not found at {SHARED} (place shared/ beside the checkout or set MVPT_SHARED)",
+                allow_module_level=True)
 
 SEEDS = 8
 SPECTRA = "wavelength spectra"
