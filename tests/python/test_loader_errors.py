@@ -18,7 +18,7 @@ import pytest
 import mvpt
 from mvpt import cli
 
-from small_scenes import GEOMETRY, scene, sensor
+from small_scenes import scene, sensor
 
 
 @dataclass

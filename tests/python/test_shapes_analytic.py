@@ -1,10 +1,5 @@
 """Analytic shapes (sphere, disk, cylinder) against Mitsuba 3: geometry, uv
 parameterisation (through checkerboard textures), flip_normals, spherical emitters."""
-from pathlib import Path
-
-import numpy as np
-
-import mvpt
 from shapes_compare import compare_with_mitsuba
 
 SENSORS = """

@@ -4,14 +4,11 @@ Mitsuba 3.9.1 cannot load <animation>, so the motion-blurred reference is built 
 static Mitsuba renders at stratified random times (each of the K runs renders the scene
 posed at t_k = (k + u_k) / K): their average is an unbiased estimate of the
 shutter-integrated image, and their spread gives its variance."""
-import re
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import mvpt
-from shapes_compare import assert_z_scores, block_z_scores, compare_with_mitsuba, mi, require_shared
+from shapes_compare import assert_z_scores, block_z_scores, compare_with_mitsuba, mi
 
 SENSORS = """
   <sensor type="perspective">

@@ -5,7 +5,6 @@ mean per view within 1 % (up to noise) and Šidák-corrected 8×8 block t-tests.
 A scene whose plugin mvpt does not know yet ("unknown <kind> type" from the loader) is
 skipped naming the plugin; every other failure fails. Also here: a calibration test of the
 statistics on synthetic data, and a power test (a 4 % brighter light must be detected)."""
-import os
 import re
 import sys
 from pathlib import Path
