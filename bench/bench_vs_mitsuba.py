@@ -35,6 +35,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests" / "python"))
 import mitsuba_compare as mc  # noqa: E402
+from shared_data import shared_scenes  # noqa: E402
 
 SCENES = [  # (name, path under the shared scenes, defines)
     ("cbox-rgb", "m3data-cbox/cbox-rgb.xml", {"max_depth": 8}),
@@ -44,16 +45,11 @@ SCENES = [  # (name, path under the shared scenes, defines)
 
 
 def shared_dir(arg: str | None) -> Path:
-    import os
-    cands = [Path(arg)] if arg else []
-    if "MVPT_SHARED" in os.environ:
-        cands.append(Path(os.environ["MVPT_SHARED"]))
-    repo = HERE.parent
-    cands += [repo / ".." / "shared" / "scenes", repo / ".." / ".." / "shared" / "scenes"]
-    for c in cands:
-        if c.is_dir():
-            return c.resolve()
-    sys.exit("shared scenes not found: pass --shared or set MVPT_SHARED")
+    """--shared (the scenes folder), else the tests' resolver (MVPT_SHARED or ../shared)."""
+    path = Path(arg) if arg else shared_scenes()
+    if not path.is_dir():
+        sys.exit(f"shared scenes not found at {path}: pass --shared or set MVPT_SHARED")
+    return path.resolve()
 
 
 class Runner:
