@@ -179,6 +179,9 @@ CASES = {
     "spectrum_file_missing": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
                                               'filename="nothere.spd"/></bsdf>'), 'filename="nothere.spd"',
                                   r"file 'nothere.spd' not found"),
+    "spectrum_blackbody": Case(scene(body='    <emitter type="point">\n        <spectrum name="intensity" type="blackbody">'
+                                          '<float name="temperature" value="3000"/></spectrum>\n    </emitter>\n'),
+                               'type="blackbody"', r"<spectrum type=\"blackbody\"> .*spectral variants; mvpt renders in RGB"),
     "spectrum_file_bad_line": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
                                                'filename="r.spd"/></bsdf>'), '500 0.5 0.7',
                                    r"spectrum 'reflectance': expected 'wavelength value' on each line, got 3 numbers",

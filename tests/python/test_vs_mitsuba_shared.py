@@ -65,7 +65,7 @@ def case(path, requires=(), defines=None, spp=256, max_res=48, refs=False, mitsu
 CASES = [
     # -- Scenes from several sources -----------------------------------------------------
     case("m3data-cbox/cbox-rgb.xml", spp=512),
-    case("m3data-cbox/cbox.xml", spp=512),
+    case("m3data-cbox/cbox.xml"),
     case("m3tut-cbox/cbox.xml", {"conductor", "dielectric", "sphere"}, spp=512),
     case("m3data-matpreview/matpreview.xml", MATPREVIEW | {"plastic"}, {"max_depth": 8}, max_res=64),
     case("bitterli-cornell-box/scene.xml", {"twosided"}, BITTERLI, spp=512),

@@ -259,6 +259,9 @@ void parse_value_node(const XmlNode &n, Properties &props, const LoadContext &ct
         else if (l.size() == 3) props.set(name, Color3f(float(l[0]), float(l[1]), float(l[2])), n.loc, tag);
         else throw SceneError(n.attr_loc("value"), "rgb '" + name + "': expected 1 or 3 numbers, got " + std::to_string(l.size()));
     } else if (tag == "spectrum") {
+        if (const std::string *type = n.attr("type"))
+            throw SceneError(n.attr_loc("type"), "<spectrum type=\"" + *type + "\"> (e.g. blackbody) needs Mitsuba's spectral "
+                                                 "variants; mvpt renders in RGB (give 'value' or 'filename')");
         check_attrs(n.attrs, {"name", "value", "filename"}, tag, n.loc);
         no_children();
         std::string name = name_of();
