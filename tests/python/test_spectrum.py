@@ -77,8 +77,14 @@ def test_diffuse_reflectance_through_the_loader():
     assert np.allclose(f * np.pi, _mitsuba_rgb(text, "reflectance"), rtol=1e-4)
 
 
-def _seen_emitter(spectrum_xml):
-    """A 4x4 view filled by an area light: every pixel is its radiance."""
+AREA = """<shape type="rectangle">
+        <transform name="to_world"><scale value="10"/><rotate y="1" angle="180"/><translate z="5"/></transform>
+        <emitter type="area">{}</emitter>
+    </shape>"""
+
+
+def _seen_emitter(spectrum_xml, emitter=AREA):
+    """A 4x4 view filled by one emitter (by default an area light): every pixel is its radiance."""
     xml = f"""<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="1"/></integrator>
     <sensor type="perspective">
@@ -87,10 +93,7 @@ def _seen_emitter(spectrum_xml):
         <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/>
             <rfilter type="box"/></film>
     </sensor>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="10"/><rotate y="1" angle="180"/><translate z="5"/></transform>
-        <emitter type="area">{spectrum_xml}</emitter>
-    </shape>
+    {emitter.format(spectrum_xml)}
 </scene>"""
     img = mvpt.render(mvpt.load_string(xml), spp=1).images
     return next(iter(img.values())).reshape(-1, 3)
@@ -111,3 +114,10 @@ def test_spd_file_equals_inline_values(tmp_path):
         f'<shape version="3.0.0" type="rectangle"><emitter type="area"><spectrum name="radiance" '
         f'filename="{tmp_path / "light.spd"}"/></emitter></shape>'))["emitter.radiance.value"]
     assert np.allclose(px, np.array(mi_rgb)[None, :], rtol=1e-4)
+
+
+def test_environment_radiance_through_the_loader():
+    # A `constant` emitter's radiance is an emission spectrum too (Mitsuba's get_emissive_texture).
+    text = SPECTRA["cbox_light"]
+    px = _seen_emitter(f'<spectrum name="radiance" value="{text}"/>', '<emitter type="constant">{}</emitter>')
+    assert np.allclose(px, _mitsuba_rgb(text, "emission")[None, :], rtol=1e-4)
