@@ -22,6 +22,7 @@ using namespace mvpt;
 
 void bind_probes(nb::module_ &m);
 void bind_light_probes(nb::module_ &m);
+void bind_spectrum(nb::module_ &m);
 
 namespace {
 
@@ -233,4 +234,5 @@ NB_MODULE(_core, m) {
 
     bind_probes(m);
     bind_light_probes(m);
+    bind_spectrum(m);
 }

@@ -157,7 +157,35 @@ CASES = {
     "wrong_value_type": Case(scene(sensor().replace('<float name="fov" value="40"/>', '<string name="fov" value="40"/>')),
                              '<string name="fov"', r"'fov' must be a float, got <string>"),
     "wrong_child_type": Case(_with_shape('<bsdf type="diffuse"><transform name="reflectance"/></bsdf>'),
-                             '<transform name="reflectance"', r"'reflectance' must be an rgb colour or a float, got <transform>"),
+                             '<transform name="reflectance"', r"'reflectance' must be an rgb colour, a spectrum or a float, got <transform>"),
+    # --- <spectrum> ------------------------------------------------------------------------
+    "spectrum_not_increasing": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
+                                                'value="400:0.5, 500:0.6, 500:0.7"/></bsdf>'), 'value="400:0.5',
+                                    r"spectrum 'reflectance': wavelengths must increase strictly \(pair 3\)"),
+    "spectrum_bad_number": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
+                                            'value="400:0.5, 500:0.6x"/></bsdf>'), 'value="400:0.5',
+                                r"spectrum 'reflectance' value in '500:0.6x': expected a number, got '0.6x'"),
+    "spectrum_nan": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
+                                     'value="400:nan, 500:0.6"/></bsdf>'), 'value="400:nan',
+                         r"spectrum 'reflectance' value in '400:nan': expected a finite number, got 'nan'"),
+    "spectrum_not_a_pair": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
+                                            'value="400:0.5, 500"/></bsdf>'), 'value="400:0.5',
+                                r"spectrum 'reflectance': expected wavelength:value pairs .*got '500'"),
+    "spectrum_one_pair": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" value="500:0.5"/></bsdf>'),
+                              'value="500:0.5', r"spectrum 'reflectance': needs at least two wavelength:value pairs"),
+    "spectrum_value_and_file": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" value="0.5" '
+                                                'filename="r.spd"/></bsdf>'), '<spectrum',
+                                    r"needs either a 'value' or a 'filename' attribute \(not both\)"),
+    "spectrum_file_missing": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
+                                              'filename="nothere.spd"/></bsdf>'), 'filename="nothere.spd"',
+                                  r"file 'nothere.spd' not found"),
+    "spectrum_blackbody": Case(scene(body='    <emitter type="point">\n        <spectrum name="intensity" type="blackbody">'
+                                          '<float name="temperature" value="3000"/></spectrum>\n    </emitter>\n'),
+                               'type="blackbody"', r"<spectrum type=\"blackbody\"> .*spectral variants; mvpt renders in RGB"),
+    "spectrum_file_bad_line": Case(_with_shape('<bsdf type="diffuse"><spectrum name="reflectance" '
+                                               'filename="r.spd"/></bsdf>'), '500 0.5 0.7',
+                                   r"spectrum 'reflectance': expected 'wavelength value' on each line, got 3 numbers",
+                                   files={"r.spd": "# comment\n400 0.5\n500 0.5 0.7\n"}, in_file="r.spd"),
 }
 
 

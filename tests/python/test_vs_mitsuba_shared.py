@@ -11,9 +11,8 @@ reference tests kept here are those that Mitsuba 3.9.1 itself passes.
 `requires`: the plugins each scene needs beyond mvpt's core set (perspective, thinlens,
 hdrfilm, independent, box, path, moment, obj, rectangle, cube, diffuse, area). A scene is
 skipped "plugin X not available yet" only when mvpt reports an unknown plugin listed there;
-any other error fails. Scenes with wavelength-sampled <spectrum> values (which Mitsuba's
-RGB mode integrates to RGB and mvpt rejects with a SceneError) are strict xfails limited
-to that SceneError, so they turn into failures the day the loader accepts them.
+any other error fails. Wavelength-sampled <spectrum> values are converted to RGB as
+Mitsuba's RGB variants do (src/mvpt/core/spectrum_rgb.h).
 
 Out of scope, not listed below (reason):
   m3data-testsuite/tests/scenes: floating_sphere/test_directional_direct,
@@ -48,23 +47,23 @@ if not SHARED.is_dir():
                 allow_module_level=True)
 
 SEEDS = 8
-SPECTRA = "wavelength spectra"
 TS = "m3data-testsuite/tests/scenes/"
 DOCS = "m3data-testsuite/docs/scenes/"
 BITTERLI = {"integrator": "path"}
 MATPREVIEW = {"checkerboard", "envmap", "serialized"}
 
 
-def case(path, requires=(), defines=None, spp=256, max_res=48, gap=None, refs=False, mitsuba=True, ref_spp=256):
-    """One scene: plugins beyond the core set, defines, samples, film size, known loader gap;
+def case(path, requires=(), defines=None, spp=256, max_res=48, refs=False, mitsuba=True, ref_spp=256):
+    """One scene: plugins beyond the core set, defines, samples, film size;
     refs: also test against the stored references (at ref_spp, full reference resolution)."""
     return dict(path=path, requires=set(requires), defines=dict(defines or {}), spp=spp, max_res=max_res,
-                gap=gap, refs=refs, mitsuba=mitsuba, ref_spp=ref_spp)
+                refs=refs, mitsuba=mitsuba, ref_spp=ref_spp)
 
 
 CASES = [
     # -- Scenes from several sources -----------------------------------------------------
     case("m3data-cbox/cbox-rgb.xml", spp=512),
+    case("m3data-cbox/cbox.xml"),
     case("m3tut-cbox/cbox.xml", {"conductor", "dielectric", "sphere"}, spp=512),
     case("m3data-matpreview/matpreview.xml", MATPREVIEW | {"plastic"}, {"max_depth": 8}, max_res=64),
     case("bitterli-cornell-box/scene.xml", {"twosided"}, BITTERLI, spp=512),
@@ -72,28 +71,28 @@ CASES = [
     case("bitterli-veach-bidir/scene.xml", {"twosided", "roughconductor", "dielectric"}, BITTERLI, spp=512),
     case("nik-cornell-box-picture/scene_picture.xml", {"twosided", "bitmap"}, {"max_depth": 12}, spp=512),
     # -- Mitsuba's regression scenes: vs Mitsuba and vs the stored references ---------------
-    *[case(TS + f"bsdf_spheres/test_{n}_path.xml", req, refs=True, max_res=None, gap=gap) for n, req, gap in [
+    *[case(TS + f"bsdf_spheres/test_{n}_path.xml", req, refs=True, max_res=None) for n, req in [
         ("arealight", {"bitmap", "conductor", "dielectric", "mask", "plastic", "roughconductor", "roughdielectric",
-                       "roughplastic", "twosided"}, SPECTRA),
-        ("bumpmap", {"bitmap", "bumpmap", "envmap", "point"}, SPECTRA),
+                       "roughplastic", "twosided"}),
+        ("bumpmap", {"bitmap", "bumpmap", "envmap", "point"}),
         ("constant", {"bitmap", "conductor", "constant", "dielectric", "mask", "plastic", "roughconductor",
-                      "roughdielectric", "roughplastic", "twosided"}, None),
+                      "roughdielectric", "roughplastic", "twosided"}),
         ("envmap", {"bitmap", "conductor", "dielectric", "envmap", "mask", "plastic", "roughconductor",
-                    "roughdielectric", "roughplastic", "twosided"}, None),
+                    "roughdielectric", "roughplastic", "twosided"}),
         ("normalmap_identity_roughconductor", {"envmap", "normalmap", "point", "rawconstant", "roughconductor"},
-         SPECTRA),
-        ("normalmap", {"bitmap", "envmap", "normalmap", "point"}, SPECTRA),
-        ("normalmap_roughconductor", {"bitmap", "envmap", "normalmap", "point", "roughconductor"}, SPECTRA),
+         ),
+        ("normalmap", {"bitmap", "envmap", "normalmap", "point"}),
+        ("normalmap_roughconductor", {"bitmap", "envmap", "normalmap", "point", "roughconductor"}),
         ("pointlight", {"bitmap", "conductor", "dielectric", "mask", "plastic", "point", "roughconductor",
-                        "roughdielectric", "roughplastic", "twosided"}, None),
-        ("roughdielectric", {"envmap", "point", "roughdielectric"}, SPECTRA),
-        ("roughplastic_linear", {"envmap", "point", "roughplastic"}, SPECTRA),
-        ("roughplastic_nonlinear", {"envmap", "point", "roughplastic"}, SPECTRA),
-        ("textured_diffuse", {"bitmap", "envmap", "point"}, SPECTRA),
-        ("textured_roughconductor", {"checkerboard", "envmap", "point", "roughconductor"}, SPECTRA),
-        ("texturedprincipled1", {"checkerboard", "envmap", "point", "principled"}, SPECTRA),
-        ("texturedprincipled2", {"checkerboard", "envmap", "point", "principled"}, SPECTRA),
-        ("texturedprincipledthin", {"checkerboard", "envmap", "point", "principledthin"}, SPECTRA),
+                        "roughdielectric", "roughplastic", "twosided"}),
+        ("roughdielectric", {"envmap", "point", "roughdielectric"}),
+        ("roughplastic_linear", {"envmap", "point", "roughplastic"}),
+        ("roughplastic_nonlinear", {"envmap", "point", "roughplastic"}),
+        ("textured_diffuse", {"bitmap", "envmap", "point"}),
+        ("textured_roughconductor", {"checkerboard", "envmap", "point", "roughconductor"}),
+        ("texturedprincipled1", {"checkerboard", "envmap", "point", "principled"}),
+        ("texturedprincipled2", {"checkerboard", "envmap", "point", "principled"}),
+        ("texturedprincipledthin", {"checkerboard", "envmap", "point", "principledthin"}),
     ]],
     # The references of these two disagree with Mitsuba 3.9.1 itself under the suite's rule
     # (pixels passing: instancing 95.98 %, infinite_mirrors 99.41-99.74 %; measured with
@@ -110,7 +109,7 @@ CASES = [
                      ("emitters", {"cylinder", "point", "spot"}),
                      ("simple_motion", {"cylinder", "directional", "instance", "shapegroup", "sphere"})]],
     # -- Mitsuba's documentation scenes ---------------------------------------------------
-    case(DOCS + "bsdf_blendbsdf.xml", MATPREVIEW | {"bitmap", "blendbsdf", "conductor", "roughplastic"}, gap=SPECTRA),
+    case(DOCS + "bsdf_blendbsdf.xml", MATPREVIEW | {"bitmap", "blendbsdf", "conductor", "roughplastic"}),
     case(DOCS + "bsdf_bumpmap_with.xml", MATPREVIEW | {"bitmap", "bumpmap", "roughplastic"}),
     case(DOCS + "bsdf_bumpmap_without.xml", MATPREVIEW | {"bitmap", "roughplastic"}),
     case(DOCS + "bsdf_conductor_aluminium.xml", MATPREVIEW | {"conductor"}),
@@ -119,8 +118,8 @@ CASES = [
     case(DOCS + "bsdf_dielectric_glass.xml", MATPREVIEW | {"dielectric"}),
     case(DOCS + "bsdf_diffuse_plain.xml", MATPREVIEW),
     case(DOCS + "bsdf_diffuse_textured.xml", MATPREVIEW | {"bitmap"}),
-    case(DOCS + "bsdf_mask_after.xml", MATPREVIEW | {"bitmap", "mask"}, gap=SPECTRA),
-    case(DOCS + "bsdf_mask_before.xml", MATPREVIEW, gap=SPECTRA),
+    case(DOCS + "bsdf_mask_after.xml", MATPREVIEW | {"bitmap", "mask"}),
+    case(DOCS + "bsdf_mask_before.xml", MATPREVIEW),
     case(DOCS + "bsdf_normalmap_with.xml", MATPREVIEW | {"bitmap", "normalmap", "roughplastic"}),
     case(DOCS + "bsdf_normalmap_without.xml", MATPREVIEW | {"bitmap", "roughplastic"}),
     *[case(DOCS + f"bsdf_plastic_{n}.xml", MATPREVIEW | {"plastic", "bitmap"}) for n in
@@ -132,12 +131,12 @@ CASES = [
     *[case(DOCS + f"bsdf_roughplastic_{n}.xml", MATPREVIEW | {"roughplastic", "bitmap"}) for n in
       ["beckmann", "diffuse", "ggx", "nopreserve", "preserve"]],
     case(DOCS + "bsdf_thindielectric_glass.xml", MATPREVIEW | {"thindielectric"}),
-    case(DOCS + "bsdf_twosided_cbox.xml", {"constant", "twosided"}, gap=SPECTRA),
-    case(DOCS + "bsdf_twosided_cbox_onesided.xml", {"constant"}, gap=SPECTRA),
+    case(DOCS + "bsdf_twosided_cbox.xml", {"constant", "twosided"}),
+    case(DOCS + "bsdf_twosided_cbox_onesided.xml", {"constant"}),
     case(DOCS + "emitter_spot_no_texture.xml", {"checkerboard", "constant", "plastic", "serialized", "sphere", "spot"}),
     case(DOCS + "emitter_spot_texture.xml", {"bitmap", "checkerboard", "constant", "plastic", "serialized", "sphere",
                                              "spot"}),
-    *[case(DOCS + f"integrator_depth_{n}.xml", gap=SPECTRA) for n in ["1", "2", "3", "inf"]],
+    *[case(DOCS + f"integrator_depth_{n}.xml") for n in ["1", "2", "3", "inf"]],
     *[case(DOCS + f"sampler_{n}.xml", {"checkerboard", "serialized", "sphere", s}) for n, s in [
         ("independent_16spp", "independent"), ("independent_25spp", "independent"),
         ("ldsampler_16spp", "ldsampler"), ("multijitter_16spp", "multijitter"),
@@ -165,12 +164,7 @@ def _id(c):
 
 
 def _param(c, kind):
-    marks = []
-    if c["gap"] == SPECTRA:
-        marks.append(pytest.mark.xfail(strict=True, raises=mvpt.SceneError,
-                                       reason="mvpt rejects wavelength-sampled <spectrum> (Mitsuba's RGB mode "
-                                              "integrates them to RGB)"))
-    return pytest.param(c, id=_id(c) + kind, marks=marks)
+    return pytest.param(c, id=_id(c) + kind)
 
 
 @pytest.mark.parametrize("c", [_param(c, "") for c in CASES if c["mitsuba"]])

@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 
 namespace mvpt {
 
@@ -153,9 +155,69 @@ Transform parse_transform_ops(const XmlNode &node) {
     return t;
 }
 
+/// `wavelength:value, ...` pairs, or one constant (Mitsuba's Properties::Spectrum).
+SpectrumCurve parse_spectrum_pairs(const std::string &text, const FileLoc &loc, const std::string &what) {
+    std::vector<std::string> tokens;
+    std::string tok;
+    for (char c : text + " ") {
+        if (c == ',' || c == ' ' || c == '\t' || c == '\n' || c == '\r') {
+            if (!tok.empty()) tokens.push_back(tok);
+            tok.clear();
+        } else {
+            tok += c;
+        }
+    }
+    if (tokens.empty()) throw SceneError(loc, what + ": expected a number or wavelength:value pairs, got nothing");
+    if (tokens.size() == 1 && tokens[0].find(':') == std::string::npos)
+        return SpectrumCurve::uniform(parse_float(tokens[0], loc, what));
+    SpectrumCurve s;
+    for (const std::string &t : tokens) {
+        size_t colon = t.find(':');
+        if (colon == std::string::npos || t.find(':', colon + 1) != std::string::npos)
+            throw SceneError(loc, what + ": expected wavelength:value pairs (e.g. \"400:0.3, 500:0.5\"), got '" + t + "'");
+        s.wavelengths.push_back(parse_float(t.substr(0, colon), loc, what + " wavelength in '" + t + "'"));
+        s.values.push_back(parse_float(t.substr(colon + 1), loc, what + " value in '" + t + "'"));
+    }
+    return s;
+}
+
+/// A spectral data file (`.spd`): one "wavelength value" pair per line, '#' comments.
+SpectrumCurve read_spectrum_file(const std::filesystem::path &path, const std::string &what) {
+    std::ifstream in(path);
+    if (!in) throw SceneError({path.string()}, what + ": cannot read the spectrum file");
+    SpectrumCurve s;
+    std::string line;
+    for (int line_no = 1; std::getline(in, line); ++line_no) {
+        std::string data = line.substr(0, line.find('#'));
+        std::vector<double> l = parse_float_list(data, {path.string(), line_no, 1}, what);
+        if (l.empty()) continue;
+        if (l.size() != 2)
+            throw SceneError({path.string(), line_no, 1},
+                             what + ": expected 'wavelength value' on each line, got " + std::to_string(l.size()) + " numbers");
+        s.wavelengths.push_back(l[0]);
+        s.values.push_back(l[1]);
+    }
+    if (s.wavelengths.empty()) throw SceneError({path.string()}, what + ": the spectrum file holds no data");
+    return s;
+}
+
+/// A `<spectrum>` element: `value` (constant or pairs) or `filename` (an .spd file).
+SpectrumCurve parse_spectrum(const XmlNode &n, const std::string &name, const LoadContext &ctx) {
+    const std::string *value = n.attr("value"), *file = n.attr("filename");
+    std::string what = "spectrum '" + name + "'";
+    if (bool(value) == bool(file))
+        throw SceneError(n.loc, "<spectrum> needs either a 'value' or a 'filename' attribute (not both)");
+    const char *attr = value ? "value" : "filename";
+    SpectrumCurve s = value ? parse_spectrum_pairs(*value, n.attr_loc(attr), what)
+                            : read_spectrum_file(ctx.resolve(*file, n.attr_loc(attr)), what);
+    std::string problem = s.validate();
+    if (!problem.empty()) throw SceneError(n.attr_loc(attr), what + ": " + problem);
+    return s;
+}
+
 } // namespace
 
-void parse_value_node(const XmlNode &n, Properties &props) {
+void parse_value_node(const XmlNode &n, Properties &props, const LoadContext &ctx) {
     const std::string &tag = n.tag;
     auto name_of = [&] { return required(n.attrs, "name", tag, n.loc); };
     auto no_children = [&] {
@@ -188,17 +250,22 @@ void parse_value_node(const XmlNode &n, Properties &props) {
         check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
         no_children();
         props.set(name_of(), required(n.attrs, "value", tag, n.loc), n.loc, tag);
-    } else if (tag == "rgb" || tag == "spectrum") {
+    } else if (tag == "rgb") {
         check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
         no_children();
-        std::string name = name_of(), v = required(n.attrs, "value", tag, n.loc);
-        if (tag == "spectrum" && v.find(':') != std::string::npos)
-            throw SceneError(n.attr_loc("value"), "spectrum '" + name + "': wavelength-sampled spectra are not supported; use <rgb>");
-        auto l = parse_float_list(v, n.attr_loc("value"), tag + " '" + name + "'");
+        std::string name = name_of();
+        auto l = parse_float_list(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "rgb '" + name + "'");
         if (l.size() == 1) props.set(name, Color3f(float(l[0])), n.loc, tag);
-        else if (l.size() == 3 && tag == "rgb") props.set(name, Color3f(float(l[0]), float(l[1]), float(l[2])), n.loc, tag);
-        else throw SceneError(n.attr_loc("value"), tag + " '" + name + "': expected 1" + (tag == "rgb" ? " or 3" : "") +
-                                                       " numbers, got " + std::to_string(l.size()));
+        else if (l.size() == 3) props.set(name, Color3f(float(l[0]), float(l[1]), float(l[2])), n.loc, tag);
+        else throw SceneError(n.attr_loc("value"), "rgb '" + name + "': expected 1 or 3 numbers, got " + std::to_string(l.size()));
+    } else if (tag == "spectrum") {
+        if (const std::string *type = n.attr("type"))
+            throw SceneError(n.attr_loc("type"), "<spectrum type=\"" + *type + "\"> (e.g. blackbody) needs Mitsuba's spectral "
+                                                 "variants; mvpt renders in RGB (give 'value' or 'filename')");
+        check_attrs(n.attrs, {"name", "value", "filename"}, tag, n.loc);
+        no_children();
+        std::string name = name_of();
+        props.set(name, parse_spectrum(n, name, ctx), n.loc, tag);
     } else if (tag == "point" || tag == "vector") {
         check_attrs(n.attrs, {"name", "value", "x", "y", "z"}, tag, n.loc);
         no_children();

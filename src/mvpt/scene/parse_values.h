@@ -1,6 +1,7 @@
 // Value elements of scene files (<float>, <rgb>, <transform>, ...) -> Properties.
 #pragma once
 
+#include "plugin.h"
 #include "properties.h"
 #include "xml_parser.h"
 
@@ -23,7 +24,8 @@ int64_t parse_int(const std::string &s, const FileLoc &loc, const std::string &w
 /// Comma- and/or space-separated list of finite floats.
 std::vector<double> parse_float_list(const std::string &s, const FileLoc &loc, const std::string &what);
 
-/// Parse one value element (not an object) and store it in `props`.
-void parse_value_node(const XmlNode &node, Properties &props);
+/// Parse one value element (not an object) and store it in `props`; `ctx` resolves
+/// file names (`<spectrum filename="...">`).
+void parse_value_node(const XmlNode &node, Properties &props, const LoadContext &ctx);
 
 } // namespace mvpt

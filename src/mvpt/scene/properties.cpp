@@ -85,13 +85,14 @@ std::string Properties::get_string(const std::string &name) const {
     return *p;
 }
 
-Color3f Properties::get_color(const std::string &name, Color3f def) const {
+Color3f Properties::get_color(const std::string &name, Color3f def, SpectrumUse use) const {
     const Entry *e = find(name);
     if (!e) return def;
     if (auto *c = std::get_if<Color3f>(&e->value)) return *c;
+    if (auto *s = std::get_if<SpectrumCurve>(&e->value)) return spectrum_to_rgb(*s, use);
     if (auto *d = std::get_if<double>(&e->value)) return Color3f(float(*d));
     if (auto *i = std::get_if<int64_t>(&e->value)) return Color3f(float(*i));
-    fail(name, "parameter '" + name + "' must be an rgb colour or a float, got <" + e->tag + ">");
+    fail(name, "parameter '" + name + "' must be an rgb colour, a spectrum or a float, got <" + e->tag + ">");
 }
 
 Vec3f Properties::get_vector(const std::string &name, Vec3f def) const {
@@ -124,7 +125,7 @@ bool Properties::has_texture(const std::string &name) const {
     return false;
 }
 
-std::shared_ptr<Texture> Properties::get_texture(const std::string &name, Color3f def) const {
+std::shared_ptr<Texture> Properties::get_texture(const std::string &name, Color3f def, SpectrumUse use) const {
     m_asked.insert(name);
     for (auto &c : m_children)
         if (c.name == name) {
@@ -133,13 +134,13 @@ std::shared_ptr<Texture> Properties::get_texture(const std::string &name, Color3
             c.queried = true;
             return std::static_pointer_cast<Texture>(c.object);
         }
-    Color3f v = get_color(name, def);
+    Color3f v = get_color(name, def, use);
     if (!v.is_finite()) fail(name, "parameter '" + name + "' is not finite");
     return std::make_shared<ConstantTexture>(v);
 }
 
-std::shared_ptr<Texture> Properties::get_texture(const std::string &name, float def) const {
-    return get_texture(name, Color3f(def));
+std::shared_ptr<Texture> Properties::get_texture(const std::string &name, float def, SpectrumUse use) const {
+    return get_texture(name, Color3f(def), use);
 }
 
 std::vector<const ChildObject *> Properties::children_of_kind(const std::string &kind) const {

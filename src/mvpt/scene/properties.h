@@ -4,6 +4,7 @@
 
 #include "../core/error.h"
 #include "../core/math.h"
+#include "../core/spectrum_rgb.h"
 #include "../core/transform.h"
 #include "animation.h"
 
@@ -34,7 +35,8 @@ struct ChildObject {
 
 class Properties {
 public:
-    using Value = std::variant<bool, int64_t, double, std::string, Color3f, Vec3f, Transform, AnimatedTransform>;
+    using Value = std::variant<bool, int64_t, double, std::string, Color3f, SpectrumCurve, Vec3f, Transform,
+                               AnimatedTransform>;
 
     Properties(std::string kind = {}, std::string type = {}, FileLoc loc = {})
         : m_kind(std::move(kind)), m_type(std::move(type)), m_loc(std::move(loc)) {}
@@ -61,14 +63,18 @@ public:
     float get_float(const std::string &name) const;
     std::string get_string(const std::string &name, const std::string &def) const;
     std::string get_string(const std::string &name) const;
-    Color3f get_color(const std::string &name, Color3f def) const;
+    /// An `<rgb>`, `<float>` or `<spectrum>` as RGB; a spectrum converts as Mitsuba's RGB mode does for `use`.
+    Color3f get_color(const std::string &name, Color3f def, SpectrumUse use = SpectrumUse::Reflectance) const;
     Vec3f get_vector(const std::string &name, Vec3f def) const;
     Transform get_transform(const std::string &name, const Transform &def = {}) const;
     /// A transform that may be animated (`<animation>` or a plain `<transform>`).
     AnimatedTransform get_animated_transform(const std::string &name) const;
-    /// Texture-valued parameter: an `<rgb>`/`<float>` constant or a nested/referenced texture.
-    std::shared_ptr<Texture> get_texture(const std::string &name, Color3f def) const;
-    std::shared_ptr<Texture> get_texture(const std::string &name, float def) const;
+    /// Texture-valued parameter: an `<rgb>`/`<float>`/`<spectrum>` constant (see get_color) or a
+    /// nested/referenced texture.
+    std::shared_ptr<Texture> get_texture(const std::string &name, Color3f def,
+                                         SpectrumUse use = SpectrumUse::Reflectance) const;
+    std::shared_ptr<Texture> get_texture(const std::string &name, float def,
+                                         SpectrumUse use = SpectrumUse::Reflectance) const;
     bool has_texture(const std::string &name) const;
 
     /// Child objects (bsdf/emitter/film/...) declared or referenced inside this element.

@@ -345,7 +345,7 @@ public:
             } else if (kUnsupportedTags.count(tag)) {
                 throw SceneError(c.loc, "<" + tag + "> (participating media) is not supported by mvpt");
             } else {
-                parse_value_node(c, props);
+                parse_value_node(c, props, context_for(c));
             }
         }
     }
@@ -371,11 +371,7 @@ public:
                                            (!hint.empty() ? hint : types.empty() ? " (mvpt has no " + node.tag + " plugins yet)"
                                                                                  : " (known: " + known + ")"));
         }
-        LoadContext ctx;
-        ctx.search_dirs = {node.dir};
-        for (auto &d : m_path_dirs) ctx.search_dirs.push_back(d);
-        if (node.dir != m_scene_dir) ctx.search_dirs.push_back(m_scene_dir);
-        std::shared_ptr<Object> obj = (*f)(props, ctx);
+        std::shared_ptr<Object> obj = (*f)(props, context_for(node));
         props.check_all_queried();
         m_cache[&node] = obj;
         return obj;
@@ -384,6 +380,15 @@ public:
     bool referenced(const std::string &id) const { return m_referenced.count(id) != 0; }
 
 private:
+    /// Where files named by `node` are looked for: its file's directory, <path> dirs, the scene's.
+    LoadContext context_for(const XmlNode &node) const {
+        LoadContext ctx;
+        ctx.search_dirs = {node.dir};
+        for (auto &d : m_path_dirs) ctx.search_dirs.push_back(d);
+        if (node.dir != m_scene_dir) ctx.search_dirs.push_back(m_scene_dir);
+        return ctx;
+    }
+
     static void add_child(Properties &props, ChildObject co) {
         if (!co.name.empty() && props.has(co.name))
             throw SceneError(co.loc, "parameter '" + co.name + "' is given twice (first at " + props.loc_of(co.name).str() + ")");

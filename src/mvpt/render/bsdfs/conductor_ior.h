@@ -21,8 +21,8 @@ inline ConductorIor read_conductor_ior(const Properties &props) {
     std::string material = props.get_string("material", "none");
     if (props.has_texture("eta") || material == "none") {
         if (material != "none") props.fail("material", "specify either (eta, k) or material, not both");
-        r.eta = props.get_texture("eta", 0.f);
-        r.k = props.get_texture("k", 1.f);
+        r.eta = props.get_texture("eta", 0.f, SpectrumUse::Unbounded);
+        r.k = props.get_texture("k", 1.f, SpectrumUse::Unbounded);
         return r;
     }
     const ConductorPreset *p = find_conductor_preset(material);

@@ -45,10 +45,10 @@ inline MicrofacetParams read_microfacet_params(const Properties &props) {
             props.fail(has_u ? "alpha_u" : "alpha_v", "both 'alpha_u' and 'alpha_v' must be specified");
         if (props.has_texture("alpha"))
             props.fail("alpha", "specify either 'alpha' or 'alpha_u'/'alpha_v', not both");
-        p.alpha_u = props.get_texture("alpha_u", 0.1f);
-        p.alpha_v = props.get_texture("alpha_v", 0.1f);
+        p.alpha_u = props.get_texture("alpha_u", 0.1f, SpectrumUse::Unbounded);
+        p.alpha_v = props.get_texture("alpha_v", 0.1f, SpectrumUse::Unbounded);
     } else {
-        p.alpha_u = p.alpha_v = props.get_texture("alpha", 0.1f);
+        p.alpha_u = p.alpha_v = props.get_texture("alpha", 0.1f, SpectrumUse::Unbounded);
     }
     return p;
 }

@@ -28,7 +28,7 @@ public:
         m_sheen_tint = LobeParam(props, "sheen_tint", 0.f);
         m_flatness = LobeParam(props, "flatness", 0.f);
         m_spec_tint = LobeParam(props, "spec_tint", 0.f);
-        m_eta = props.get_texture("eta", 1.5f);
+        m_eta = props.get_texture("eta", 1.5f, SpectrumUse::Unbounded);
         m_diff_trans = LobeParam(props, "diff_trans", 0.f);
         auto rate = [&](const char *name) {
             float r = props.get_float(name, 1.f);

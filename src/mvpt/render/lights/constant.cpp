@@ -9,7 +9,7 @@ namespace mvpt {
 class ConstantEnvironment final : public Light {
 public:
     explicit ConstantEnvironment(const Properties &props) {
-        m_radiance = props.get_color("radiance", Color3f(1.f));
+        m_radiance = props.get_color("radiance", Color3f(1.f), SpectrumUse::Emission);
         if (!m_radiance.is_finite() || m_radiance.r < 0 || m_radiance.g < 0 || m_radiance.b < 0)
             props.fail("radiance", "'radiance' must be finite and non-negative");
         m_flags = LightInfinite;

@@ -22,7 +22,7 @@ public:
             if (!(len > 0.f) || !std::isfinite(len)) props.fail("to_world", "'to_world' maps +z to a degenerate direction");
             m_direction = m_direction / len;
         }
-        m_irradiance = props.get_color("irradiance", Color3f(1.f));
+        m_irradiance = props.get_color("irradiance", Color3f(1.f), SpectrumUse::Emission);
         if (!m_irradiance.is_finite() || m_irradiance.r < 0 || m_irradiance.g < 0 || m_irradiance.b < 0)
             props.fail("irradiance", "'irradiance' must be finite and non-negative");
         m_flags = LightInfinite | LightDeltaDirection;

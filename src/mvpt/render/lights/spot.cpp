@@ -12,7 +12,7 @@ class SpotLight final : public Light {
 public:
     explicit SpotLight(const Properties &props) {
         m_to_world = props.get_animated_transform("to_world");
-        m_intensity = props.get_color("intensity", Color3f(1.f));
+        m_intensity = props.get_color("intensity", Color3f(1.f), SpectrumUse::Emission);
         if (!m_intensity.is_finite() || m_intensity.r < 0 || m_intensity.g < 0 || m_intensity.b < 0)
             props.fail("intensity", "'intensity' must be finite and non-negative");
         if (props.has_texture("texture")) {

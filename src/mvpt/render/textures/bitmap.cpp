@@ -30,6 +30,10 @@ public:
         else if (wrap == "clamp") m_wrap = Wrap::Clamp;
         else props.fail("wrap_mode", "wrap_mode must be 'repeat', 'mirror' or 'clamp', got '" + wrap + "'");
         m_to_uv = UvTransform(props.get_transform("to_uv"));
+        // Storage precision (Mitsuba's `format`): "variant" is float32 in scalar_rgb, as here.
+        std::string format = props.get_string("format", "variant");
+        if (format != "variant")
+            props.fail("format", "format must be 'variant' (mvpt does not store textures as 'fp16'), got '" + format + "'");
         try {
             m_image = read_image(path, raw);
         } catch (const std::exception &e) {
