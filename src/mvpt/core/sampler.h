@@ -73,14 +73,23 @@ public:
 
     float next_1d() {
         if (m_kind == SamplerKind::Independent) return bits_to_unit_float(uint32_t(independent_bits()));
-        uint64_t h = dimension_hash();
-        return bits_to_unit_float(owen_scramble(sobol_dim0(shuffled_index(h)), uint32_t(h >> 32)));
+        return sobol_1d();
     }
     Vec2f next_2d() {
         if (m_kind == SamplerKind::Independent) {
             uint64_t r = independent_bits();
             return {bits_to_unit_float(uint32_t(r)), bits_to_unit_float(uint32_t(r >> 32))};
         }
+        return sobol_2d();
+    }
+
+private:
+    // The Sobol paths stay out of line so that the independent path inlines into integrators.
+    [[gnu::noinline]] float sobol_1d() {
+        uint64_t h = dimension_hash();
+        return bits_to_unit_float(owen_scramble(sobol_dim0(shuffled_index(h)), uint32_t(h >> 32)));
+    }
+    [[gnu::noinline]] Vec2f sobol_2d() {
         uint64_t h = dimension_hash();
         uint32_t i = shuffled_index(h);
         uint64_t h2 = mix_bits(h);
@@ -88,7 +97,6 @@ public:
                 bits_to_unit_float(owen_scramble(sobol_dim1(i), uint32_t(h2 >> 32)))};
     }
 
-private:
     /// 64 random bits of (sample, dimension) for the independent sampler: one mix per draw.
     uint64_t independent_bits() { return mix_bits(m_sample_hash + 0x9e3779b97f4a7c15ULL * (uint64_t(m_dim++) + 1)); }
     /// Per (pixel, dimension) scrambling seed of the Sobol sampler, shared by all sample indices.

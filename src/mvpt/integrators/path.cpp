@@ -24,7 +24,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
     Spectrum result(0.f), throughput(1.f);
     float eta = 1.f;
     Ray ray = camera_ray;
-    SurfaceInteraction prev_si;
+    Point3f prev_p; // previous scattering vertex (reference point of NEE's density)
     float prev_bsdf_pdf = 1.f;
     bool prev_bsdf_delta = true;
     // Mitsuba 3 keeps a path's radiance only if it scattered at a non-null surface, hit
@@ -45,7 +45,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
             Spectrum le = hit ? emitter->eval(si, -ray.d) : emitter->eval_environment(ray.d);
             if (!le.is_black()) {
                 float w = 1.f;
-                if (!prev_bsdf_delta) w = mis_power(prev_bsdf_pdf, emitter_pdf(scene, emitter, prev_si.p, si, ray.d));
+                if (!prev_bsdf_delta) w = mis_power(prev_bsdf_pdf, emitter_pdf(scene, emitter, prev_p, si, ray.d));
                 result += throughput * le * w;
             }
         }
@@ -86,7 +86,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
         ray = si.spawn_ray(wo_world);
         throughput *= bsdf_weight;
         eta *= bs.eta;
-        prev_si = si;
+        prev_p = si.p;
         prev_bsdf_pdf = bs.pdf;
         prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
 

@@ -18,9 +18,10 @@ void embree_error(void *, RTCError code, const char *str) {
 /// and counted as such).
 bool embree_can_trace(const Ray &ray) {
     constexpr float large = 1.844e18f;
-    for (int i = 0; i < 3; ++i)
-        if (!(std::abs(ray.o[i]) <= large) || !(std::abs(ray.d[i]) <= large)) return false;
-    return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
+    // Branch-free: a NaN fails its comparison and so the conjunction.
+    bool finite = (std::abs(ray.o.x) <= large) & (std::abs(ray.o.y) <= large) & (std::abs(ray.o.z) <= large) &
+                  (std::abs(ray.d.x) <= large) & (std::abs(ray.d.y) <= large) & (std::abs(ray.d.z) <= large);
+    return finite & (ray.tmin == ray.tmin) & (ray.tmax == ray.tmax);
 }
 } // namespace
 
@@ -92,6 +93,7 @@ void Scene::build(const SceneTree &tree) {
         m_motion.t1 = animated ? std::max(m_motion.t1, e) : e;
         animated = true;
     }
+    m_animated = animated;
     for (auto &shape : m_shapes) {
         unsigned gid = shape->attach(m_device, m_scene, m_motion);
         if (gid >= m_geom_to_shape.size()) m_geom_to_shape.resize(gid + 1, nullptr);
@@ -115,7 +117,7 @@ bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
     rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
     rh.ray.tnear = ray.tmin;
     rh.ray.tfar = ray.tmax;
-    rh.ray.time = m_motion.to_embree(ray.time);
+    rh.ray.time = m_animated ? m_motion.to_embree(ray.time) : 0.f;
     rh.ray.mask = 0xffffffffu;
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -145,7 +147,7 @@ bool Scene::occluded(const Ray &ray) const {
     r.dir_x = ray.d.x; r.dir_y = ray.d.y; r.dir_z = ray.d.z;
     r.tnear = ray.tmin;
     r.tfar = ray.tmax;
-    r.time = m_motion.to_embree(ray.time);
+    r.time = m_animated ? m_motion.to_embree(ray.time) : 0.f;
     r.mask = 0xffffffffu;
     r.flags = 0;
     rtcOccluded1(m_scene, &ctx, &r);

@@ -53,6 +53,8 @@ private:
     std::shared_ptr<Integrator> m_integrator;
     BoundingBox m_bounds;
     MotionTime m_motion;
+    /// Some shape moves (otherwise Embree's ray time is irrelevant and left at 0).
+    bool m_animated = false;
 };
 
 /// Load a Mitsuba 3 XML scene; `defines` override its <default> values.

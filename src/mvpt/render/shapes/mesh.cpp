@@ -40,6 +40,18 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
         m_area += areas[i];
     }
     m_area_distr.build(areas);
+    m_inv_area = 1.f / m_area;
+    m_face_normals.resize(m_data.triangle_count());
+    m_flat_vertex_normals.assign(m_data.triangle_count(), 0);
+    for (size_t i = 0; i < m_face_normals.size(); ++i) {
+        const uint32_t *idx = &m_data.indices[3 * i];
+        const Point3f &p0 = m_data.positions[idx[0]], &p1 = m_data.positions[idx[1]], &p2 = m_data.positions[idx[2]];
+        m_face_normals[i] = normalize(cross(p1 - p0, p2 - p0));
+        if (!m_data.normals.empty()) {
+            const Normal3f &n0 = m_data.normals[idx[0]], &n1 = m_data.normals[idx[1]], &n2 = m_data.normals[idx[2]];
+            m_flat_vertex_normals[i] = n0 == n1 && n1 == n2 && squared_norm(n0) > 0.f;
+        }
+    }
     attach_shape_children(*this, props);
     if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
 }
@@ -86,48 +98,49 @@ unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene, const MotionTime
     return id;
 }
 
+Normal3f TriangleMesh::shading_normal(uint32_t prim, uint32_t i0, uint32_t i1, uint32_t i2, float b0, Vec2f b,
+                                      Normal3f n) const {
+    if (m_data.normals.empty()) return n;
+    // Stored vertex normals are unit length: a flat triangle's interpolation is its vertex normal.
+    if (m_flat_vertex_normals[prim]) return m_data.normals[i0];
+    Normal3f s = m_data.normals[i0] * b0 + m_data.normals[i1] * b.x + m_data.normals[i2] * b.y;
+    float l2 = squared_norm(s);
+    return l2 > 0.f ? s * (1.f / std::sqrt(l2)) : n;
+}
+
 void TriangleMesh::fill_interaction(const Ray &, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const {
     uint32_t i0 = m_data.indices[3 * prim], i1 = m_data.indices[3 * prim + 1], i2 = m_data.indices[3 * prim + 2];
     const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
     float b0 = 1.f - b.x - b.y;
     si.t = t;
     si.p = p0 * b0 + p1 * b.x + p2 * b.y;
-    Vec3f dp0 = p1 - p0, dp1 = p2 - p0;
-    Normal3f n = normalize(cross(dp0, dp1));
-    if (m_flip_normals) n = -n;
+    Normal3f n = m_face_normals[prim];
+    Normal3f ns = shading_normal(prim, i0, i1, i2, b0, b, n);
+    if (m_flip_normals) { n = -n; ns = -ns; }
     si.n = n;
 
-    Vec3f dp_du, dp_dv;
-    bool have_dp = false;
-    if (!m_data.uvs.empty()) {
-        Vec2f uv0 = m_data.uvs[i0], uv1 = m_data.uvs[i1], uv2 = m_data.uvs[i2];
-        si.uv = uv0 * b0 + uv1 * b.x + uv2 * b.y;
-        Vec2f duv0 = uv1 - uv0, duv1 = uv2 - uv0;
-        float det = duv0.x * duv1.y - duv0.y * duv1.x;
-        if (det != 0.f) {
-            float inv = 1.f / det;
-            dp_du = (dp0 * duv1.y - dp1 * duv0.y) * inv;
-            dp_dv = (dp1 * duv0.x - dp0 * duv1.x) * inv;
-            have_dp = all_finite(dp_du) && squared_norm(dp_du) > 0.f;
-        }
-    } else {
+    if (m_data.uvs.empty()) {
         si.uv = b;
+        si.sh_frame = Frame(ns);
+        return;
     }
-
-    Normal3f ns = n;
-    if (!m_data.normals.empty()) {
-        Normal3f s = m_data.normals[i0] * b0 + m_data.normals[i1] * b.x + m_data.normals[i2] * b.y;
-        float l = norm(s);
-        if (l > 0.f) ns = (m_flip_normals ? -s : s) / l;
-    }
-    // Shading frame from dp/du projected onto the tangent plane (Mitsuba's initialize_sh_frame).
-    if (have_dp) {
-        Vec3f s = dp_du - ns * dot(ns, dp_du);
-        float l = norm(s);
-        if (l > 1e-12f) {
-            s = s / l;
-            si.sh_frame = Frame(s, cross(ns, s), ns);
-            return;
+    Vec2f uv0 = m_data.uvs[i0], uv1 = m_data.uvs[i1], uv2 = m_data.uvs[i2];
+    si.uv = uv0 * b0 + uv1 * b.x + uv2 * b.y;
+    Vec2f duv0 = uv1 - uv0, duv1 = uv2 - uv0;
+    float det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if (det != 0.f) {
+        Vec3f dp0 = p1 - p0, dp1 = p2 - p0;
+        float inv = 1.f / det;
+        Vec3f dp_du = (dp0 * duv1.y - dp1 * duv0.y) * inv;
+        // Shading frame from dp/du projected onto the tangent plane (Mitsuba's initialize_sh_frame).
+        if (all_finite(dp_du) && squared_norm(dp_du) > 0.f) {
+            Vec3f s = dp_du - ns * dot(ns, dp_du);
+            float l = norm(s);
+            if (l > 1e-12f) {
+                s = s / l;
+                si.sh_frame = Frame(s, cross(ns, s), ns);
+                return;
+            }
         }
     }
     si.sh_frame = Frame(ns);
@@ -139,20 +152,17 @@ ShapeSample TriangleMesh::sample_area(Vec2f u) const {
     Vec2f b = warp::square_to_uniform_triangle({ux, u.y});
     uint32_t i0 = m_data.indices[3 * tri], i1 = m_data.indices[3 * tri + 1], i2 = m_data.indices[3 * tri + 2];
     const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
+    float b0 = 1.f - b.x - b.y;
     ShapeSample s;
-    s.p = p0 * (1.f - b.x - b.y) + p1 * b.x + p2 * b.y;
-    Normal3f n = normalize(cross(p1 - p0, p2 - p0));
-    if (!m_data.normals.empty()) {
-        // Smooth meshes: the interpolated normal, as Mitsuba uses for emitter sampling.
-        Normal3f ns = m_data.normals[i0] * (1.f - b.x - b.y) + m_data.normals[i1] * b.x + m_data.normals[i2] * b.y;
-        if (squared_norm(ns) > 0.f) n = normalize(ns);
-    }
+    s.p = p0 * b0 + p1 * b.x + p2 * b.y;
+    // Smooth meshes: the interpolated normal, as Mitsuba uses for emitter sampling.
+    Normal3f n = shading_normal(uint32_t(tri), i0, i1, i2, b0, b, m_face_normals[tri]);
     s.n = m_flip_normals ? -n : n;
     if (!m_data.uvs.empty())
-        s.uv = m_data.uvs[i0] * (1.f - b.x - b.y) + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
+        s.uv = m_data.uvs[i0] * b0 + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
     else
         s.uv = b;
-    s.pdf_a = 1.f / m_area;
+    s.pdf_a = m_inv_area;
     return s;
 }
 

@@ -25,9 +25,19 @@ public:
     const MeshData &data() const { return m_data; }
 
 private:
+    /// Unit face normal of triangle `prim` (before flip_normals).
+    const Normal3f &face_normal(uint32_t prim) const { return m_face_normals[prim]; }
+    /// Shading normal at barycentrics (b0, b.x, b.y) before flip_normals, falling back to `n`.
+    Normal3f shading_normal(uint32_t prim, uint32_t i0, uint32_t i1, uint32_t i2, float b0, Vec2f b, Normal3f n) const;
+
     MeshData m_data;
     bool m_flip_normals = false;
-    float m_area = 0.f;
+    float m_area = 0.f, m_inv_area = 0.f;
+    /// Per-triangle precomputed data (hit and emitter sampling are per-path hot spots).
+    std::vector<Normal3f> m_face_normals;
+    /// Per triangle: its three vertex normals are identical and non-zero, so
+    /// interpolation and renormalisation reduce to that normal.
+    std::vector<uint8_t> m_flat_vertex_normals;
     DiscreteDistribution m_area_distr;
     BoundingBox m_bounds;
 };
