@@ -99,8 +99,12 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         auto t_pass = clock::now();
 
         std::vector<const Tile *> tiles;
+        uint64_t pass_samples = 0;
         for (const Tile &t : all_tiles)
-            if (pass < target[t.view_slot]) tiles.push_back(&t);
+            if (pass < target[t.view_slot]) {
+                tiles.push_back(&t);
+                pass_samples += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
+            }
 
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
@@ -153,9 +157,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
         m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
         m_stats.passes = pass + 1;
-        m_stats.samples = 0;
-        for (auto &fb : m_films)
-            for (uint32_t c : fb.count) m_stats.samples += c;
+        m_stats.samples += pass_samples; // one sample per pixel of every tile in the pass
         if (progress) {
             RenderProgress p;
             p.pass = pass + 1;
