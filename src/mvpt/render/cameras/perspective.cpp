@@ -74,7 +74,7 @@ public:
     }
 
     bool project(Point3f y, float time, Vec2f lens, Vec2f *film_pos) const override {
-        Point3f p = m_animated ? CameraPose(m_to_world.eval(time)).to_camera(y) : m_pose.to_camera(y);
+        Point3f p = pose_at(time).to_camera(y);
         if (!(p.z >= m_near && p.z <= m_far)) return false;
         // Point q on the plane z = 1 that the film position maps to (design doc §3). Thin lens:
         // the ray u -> p meets the focus plane z = f_d at P = u + (p - u) f_d / p.z, and
@@ -91,12 +91,11 @@ public:
     }
 
     Point3f lens_point(float time, Vec2f lens) const override {
-        CameraPose pose = m_animated ? CameraPose(m_to_world.eval(time)) : m_pose;
-        return lens_point_in_pose(pose, lens);
+        return lens_point_in_pose(pose_at(time), lens);
     }
 
     float film_density(Point3f y, Normal3f n_y, float time, Vec2f lens) const override {
-        CameraPose pose = m_animated ? CameraPose(m_to_world.eval(time)) : m_pose;
+        CameraPose pose = pose_at(time);
         // G = f^2 cos(phi) / (cos^3(theta) d^2) (design doc §4): the direction -> focus-plane map
         // has area factor f_d^2 / cos^3(theta) from the lens point, scaled by (f / f_d)^2 onto the
         // film in pixels; dw/dA_y = cos(phi) / d^2.
@@ -112,6 +111,9 @@ public:
     bool is_animated() const override { return m_animated; }
 
 private:
+    /// The pose at `time` (keyframes interpolated only for an animated camera).
+    CameraPose pose_at(float time) const { return m_animated ? CameraPose(m_to_world.eval(time)) : m_pose; }
+
     static bool is_rigid(const Matrix4 &m) {
         for (int i = 0; i < 3; ++i)
             for (int j = i; j < 3; ++j) {
