@@ -6,8 +6,10 @@
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/shared_ptr.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
@@ -147,6 +149,16 @@ private:
     RenderProgress m_progress;
 };
 
+using Vec2 = std::array<float, 2>;
+using Vec3 = std::array<float, 3>;
+
+const Camera &camera_at(const Scene &s, size_t view) {
+    if (view >= s.cameras().size())
+        throw nb::index_error(("view " + std::to_string(view) + " out of range (the scene has " +
+                               std::to_string(s.cameras().size()) + " sensors)").c_str());
+    return *s.cameras()[view];
+}
+
 nb::list view_info(const Scene &s) {
     nb::list l;
     for (auto &c : s.cameras()) {
@@ -189,7 +201,23 @@ NB_MODULE(_core, m) {
         .def_prop_ro("views", &view_info)
         .def_prop_ro("integrator", [](const Scene &s) { return s.integrator().name(); })
         .def_prop_ro("shape_count", [](const Scene &s) { return s.shapes().size(); })
-        .def_prop_ro("light_count", [](const Scene &s) { return s.lights().size(); });
+        .def_prop_ro("light_count", [](const Scene &s) { return s.lights().size(); })
+        // Camera projection API (design doc §2-§4), for tests and tools: view is a scene index.
+        .def("camera_generate_ray", [](const Scene &s, size_t view, Vec2 film, Vec2 lens, float time) {
+            Ray r = camera_at(s, view).generate_ray({film[0], film[1]}, {lens[0], lens[1]}, time);
+            return std::make_pair(Vec3{r.o.x, r.o.y, r.o.z}, Vec3{r.d.x, r.d.y, r.d.z});
+        }, "view"_a, "film"_a, "lens"_a = Vec2{0.f, 0.f}, "time"_a = 0.f,
+           "(origin, direction) of the ray through film position `film` (pixels), unit-disk lens point `lens`.")
+        .def("camera_project", [](const Scene &s, size_t view, Vec3 y, float time, Vec2 lens) -> std::optional<Vec2> {
+            Vec2f x;
+            if (!camera_at(s, view).project({y[0], y[1], y[2]}, time, {lens[0], lens[1]}, &x)) return std::nullopt;
+            return Vec2{x.x, x.y};
+        }, "view"_a, "y"_a, "time"_a = 0.f, "lens"_a = Vec2{0.f, 0.f},
+           "Film position (pixels) where the ray from the lens point to `y` lands, or None outside [near, far].")
+        .def("camera_film_density", [](const Scene &s, size_t view, Vec3 y, Vec3 n, float time, Vec2 lens) {
+            return camera_at(s, view).film_density({y[0], y[1], y[2]}, {n[0], n[1], n[2]}, time, {lens[0], lens[1]});
+        }, "view"_a, "y"_a, "n"_a, "time"_a = 0.f, "lens"_a = Vec2{0.f, 0.f},
+           "G(y): film area (pixels^2) per unit surface area at y with normal n (design doc §4).");
 
     m.def("load_file", [](const std::string &path, const std::map<std::string, std::string> &defines) {
         return std::shared_ptr<Scene>(load_scene_file(path, defines));

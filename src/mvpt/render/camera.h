@@ -1,5 +1,14 @@
 // Camera interface (Mitsuba's "sensor"): one view of the scene with its film,
-// sampler settings and shutter interval.
+// sampler settings and shutter interval, plus the projection API on which
+// multi-view path tracing is built (docs/multiview-path-tracing.md §2–§4).
+//
+// Conventions shared by every method (design doc §2):
+// - film positions are in pixel units, full-film coordinates (the crop window is
+//   not subtracted), x to the right and y down; pixel (i, j) covers [i, i+1) x [j, j+1);
+// - `lens` is a point xi on the *unit* disk; the world lens point is
+//   u = o(t) + r (xi.x e1(t) + xi.y e2(t)) with lens radius r (0 for a pinhole) and
+//   e1, e2 the camera's x and y axes at time t (camera space: +z forward, +x left, +y up);
+// - `time` is absolute scene time; a camera with an animated `to_world` is posed at it.
 #pragma once
 
 #include "../core/math.h"
@@ -18,15 +27,45 @@ struct FilmDesc {
     int width = 768, height = 576;
     int crop_x = 0, crop_y = 0, crop_width = 768, crop_height = 576;
     std::shared_ptr<ReconstructionFilter> filter;
+
+    /// True when film position `pos` (pixels, full-film coordinates) lies inside the crop window
+    /// (design doc §3, test 3 "image"); half-open: [crop_x, crop_x + crop_width).
+    bool contains(Vec2f pos) const {
+        return pos.x >= float(crop_x) && pos.x < float(crop_x + crop_width) && pos.y >= float(crop_y) &&
+               pos.y < float(crop_y + crop_height);
+    }
 };
 
 class Camera : public Object {
 public:
-    /// Ray through film position `film` (pixels, full-film coordinates, y down),
-    /// lens point `lens` on the unit disk, at scene time `time`. Rays carry unit weight.
+    /// Ray through film position `film`, lens point `lens` on the unit disk, at scene time `time`
+    /// (design doc §2): from the lens point towards the point of the focus plane that `film`
+    /// maps to. Rays carry unit weight; [tmin, tmax] spans camera-space depths [near, far].
     virtual Ray generate_ray(Vec2f film, Vec2f lens, float time) const = 0;
+
+    /// Inverse of `generate_ray` for a fixed lens point and time (design doc §3, the shift
+    /// T_{l->k}): the film position where the ray from the lens point `u(time, lens)` towards
+    /// `y` lands (the ray is intersected with the focus plane and that point projected through
+    /// the lens centre; a pinhole gives the ordinary projection of `y`). Returns false, leaving
+    /// `film_pos` unspecified, when `y` is behind the camera or its camera-space depth lies
+    /// outside [near_clip, far_clip]. It does not test the film bounds: see `FilmDesc::contains`.
+    virtual bool project(Point3f y, float time, Vec2f lens, Vec2f *film_pos) const = 0;
+
+    /// World-space lens point u = o(t) + r (xi.x e1(t) + xi.y e2(t)) (design doc §2).
+    virtual Point3f lens_point(float time, Vec2f lens) const = 0;
+
+    /// Film area per unit surface area at `y` (normal `n_y`, any length and side), for the
+    /// lens point `u(time, lens)` (design doc §4):
+    ///     G(y) = f^2 cos(phi) / (cos^3(theta) d^2),   f = (W/2) / tan(fov_x/2) in pixels,
+    /// theta between u->y and the optical axis, phi between n_y and y->u, d = |y - u|.
+    /// The Jacobian of the shift l->k is |T'_{l->k}| = G_k(y) / G_l(y). Returns 0 when `y`
+    /// is not in front of the lens plane.
+    virtual float film_density(Point3f y, Normal3f n_y, float time, Vec2f lens) const = 0;
+
     /// Lens radius (0 for a pinhole).
     virtual float lens_radius() const { return 0.f; }
+    /// True when `to_world` is keyframed, i.e. the pose depends on time.
+    virtual bool is_animated() const { return false; }
 
     std::string id;
     FilmDesc film;

@@ -1,7 +1,9 @@
 // Perspective (pinhole) and thin-lens cameras, Mitsuba's `perspective` and
-// `thinlens` sensors: camera space has +z forward, +x left, +y up.
+// `thinlens` sensors: camera space has +z forward, +x left, +y up. `to_world` may be
+// keyframed (<animation>): the pose is then evaluated at each ray's time.
 #include "../../scene/plugin.h"
 #include "../camera.h"
+#include "camera_pose.h"
 #include "sensor_common.h"
 
 #include <cmath>
@@ -12,17 +14,17 @@ class PerspectiveCamera final : public Camera {
 public:
     PerspectiveCamera(const Properties &props, bool thin_lens) {
         read_sensor_common(*this, props);
-        auto at = props.get_animated_transform("to_world");
-        if (at.is_animated()) props.fail("to_world", "animated sensors are not supported yet");
-        m_to_world = at.eval(0.f);
-        // Rows of the linear part must be orthonormal: no scale or shear (Mitsuba's has_scale, tolerance 1e-3).
-        const Matrix4 &m = m_to_world.matrix();
-        for (int i = 0; i < 3; ++i)
-            for (int j = i; j < 3; ++j) {
-                double dot_ij = m.m[i][0] * m.m[j][0] + m.m[i][1] * m.m[j][1] + m.m[i][2] * m.m[j][2];
-                if (std::abs(dot_ij - (i == j ? 1.0 : 0.0)) > 1e-3)
-                    props.fail("to_world", "'to_world' of a sensor must be a rigid motion: scale or shear is not allowed");
-            }
+        m_to_world = props.get_animated_transform("to_world");
+        // Every pose must be a rigid motion: no scale or shear (Mitsuba's has_scale, tolerance 1e-3).
+        // Keyframes that are rigid interpolate (slerp + lerp) to rigid poses.
+        for (const TransformKey &k : m_to_world.keys())
+            if (!is_rigid(k.original.matrix()))
+                props.fail("to_world", m_to_world.is_animated()
+                                           ? "the keyframe at time " + std::to_string(k.time) +
+                                                 " of a sensor's 'to_world' must be a rigid motion: scale or shear is not allowed"
+                                           : "'to_world' of a sensor must be a rigid motion: scale or shear is not allowed");
+        m_animated = m_to_world.is_animated();
+        m_pose = CameraPose(m_to_world.eval(shutter_open));
         m_near = props.get_float("near_clip", 1e-2f);
         m_far = props.get_float("far_clip", 1e4f);
         if (!(m_near > 0.f) || !(m_far > m_near))
@@ -61,37 +63,109 @@ public:
         } else {
             props.fail("fov_axis", "'fov_axis' must be x, y, diagonal, smaller or larger, got '" + axis + "'");
         }
-        m_origin = m_to_world.point(Point3f(0.f));
+        // Pixels are square for every fov_axis (tan_x / W == tan_y / H), so one film distance serves.
+        m_film_distance = 0.5f * float(film.width) / m_tan_x;
     }
 
     Ray generate_ray(Vec2f film_pos, Vec2f lens, float time) const override {
-        // Point on the plane z = 1 in camera space.
-        float u = film_pos.x / float(film.width), v = film_pos.y / float(film.height);
-        Vec3f near_p(-(2.f * u - 1.f) * m_tan_x, -(2.f * v - 1.f) * m_tan_y, 1.f);
-        Vec3f o_cam(0.f), d_cam;
+        // The static case uses the cached pose: no per-ray matrix evaluation.
+        return m_animated ? ray_in_pose(CameraPose(m_to_world.eval(time)), film_pos, lens, time)
+                          : ray_in_pose(m_pose, film_pos, lens, time);
+    }
+
+    bool project(Point3f y, float time, Vec2f lens, Vec2f *film_pos) const override {
+        Point3f p = pose_at(time).to_camera(y);
+        if (!(p.z >= m_near && p.z <= m_far)) return false;
+        // Point q on the plane z = 1 that the film position maps to (design doc §3). Thin lens:
+        // the ray u -> p meets the focus plane z = f_d at P = u + (p - u) f_d / p.z, and
+        // q = P / f_d = u (1/f_d - 1/p.z) + p / p.z; a pinhole (u = 0) gives q = p / p.z.
+        float inv_z = 1.f / p.z;
+        float qx = p.x * inv_z, qy = p.y * inv_z;
         if (m_aperture_radius > 0.f) {
-            o_cam = Vec3f(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f);
+            float k = m_aperture_radius * (1.f / m_focus_distance - inv_z);
+            qx += lens.x * k;
+            qy += lens.y * k;
+        }
+        *film_pos = film_from_plane(qx, qy);
+        return true;
+    }
+
+    Point3f lens_point(float time, Vec2f lens) const override {
+        return lens_point_in_pose(pose_at(time), lens);
+    }
+
+    float film_density(Point3f y, Normal3f n_y, float time, Vec2f lens) const override {
+        CameraPose pose = pose_at(time);
+        // G = f^2 cos(phi) / (cos^3(theta) d^2) (design doc §4): the direction -> focus-plane map
+        // has area factor f_d^2 / cos^3(theta) from the lens point, scaled by (f / f_d)^2 onto the
+        // film in pixels; dw/dA_y = cos(phi) / d^2.
+        Vec3f w = y - lens_point_in_pose(pose, lens);
+        float d2 = squared_norm(w), d = std::sqrt(d2);
+        float cos_theta = dot(w, normalize(pose.axis[2])) / d;
+        if (!(cos_theta > 0.f)) return 0.f;
+        float cos_phi = absdot(n_y, w) / (norm(n_y) * d);
+        return sqr(m_film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
+    }
+
+    float lens_radius() const override { return m_aperture_radius; }
+    bool is_animated() const override { return m_animated; }
+
+private:
+    /// The pose at `time` (keyframes interpolated only for an animated camera).
+    CameraPose pose_at(float time) const { return m_animated ? CameraPose(m_to_world.eval(time)) : m_pose; }
+
+    static bool is_rigid(const Matrix4 &m) {
+        for (int i = 0; i < 3; ++i)
+            for (int j = i; j < 3; ++j) {
+                double dot_ij = m.m[i][0] * m.m[j][0] + m.m[i][1] * m.m[j][1] + m.m[i][2] * m.m[j][2];
+                if (std::abs(dot_ij - (i == j ? 1.0 : 0.0)) > 1e-3) return false;
+            }
+        return true;
+    }
+
+    /// Film position (pixels) -> camera-space point on the plane z = 1 (Mitsuba's sample_to_camera:
+    /// film x grows to the camera's right = -x, film y grows downwards = -y).
+    Vec3f plane_from_film(Vec2f film_pos) const {
+        float u = film_pos.x / float(film.width), v = film_pos.y / float(film.height);
+        return {-(2.f * u - 1.f) * m_tan_x, -(2.f * v - 1.f) * m_tan_y, 1.f};
+    }
+    /// Inverse of `plane_from_film`.
+    Vec2f film_from_plane(float qx, float qy) const {
+        return {0.5f * (1.f - qx / m_tan_x) * float(film.width), 0.5f * (1.f - qy / m_tan_y) * float(film.height)};
+    }
+
+    Point3f lens_point_in_pose(const CameraPose &pose, Vec2f lens) const {
+        if (m_aperture_radius > 0.f)
+            return pose.to_world(Point3f(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f));
+        return pose.origin;
+    }
+
+    Ray ray_in_pose(const CameraPose &pose, Vec2f film_pos, Vec2f lens, float time) const {
+        Vec3f near_p = plane_from_film(film_pos);
+        Vec3f d_cam;
+        Ray r;
+        if (m_aperture_radius > 0.f) {
+            Vec3f o_cam(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f);
             d_cam = normalize(near_p * m_focus_distance - o_cam);
+            r.o = pose.to_world(o_cam);
         } else {
             d_cam = normalize(near_p);
+            r.o = pose.origin;
         }
         float inv_z = 1.f / d_cam.z;
-        Ray r;
-        r.o = m_aperture_radius > 0.f ? m_to_world.point(o_cam) : m_origin;
-        r.d = normalize(m_to_world.vector(d_cam));
+        r.d = normalize(pose.vector_to_world(d_cam));
         r.tmin = m_near * inv_z;
         r.tmax = m_far * inv_z;
         r.time = time;
         return r;
     }
 
-    float lens_radius() const override { return m_aperture_radius; }
-
-private:
-    Transform m_to_world;
-    Point3f m_origin;
+    AnimatedTransform m_to_world;
+    CameraPose m_pose; ///< the pose of a static camera
+    bool m_animated = false;
     float m_near, m_far, m_focus_distance, m_aperture_radius = 0.f;
     float m_tan_x = 1.f, m_tan_y = 1.f;
+    float m_film_distance = 1.f; ///< f = (W/2) / tan(fov_x/2), in pixels
 };
 
 MVPT_REGISTER_PLUGIN("sensor", "perspective", [](const Properties &p, const LoadContext &) {
