@@ -47,12 +47,19 @@ Transform compose(Vec3f s, Quaternion q, Vec3f t) {
     double r[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
                       {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
                       {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
-    Matrix4 m;
-    double sc[3] = {s.x, s.y, s.z};
+    // M = T R S; its inverse S^-1 R^T T^-1 in closed form (no general 4x4 inversion per call).
+    Matrix4 m, inv;
+    double sc[3] = {s.x, s.y, s.z}, tr[3] = {t.x, t.y, t.z};
     for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) m.m[i][j] = r[i][j] * sc[j];
-    m.m[0][3] = t.x; m.m[1][3] = t.y; m.m[2][3] = t.z;
-    return Transform(m);
+        for (int j = 0; j < 3; ++j) {
+            m.m[i][j] = r[i][j] * sc[j];
+            inv.m[i][j] = r[j][i] / sc[i];
+        }
+    for (int i = 0; i < 3; ++i) {
+        m.m[i][3] = tr[i];
+        inv.m[i][3] = -(inv.m[i][0] * tr[0] + inv.m[i][1] * tr[1] + inv.m[i][2] * tr[2]);
+    }
+    return {m, inv};
 }
 
 } // namespace
