@@ -39,6 +39,8 @@ class RenderResult:
     images: dict = field(default_factory=dict)
     variance: dict = field(default_factory=dict)
     sample_count: dict = field(default_factory=dict)
+    #: multi-view path tracing only: contributions received per pixel (own native samples included)
+    contributions: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
 
     @property
@@ -74,8 +76,15 @@ def resolve_views(scene: _core.Scene, views: Optional[Sequence]) -> list:
 
 def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[int] = None,
            threads: int = 0, views: Optional[Sequence] = None,
-           progress: Optional[Callable[[dict], None]] = None, poll: float = 0.1) -> RenderResult:
+           progress: Optional[Callable[[dict], None]] = None, poll: float = 0.1,
+           method: str = "scene") -> RenderResult:
     """Render all views (or `views`: ids or indices) of `scene`.
+
+    method: "pt" (independent path tracing of every view), "mvpt" (multi-view path tracing,
+    sharing paths between the views; its settings come from an `mvpath` integrator in the
+    scene, or its defaults) or "scene" (whatever the scene's integrator is). With "mvpt",
+    sample_count holds native samples and `contributions` what each pixel received; spp is
+    the mean number of native samples per pixel.
 
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
     seconds (0: none; the render stops within about one pass of it). The render runs
@@ -94,9 +103,11 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"poll must be > 0 seconds, got {poll}")
     if seed is not None and not 0 <= int(seed) < 2**32:
         raise ValueError(f"seed must lie in [0, 2^32), got {seed}")
+    if method not in ("scene", "pt", "mvpt"):
+        raise ValueError(f"method must be 'pt', 'mvpt' or 'scene', got {method!r}")
     index = resolve_views(scene, views)
     job = _core.RenderJob(scene, spp=int(spp), time=float(time), seed=None if seed is None else int(seed),
-                          threads=int(threads), views=index)
+                          threads=int(threads), views=index, method=method)
     job.start()
     interrupted = None
     try:
@@ -116,8 +127,10 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         result.images[r["id"]] = r["image"]
         result.variance[r["id"]] = r["variance"]
         result.sample_count[r["id"]] = r["sample_count"]
+        if "contributions" in r:
+            result.contributions[r["id"]] = r["contributions"]
     result.stats = _stats(scene, job.stats(), results, index,
-                          dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads)))
+                          dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads), method=method))
     if interrupted is not None:
         result.stats["cancelled"] = True
         if not isinstance(interrupted, KeyboardInterrupt):
@@ -141,6 +154,9 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
             "mean": [float(x) for x in img.reshape(-1, 3).mean(axis=0, dtype=np.float64)],
             "nonfinite_samples": int(r["nonfinite"]),
         }
+        if "multiview" in r:
+            views[r["id"]]["multiview"] = dict(r["multiview"], contributions_per_pixel=float(
+                r["contributions"].sum(dtype=np.float64)) / pixels)
     settings = dict(settings, views=list(views), integrator=scene.integrator)
     first = raw.get("first_nonfinite")
     if first is not None:
@@ -156,5 +172,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "nonfinite_samples": raw["nonfinite_samples"],
         "first_nonfinite": first,
         "integrator": scene.integrator,
+        "method": raw["method"],
+        "notes": list(raw["notes"]),
         "views": views,
-    }
+    } | ({"estimator": raw["estimator"], "multiview": dict(raw["multiview"])} if raw["method"] == "mvpt" else {})

@@ -1,6 +1,7 @@
 #include "renderer.h"
 
 #include "core/warp.h"
+#include "integrators/mvpath.h"
 #include "render/camera.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -62,6 +63,11 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
 }
 
 void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress) {
+    bool scene_mv = dynamic_cast<const MultiViewPathIntegrator *>(&m_scene.integrator()) != nullptr;
+    if (m_opts.method == RenderMethod::MultiView || (m_opts.method == RenderMethod::Scene && scene_mv)) {
+        render_multiview(cancel, progress);
+        return;
+    }
     using clock = std::chrono::steady_clock;
     const auto &cams = m_scene.cameras();
     const Integrator &integrator = m_scene.integrator();

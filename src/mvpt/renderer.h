@@ -4,6 +4,8 @@
 #pragma once
 
 #include "integrators/integrator.h"
+#include "integrators/mv_sample.h"
+#include "mv_film.h"
 #include "scene/scene.h"
 
 #include <atomic>
@@ -16,7 +18,12 @@
 
 namespace mvpt {
 
+/// Rendering method: the scene's integrator, independent path tracing of every view, or
+/// multi-view path tracing (docs/multiview-path-tracing.md).
+enum class RenderMethod { Scene, PathTracing, MultiView };
+
 struct RenderOptions {
+    RenderMethod method = RenderMethod::Scene;
     /// Samples per pixel; 0 uses each sensor's sampler `sample_count`.
     int spp = 0;
     /// Wall-clock budget in seconds (0: none). Passes stop when the next one
@@ -36,8 +43,10 @@ struct ViewResult {
     int width = 0, height = 0;
     std::vector<float> rgb;      ///< mean radiance, 3 floats per pixel
     std::vector<float> variance; ///< variance of the pixel mean, 3 floats per pixel
-    std::vector<uint32_t> sample_count;
+    std::vector<uint32_t> sample_count; ///< samples per pixel (multi-view: native samples)
+    std::vector<float> contributions;   ///< multi-view: contributions received per pixel
     uint64_t samples = 0;
+    MvViewStats mv; ///< multi-view statistics of the view
     uint64_t nonfinite = 0; ///< non-finite samples dropped (recorded as zero)
 };
 
@@ -52,6 +61,11 @@ struct RenderStats {
     /// independent of the thread count.
     int64_t nonfinite_view = -1, nonfinite_x = -1, nonfinite_y = -1, nonfinite_sample = -1;
     int threads = 0;
+    /// "pt" or "mvpt" (what ran), and the multi-view estimator ("balance" / "weighted").
+    std::string method = "pt", estimator;
+    /// Things the user should know about the run (e.g. a filter replaced by a box).
+    std::vector<std::string> notes;
+    MvViewStats mv; ///< multi-view statistics summed over views
 };
 
 struct RenderProgress {
@@ -78,11 +92,15 @@ private:
         std::unique_ptr<std::atomic<uint64_t>> nonfinite = std::make_unique<std::atomic<uint64_t>>(0);
     };
     void develop();
+    void render_multiview(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress);
+    void develop_multiview();
 
     const Scene &m_scene;
     RenderOptions m_opts;
     std::vector<int> m_views;
     std::vector<FilmBuffer> m_films;
+    std::vector<MvFilm> m_mv_films;
+    MvContext m_mv;
     std::vector<ViewResult> m_results;
     RenderStats m_stats;
 };

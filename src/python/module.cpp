@@ -37,6 +37,21 @@ FloatArray make_array(std::vector<float> data, std::initializer_list<size_t> sha
     return FloatArray(heap->data(), sh.size(), sh.data(), owner);
 }
 
+/// Multi-view statistics (design doc §9) as a dict; rejections are keyed by test.
+nb::dict mv_stats_dict(const MvViewStats &m) {
+    nb::dict d;
+    d["native_samples"] = m.native;
+    d["contributions"] = m.received;
+    d["shifts_tried"] = m.tried;
+    static const char *names[] = {"time", "orientation", "image", "bsdf", "visibility", "selection"};
+    nb::dict rej;
+    for (int i = 0; i < int(ShiftTest::Count); ++i) rej[names[i]] = m.rejected[i];
+    d["rejected"] = rej;
+    d["mean_sharing"] = m.native ? double(m.sharing) / double(m.native) : 0.0;
+    d["rays_per_native_sample"] = m.native ? double(m.rays) / double(m.native) : 0.0;
+    return d;
+}
+
 /// A render running on its own thread; Python polls it so that Ctrl-C and
 /// progress bars stay responsive.
 class RenderJob {
@@ -102,6 +117,10 @@ public:
             d["sample_count"] = make_array(std::move(count), {h, w});
             d["samples"] = r.samples;
             d["nonfinite"] = r.nonfinite;
+            if (!r.contributions.empty()) {
+                d["contributions"] = make_array(std::vector<float>(r.contributions), {h, w});
+                d["multiview"] = mv_stats_dict(r.mv);
+            }
             d["width"] = r.width;
             d["height"] = r.height;
             out.append(d);
@@ -123,6 +142,14 @@ public:
         d["shadow_rays"] = s.counters.shadow_rays;
         d["nonfinite_samples"] = s.counters.nonfinite;
         d["threads"] = s.threads;
+        d["method"] = s.method;
+        if (s.method == "mvpt") {
+            d["estimator"] = s.estimator;
+            d["multiview"] = mv_stats_dict(s.mv);
+        }
+        nb::list notes;
+        for (const std::string &n : s.notes) notes.append(n);
+        d["notes"] = notes;
         if (s.nonfinite_view >= 0) {
             nb::dict f;
             f["view"] = s.nonfinite_view; f["x"] = s.nonfinite_x; f["y"] = s.nonfinite_y; f["sample"] = s.nonfinite_sample;
@@ -228,11 +255,16 @@ NB_MODULE(_core, m) {
 
     nb::class_<RenderJob>(m, "RenderJob")
         .def("__init__", [](RenderJob *self, std::shared_ptr<Scene> scene, int spp, double time, std::optional<uint32_t> seed,
-                            int threads, std::vector<int> views) {
+                            int threads, std::vector<int> views, const std::string &method) {
             RenderOptions o;
             o.spp = spp; o.time_budget = time; o.seed = seed; o.threads = threads; o.views = std::move(views);
+            if (method == "scene") o.method = RenderMethod::Scene;
+            else if (method == "pt") o.method = RenderMethod::PathTracing;
+            else if (method == "mvpt") o.method = RenderMethod::MultiView;
+            else throw nb::value_error(("unknown method '" + method + "': expected 'pt', 'mvpt' or 'scene'").c_str());
             new (self) RenderJob(std::move(scene), std::move(o));
-        }, "scene"_a, "spp"_a = 0, "time"_a = 0.0, "seed"_a = nb::none(), "threads"_a = 0, "views"_a = std::vector<int>{})
+        }, "scene"_a, "spp"_a = 0, "time"_a = 0.0, "seed"_a = nb::none(), "threads"_a = 0, "views"_a = std::vector<int>{},
+           "method"_a = "scene")
         .def("start", &RenderJob::start)
         .def("wait", &RenderJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
         .def("cancel", &RenderJob::cancel)

@@ -163,7 +163,8 @@ def test_stats_content(small):
     r = mvpt.render(small, spp=2, seed=3, threads=2)
     s = r.stats
     assert s["settings"] == {"spp": 2, "time": 0.0, "seed": 3, "threads": 2, "views": ["v0", "v1"],
-                             "integrator": "path"}
+                             "integrator": "path", "method": "scene"}
+    assert s["method"] == "pt" and s["notes"] == []
     assert s["passes"] == 2 and s["samples"] == 2 * 16 * 16 * 2
     assert s["wall_time"] > 0 and s["samples_per_second"] == pytest.approx(s["samples"] / s["wall_time"])
     rays = s["rays"]

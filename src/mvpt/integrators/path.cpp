@@ -17,26 +17,38 @@ float emitter_pdf(const Scene &scene, const Light *light, Point3f ref, const Sur
 }
 
 Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &sampler, RayCounters &counters) const {
+    PathState state;
+    // Mitsuba 3 keeps a path's radiance only if it scattered at a non-null surface, hit
+    // an emitter, or could see the environment (so a camera ray that passes through
+    // masks into nothing contributes nothing).
+    state.valid = !m_cfg.hide_emitters && scene.environment() != nullptr;
+    return trace(scene, camera_ray, state, sampler, counters);
+}
+
+Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sampler &sampler, RayCounters &counters,
+                               const SurfaceInteraction *first_hit, bool *valid_out) const {
     const auto &lights = scene.lights();
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
     const BsdfContext ctx;
 
-    Spectrum result(0.f), throughput(1.f);
-    float eta = 1.f;
-    Ray ray = camera_ray;
-    Point3f prev_p; // previous scattering vertex (reference point of NEE's density)
-    float prev_bsdf_pdf = 1.f;
-    bool prev_bsdf_delta = true;
-    // Mitsuba 3 keeps a path's radiance only if it scattered at a non-null surface, hit
-    // an emitter, or could see the environment (so a camera ray that passes through
-    // masks into nothing contributes nothing).
-    bool valid = !m_cfg.hide_emitters && scene.environment() != nullptr;
+    Spectrum result(0.f), throughput = state.throughput;
+    float eta = state.eta;
+    Point3f prev_p = state.prev_p; // previous scattering vertex (reference point of NEE's density)
+    float prev_bsdf_pdf = state.prev_bsdf_pdf;
+    bool prev_bsdf_delta = state.prev_bsdf_delta;
+    bool valid = state.valid;
 
-    for (uint32_t depth = 0;; ++depth) {
+    for (uint32_t depth = state.depth;; ++depth) {
         sampler.set_dimension(DimCameraEnd + depth * DimsPerVertex);
         SurfaceInteraction si;
-        ++counters.rays;
-        bool hit = scene.intersect(ray, si);
+        bool hit;
+        if (first_hit && depth == state.depth) {
+            si = *first_hit;
+            hit = si.is_valid();
+        } else {
+            ++counters.rays;
+            hit = scene.intersect(ray, si);
+        }
 
         // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
         const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
@@ -100,6 +112,7 @@ Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &
             throughput *= 1.f / q;
         }
     }
+    if (valid_out) *valid_out = valid;
     return valid ? result : Spectrum(0.f);
 }
 

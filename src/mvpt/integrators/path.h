@@ -22,10 +22,31 @@ struct PathConfig {
 /// Sample dimensions consumed per path vertex (light choice, light point, lobe, direction, roulette).
 inline constexpr uint32_t DimsPerVertex = 5;
 
+/// State of a path about to trace `ray` towards its vertex number `depth` (0: the camera
+/// ray's first hit). Multi-view path tracing starts shared suffixes from such a state.
+struct PathState {
+    uint32_t depth = 0;
+    Spectrum throughput{1.f};
+    float eta = 1.f;
+    /// Previous scattering vertex and the density with which it sampled `ray` (for MIS
+    /// against next-event estimation when `ray` hits an emitter).
+    Point3f prev_p;
+    float prev_bsdf_pdf = 1.f;
+    bool prev_bsdf_delta = true;
+    /// Mitsuba's valid-path rule: radiance counts only once the path scattered at a
+    /// non-null surface, hit an emitter, or could see the environment.
+    bool valid = false;
+};
+
 class PathIntegrator final : public Integrator {
 public:
     explicit PathIntegrator(const PathConfig &cfg) : m_cfg(cfg) {}
     Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override;
+    /// Radiance carried back along `ray` by the path continuing from `state` (throughput
+    /// included). `first_hit`, when given, is the already computed intersection of `ray`;
+    /// `valid_out` receives the valid-path flag at the end (the result is zero when false).
+    Spectrum trace(const Scene &scene, Ray ray, PathState state, Sampler &sampler, RayCounters &counters,
+                   const SurfaceInteraction *first_hit = nullptr, bool *valid_out = nullptr) const;
     std::string name() const override { return "path"; }
     const PathConfig &config() const { return m_cfg; }
 

@@ -36,6 +36,16 @@ struct FilmDesc {
     }
 };
 
+/// Everything the shift T_{l->k} needs from the target camera at once (design doc §3–§4).
+struct ShiftGeometry {
+    Vec2f film;         ///< film position (pixels, full film) where u -> y lands
+    Point3f lens_point; ///< u = o(t) + r (xi.x e1 + xi.y e2)
+    float density = 0.f; ///< G(y) of `film_density`
+    /// Length of the segment y -> u that the camera sees, i.e. up to its near clip plane
+    /// (occluders closer to the lens than near_clip are invisible to camera rays too).
+    float visible_length = 0.f;
+};
+
 class Camera : public Object {
 public:
     /// Ray through film position `film`, lens point `lens` on the unit disk, at scene time `time`
@@ -61,6 +71,10 @@ public:
     /// The Jacobian of the shift l->k is |T'_{l->k}| = G_k(y) / G_l(y). Returns 0 when `y`
     /// is not in front of the lens plane.
     virtual float film_density(Point3f y, Normal3f n_y, float time, Vec2f lens) const = 0;
+
+    /// `project`, `lens_point` and `film_density` in one pose evaluation (the hot path of
+    /// multi-view path tracing). False when `project` is.
+    virtual bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const = 0;
 
     /// Lens radius (0 for a pinhole).
     virtual float lens_radius() const { return 0.f; }

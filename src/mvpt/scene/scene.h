@@ -40,6 +40,8 @@ public:
     const Integrator &integrator() const { return *m_integrator; }
     void set_integrator(std::shared_ptr<Integrator> i) { m_integrator = std::move(i); }
     const BoundingBox &bounds() const { return m_bounds; }
+    /// True when some shape moves (animated transforms): then time matters to every ray.
+    bool is_animated() const { return m_animated; }
     RTCDevice device() const { return m_device; }
 
 private:

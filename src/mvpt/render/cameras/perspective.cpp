@@ -107,6 +107,32 @@ public:
         return sqr(m_film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
     }
 
+    bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const override {
+        CameraPose pose = pose_at(time);
+        Point3f p = pose.to_camera(y);
+        if (!(p.z >= m_near && p.z <= m_far)) return false;
+        float inv_z = 1.f / p.z;
+        float qx = p.x * inv_z, qy = p.y * inv_z;
+        Vec3f u_cam(0.f, 0.f, 0.f);
+        if (m_aperture_radius > 0.f) {
+            float k = m_aperture_radius * (1.f / m_focus_distance - inv_z);
+            qx += lens.x * k;
+            qy += lens.y * k;
+            u_cam = Vec3f(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f);
+        }
+        out->film = film_from_plane(qx, qy);
+        out->lens_point = m_aperture_radius > 0.f ? pose.to_world(u_cam) : pose.origin;
+        // As in `film_density`, with the camera-space vector from the lens point.
+        Vec3f w_cam = p - u_cam;
+        float d2 = squared_norm(w_cam), d = std::sqrt(d2);
+        float cos_theta = w_cam.z / d;
+        Vec3f w = y - out->lens_point;
+        float cos_phi = absdot(n_y, w) / (norm(n_y) * norm(w));
+        out->density = sqr(m_film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
+        out->visible_length = d - m_near / cos_theta;
+        return true;
+    }
+
     float lens_radius() const override { return m_aperture_radius; }
     bool is_animated() const override { return m_animated; }
 

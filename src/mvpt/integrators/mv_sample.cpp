@@ -1,0 +1,281 @@
+#include "mv_sample.h"
+
+#include "../core/warp.h"
+#include "../render/bsdf.h"
+#include "../render/light.h"
+#include "../render/shape.h"
+#include "../scene/scene.h"
+
+#include <climits>
+
+namespace mvpt {
+
+MvViewStats &MvViewStats::operator+=(const MvViewStats &o) {
+    native += o.native; received += o.received; tried += o.tried; sharing += o.sharing; rays += o.rays;
+    for (int i = 0; i < int(ShiftTest::Count); ++i) rejected[i] += o.rejected[i];
+    return *this;
+}
+
+namespace {
+const BsdfContext Ctx;
+
+/// Material similarity of candidates a and b, memoised in the |V| x |V| matrix `sm`.
+float cached_similarity(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si, size_t a,
+                        size_t b) {
+    if (a == b) return 1.f;
+    size_t m = sc.cand.size();
+    float &v = sc.sm[a * m + b];
+    if (v < 0.f) v = sc.sm[b * m + a] = material_similarity(bsdf, si, sc.lobe[a], sc.lobe[b], ctx.cfg.tv);
+    return v;
+}
+
+/// Selection probability s_{j->k} of §6 between candidates j and k.
+float selection(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si, size_t j,
+                size_t k) {
+    if (j == k) return 1.f;
+    float s = ctx.cfg.select_jacobian ? jacobian_similarity(sc.cand[j].geo.density, sc.cand[k].geo.density) : 1.f;
+    if (s > 0.f && ctx.cfg.select_material) s *= cached_similarity(ctx, sc, bsdf, si, j, k);
+    return s;
+}
+} // namespace
+
+void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t sample_index, MvScratch &sc,
+                      MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
+    const Scene &scene = *ctx.scene;
+    const PathConfig &pc = ctx.path->config();
+    const uint32_t max_depth = pc.max_depth < 0 ? UINT_MAX : uint32_t(pc.max_depth);
+    const MvView &l = ctx.views[slot_l];
+    const Camera &cam = *l.camera;
+    const FilmDesc &film = cam.film;
+    const uint32_t pixel_l = uint32_t(py - film.crop_y) * uint32_t(film.crop_width) + uint32_t(px - film.crop_x);
+    const float n_l = float(ctx.native_map[slot_l][pixel_l]);
+    MvViewStats &st_l = stats[slot_l];
+    const uint64_t rays_before = counters.rays + counters.shadow_rays;
+    ++st_l.native;
+
+    // ---------------- Native sample z_l = (t, x_l, xi) (§2) ----------------
+    Sampler sampler(cam.sampler_kind, ctx.seeds[slot_l]);
+    sampler.start(l.scene_index, uint32_t(px), uint32_t(py), sample_index);
+    sampler.set_dimension(DimFilm);
+    Vec2f u_film = sampler.next_2d();
+    Vec2f u_lens = sampler.next_2d();
+    float u_time = sampler.next_1d();
+    // Box filter: x_l uniform in the pixel. xi is drawn for pinholes too: other views may have a lens.
+    Vec2f film_pos(float(px) + u_film.x, float(py) + u_film.y);
+    Vec2f xi = warp::square_to_uniform_disk_concentric(u_lens);
+    float t = cam.sample_time(u_time);
+    Ray ray = cam.generate_ray(film_pos, xi, t);
+    ++counters.camera_rays;
+    ++counters.rays;
+    SurfaceInteraction si;
+    bool hit = scene.intersect(ray, si);
+
+    // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
+    // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
+    auto native_only = [&](const Spectrum &L) {
+        sink.splat(slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
+        ++st_l.received;
+        ++st_l.sharing;
+        st_l.rays += counters.rays + counters.shadow_rays - rays_before;
+    };
+    const Light *env = scene.environment();
+    if (!hit) {
+        native_only(env && !pc.hide_emitters ? env->eval_environment(ray.d) : Spectrum(0.f));
+        return;
+    }
+    const Bsdf &bsdf = *si.shape->bsdf;
+    if (!bsdf.has_smooth() || max_depth <= 1 || ctx.views.size() < 2) {
+        // Purely specular (or null) first vertex, or no bounce at all: test 4 of §3 fails for
+        // every view, the path is the ordinary path tracer's.
+        PathState state;
+        state.valid = !pc.hide_emitters && env != nullptr;
+        Spectrum L = ctx.path->trace(scene, ray, state, sampler, counters, &si);
+        if (ctx.views.size() >= 2 && max_depth > 1) st_l.rejected[int(ShiftTest::Bsdf)] += ctx.views.size() - 1;
+        native_only(L);
+        return;
+    }
+
+    // ---------------- Emission at y: to l only (§7) ----------------
+    bool valid = !pc.hide_emitters && env != nullptr;
+    Spectrum le_y(0.f);
+    if (const Light *emitter = si.shape->emitter.get(); emitter && !pc.hide_emitters) {
+        valid = true;
+        le_y = emitter->eval(si, -ray.d);
+    }
+    si.wi = si.to_local(-ray.d);
+
+    // ---------------- Shifts to every other view: cheap tests (§3 tests 1-3) ----------------
+    MvVertex y{si.p, si.n, t, xi, dot(si.n, ray.o - si.p)};
+    auto &cand = sc.cand;
+    cand.clear();
+    ShiftCandidate self;
+    self.slot = slot_l;
+    self.pixel = pixel_l;
+    self.time = t;
+    bool self_ok = cam.shift_geometry(y.p, y.n, t, xi, &self.geo) && self.geo.density > 0.f;
+    cand.push_back(self);
+    if (self_ok) {
+        for (int k = 0; k < int(ctx.views.size()); ++k) {
+            if (k == slot_l) continue;
+            ++st_l.tried;
+            ShiftCandidate c;
+            ShiftTest test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
+            if (test != ShiftTest::Count) { ++st_l.rejected[int(test)]; continue; }
+            cand.push_back(c);
+        }
+    }
+    const size_t m = cand.size();
+    sc.lobe.resize(m);
+    sc.n.resize(m);
+    sc.s_sel.assign(m, 1.f);
+    sc.visible.assign(m, 1);
+    sc.selected.assign(m, 1);
+    sc.sm.assign(m * m, -1.f);
+    for (size_t i = 0; i < m; ++i) {
+        const ShiftCandidate &c = cand[i];
+        sc.n[i] = float(ctx.native_map[c.slot][c.pixel]);
+        Vec3f wi = i == 0 ? si.wi : si.to_local(normalize(c.geo.lens_point - si.p));
+        sc.lobe[i] = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy) ? view_lobe(bsdf, si, wi) : ViewLobe{wi, {}, 0.f};
+    }
+
+    // ---------------- Selection (§6) and visibility (§3 test 5) ----------------
+    for (size_t i = 1; i < m; ++i) {
+        sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
+        sampler.set_dimension(DimSelectBase + ctx.views[cand[i].slot].scene_index);
+        sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
+        // The balance estimator needs the visibility of every candidate (it enters D); the
+        // published variant only that of the selected ones.
+        bool need = ctx.cfg.mis_selected_only ? sc.selected[i] : true;
+        if (ctx.cfg.mis_selected_only && !sc.selected[i]) ++st_l.rejected[int(ShiftTest::Selection)];
+        if (!need) { sc.visible[i] = 0; continue; }
+        const ShiftCandidate &c = cand[i];
+        Point3f o = si.offset_p(c.geo.lens_point - si.p);
+        Vec3f d = c.geo.lens_point - o;
+        float dist = norm(d);
+        float len = c.geo.visible_length - (norm(c.geo.lens_point - si.p) - dist);
+        ++counters.shadow_rays;
+        sc.visible[i] = !(len > 0.f) || !scene.occluded(Ray{o, d / dist, 0.f, len * (1.f - ShadowEpsilon), t});
+        if (!sc.visible[i]) ++st_l.rejected[int(ShiftTest::Visibility)];
+        else if (!ctx.cfg.mis_selected_only && !sc.selected[i]) ++st_l.rejected[int(ShiftTest::Selection)];
+    }
+    // S: the views that shade the sample; V: the strategies in the sums D (§5).
+    auto &sharing = sc.sharing;
+    sharing.clear();
+    for (size_t i = 0; i < m; ++i)
+        if (sc.visible[i] && sc.selected[i]) sharing.push_back(int(i));
+    const size_t ns = sharing.size();
+
+    // ---------------- Balance-heuristic densities D_k (§5) ----------------
+    sc.d.assign(m, 0.f);
+    for (int k : sharing) {
+        const MvView &vk = ctx.views[cand[k].slot];
+        double sum = 0.0;
+        for (size_t j = 0; j < m; ++j) {
+            if (!sc.visible[j]) continue;
+            if (int(j) == k) { sum += sc.n[j]; continue; }
+            float s = selection(ctx, sc, bsdf, si, j, size_t(k));
+            if (!(s > 0.f)) continue;
+            float tau = time_density_ratio(vk, ctx.views[cand[j].slot], ctx.scene_moves);
+            sum += double(sc.n[j]) * tau * (cand[j].geo.density / cand[k].geo.density) * s;
+        }
+        sc.d[k] = float(sum);
+    }
+
+    // ---------------- Shared next-event estimation (§7) ----------------
+    sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
+    float u_light_select = sampler.next_1d();
+    Vec2f u_light = sampler.next_2d();
+    float u_lobe = sampler.next_1d();
+    Vec2f u_dir = sampler.next_2d();
+    float u_rr = sampler.next_1d();
+    auto &contrib = sc.contrib;
+    contrib.assign(m, Spectrum(0.f));
+    auto mixture_pdf = [&](Vec3f wo) {
+        float p = 0.f;
+        for (int k : sharing) p += bsdf.pdf(Ctx, si, sc.lobe[k].wi, wo);
+        return p / float(ns); // divided by |S|, not by the number of non-zero terms
+    };
+    const auto &lights = scene.lights();
+    if (!lights.empty()) {
+        size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
+        auto [ls, weight] = lights[idx]->sample_li(si.p, u_light, si.time);
+        if (!weight.is_black()) {
+            weight *= float(lights.size());
+            Vec3f wo = si.to_local(ls.d);
+            auto &f = sc.weight;
+            f.assign(m, Spectrum(0.f));
+            bool any = false;
+            for (int k : sharing) {
+                f[k] = bsdf.eval(Ctx, si, sc.lobe[k].wi, wo);
+                any |= !f[k].is_black();
+            }
+            if (any) {
+                Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                ++counters.shadow_rays;
+                if (!scene.occluded(shadow)) {
+                    float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), mixture_pdf(wo));
+                    for (int k : sharing) contrib[k] += f[k] * weight * w;
+                }
+            }
+        }
+    }
+
+    // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
+    sampler.set_dimension(DimBounceView);
+    int c = sharing[std::min(size_t(sampler.next_1d() * float(ns)), ns - 1)];
+    auto [bs, bsdf_weight] = bsdf.sample(Ctx, si, sc.lobe[c].wi, u_lobe, u_dir);
+    bool valid_after = valid || !(bs.sampled_type & BsdfNull);
+    bool final_valid = valid_after;
+    if (!bsdf_weight.is_black()) {
+        auto &wk = sc.weight;
+        wk.assign(m, Spectrum(0.f));
+        bool delta = (bs.sampled_type & BsdfDelta) != 0;
+        float prev_pdf = bs.pdf;
+        if (delta) {
+            // A delta lobe's direction serves only the view that sampled it; its probability in
+            // the mixture is P_c / |S|.
+            wk[c] = bsdf_weight * float(ns);
+        } else {
+            Vec3f wo = bs.wo;
+            prev_pdf = mixture_pdf(wo);
+            if (prev_pdf > 0.f)
+                for (int k : sharing) wk[k] = bsdf.eval(Ctx, si, sc.lobe[k].wi, wo) * (1.f / prev_pdf);
+        }
+        float t_max = 0.f;
+        for (int k : sharing) t_max = std::max(t_max, wk[k].max_value());
+        bool alive = t_max > 0.f;
+        if (alive && 1 >= pc.rr_depth) { // Russian roulette at y, as the path tracer does at depth 0
+            float q = std::min(t_max * bs.eta * bs.eta, 0.95f);
+            if (u_rr >= q) alive = false;
+            else
+                for (int k : sharing) wk[k] *= 1.f / q;
+        }
+        if (alive) {
+            PathState state;
+            state.depth = 1;
+            state.eta = bs.eta;
+            state.prev_p = si.p;
+            state.prev_bsdf_pdf = prev_pdf;
+            state.prev_bsdf_delta = delta;
+            state.valid = valid_after;
+            Ray next = si.spawn_ray(si.to_world(bs.wo));
+            Spectrum ls = ctx.path->trace(scene, next, state, sampler, counters, nullptr, &final_valid);
+            if (!ls.is_black())
+                for (int k : sharing) contrib[k] += wk[k] * ls;
+        }
+    }
+
+    // ---------------- Splat: L_k / D_k into each sharing view's pixel ----------------
+    for (int k : sharing) {
+        const ShiftCandidate &ck = cand[k];
+        float w = 1.f / sc.d[k];
+        Spectrum lw = final_valid ? contrib[k] * w : Spectrum(0.f);
+        Spectrum e = k == 0 ? le_y * (1.f / n_l) : Spectrum(0.f);
+        sink.splat(ck.slot, ck.pixel, lw, w, e);
+        ++stats[ck.slot].received;
+    }
+    st_l.sharing += ns;
+    st_l.rays += counters.rays + counters.shadow_rays - rays_before;
+}
+
+} // namespace mvpt

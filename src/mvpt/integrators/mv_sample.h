@@ -1,0 +1,72 @@
+// One native sample of multi-view path tracing (docs/multiview-path-tracing.md §2–§7):
+// camera ray of view l, shift of its first hit y to every other view, selection,
+// visibility, balance-heuristic densities D_k (§5), shared next-event estimation and
+// bounce (§7), and the contributions splatted into each sharing view.
+#pragma once
+
+#include "mv_selection.h"
+#include "mv_shift.h"
+#include "mvpath.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace mvpt {
+
+class Scene;
+
+/// Sampler dimensions of the multi-view decisions at y, far above the path's per-vertex
+/// blocks: the choice of the view whose lobe samples the bounce, and one selection draw
+/// per target view (indexed by the view's scene index, so adding views does not change
+/// the numbers of the others).
+inline constexpr uint32_t DimBounceView = 1u << 20;
+inline constexpr uint32_t DimSelectBase = DimBounceView + 1;
+
+/// Per-view statistics of a render (§9): as the native view (`native`, `tried`, `rejected`,
+/// `sharing`, `rays`) and as a target (`received`).
+struct MvViewStats {
+    uint64_t native = 0;   ///< native samples taken
+    uint64_t received = 0; ///< contributions received (own native samples included)
+    uint64_t tried = 0;    ///< shifts to other views tried
+    uint64_t rejected[int(ShiftTest::Count)] = {};
+    uint64_t sharing = 0; ///< sum over native samples of |S| (views shading the sample)
+    uint64_t rays = 0;    ///< rays traced for the native samples (all kinds)
+    MvViewStats &operator+=(const MvViewStats &o);
+};
+
+/// Read-only state shared by every native sample of a pass.
+struct MvContext {
+    const Scene *scene = nullptr;
+    const PathIntegrator *path = nullptr;
+    MvConfig cfg;
+    std::vector<MvView> views;                 ///< the rendered views, by slot
+    std::vector<const uint16_t *> native_map;  ///< n_k(i) of the current pass, by slot
+    std::vector<uint32_t> seeds;               ///< sampler seed, by slot
+    bool scene_moves = false;                  ///< some shape moves: shifts keep time (§3)
+};
+
+/// Receives contributions: `lw` = W * L with W = 1/D_k (the part shared by MIS), `w` = W,
+/// and `e` = radiance that only the native strategy produces (emission seen directly,
+/// paths through purely specular first vertices), already divided by n_l.
+class MvSplatSink {
+public:
+    virtual void splat(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) = 0;
+    virtual ~MvSplatSink() = default;
+};
+
+/// Per-thread scratch space (kept between samples to avoid allocations).
+struct MvScratch {
+    std::vector<ShiftCandidate> cand;
+    std::vector<ViewLobe> lobe;
+    std::vector<float> n, s_sel, d, sm;
+    std::vector<uint8_t> visible, selected;
+    std::vector<int> sharing;
+    std::vector<Spectrum> contrib, weight;
+};
+
+/// Take native sample `sample_index` of pixel (px, py) (full-film coordinates) of the view in
+/// `slot`, whose native count this pass is `n_l`; splat every contribution it makes.
+void mv_native_sample(const MvContext &ctx, int slot, int px, int py, uint32_t sample_index, MvScratch &scratch,
+                      MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
+
+} // namespace mvpt

@@ -1,0 +1,66 @@
+// Prefix shift T_{l->k} of multi-view path tracing and its validity tests
+// (docs/multiview-path-tracing.md §3), with the film densities G of §4.
+#pragma once
+
+#include "../core/math.h"
+#include "../render/camera.h"
+
+#include <cstdint>
+
+namespace mvpt {
+
+/// A rendered view as the multi-view method sees it.
+struct MvView {
+    const Camera *camera = nullptr;
+    uint32_t scene_index = 0; ///< index among the scene's sensors (the sampler's view number)
+    float t0 = 0.f, dt = 0.f; ///< shutter open time and length
+};
+
+/// The shared first vertex y of a native sample of view l.
+struct MvVertex {
+    Point3f p;
+    Normal3f n;     ///< geometric normal
+    float time = 0.f; ///< scene time of the native sample
+    Vec2f lens;     ///< xi on the unit disk
+    float side = 0.f; ///< n . (u_l - y): the side of the surface the native lens point is on
+};
+
+/// Which test rejected a shift (§3, cheap tests first); counted per view.
+enum class ShiftTest : int { Time = 0, Orientation, Image, Bsdf, Visibility, Selection, Count };
+
+/// A shift that passed the cheap tests (time, orientation, image).
+struct ShiftCandidate {
+    int slot = -1;         ///< index of the view among the rendered views
+    uint32_t pixel = 0;    ///< crop-window pixel index (row-major) that x_k falls in
+    float time = 0.f;      ///< the time at which camera k is posed (t, or t mapped between shutters)
+    ShiftGeometry geo;     ///< x_k, u_k, G_k, visible segment length
+};
+
+/// Time of the shifted sample in view `k` (§3 test 1). When shapes move (`scene_moves`) the
+/// time is kept and must lie in k's shutter; otherwise it is mapped affinely between the
+/// shutters, so every view can share. False when the time test fails.
+inline bool shift_time(const MvView &l, const MvView &k, float t, bool scene_moves, float *t_k) {
+    if (scene_moves) {
+        // Zero-length shutters are Dirac deltas in time: they share only with each other.
+        if ((l.dt == 0.f) != (k.dt == 0.f)) return false;
+        if (k.dt == 0.f ? t != k.t0 : !(t >= k.t0 && t <= k.t0 + k.dt)) return false;
+        *t_k = t;
+        return true;
+    }
+    *t_k = l.dt > 0.f ? k.t0 + (t - l.t0) * (k.dt / l.dt) : k.t0;
+    return true;
+}
+
+/// Density factor of time between strategies (§5): dt_k / dt_j when time is kept, 1 under the
+/// affine map or between zero-length shutters.
+inline float time_density_ratio(const MvView &k, const MvView &j, bool scene_moves) {
+    return scene_moves && j.dt > 0.f ? k.dt / j.dt : 1.f;
+}
+
+/// The cheap tests of the shift of `y` (a native sample of `l`) to view `k` (slot `slot`):
+/// time, orientation and clip range, image bounds. Returns the failed test, or
+/// ShiftTest::Count when `out` holds a candidate.
+ShiftTest shift_to_view(const MvView &l, const MvView &k, int slot, const MvVertex &y, bool scene_moves,
+                        ShiftCandidate *out);
+
+} // namespace mvpt

@@ -1,0 +1,62 @@
+// The `mvpath` integrator's XML interface (docs/multiview-path-tracing.md):
+//   <integrator type="mvpath">
+//     <integer name="max_depth" value="-1"/> <integer name="rr_depth" value="5"/>
+//     <boolean name="hide_emitters" value="false"/>          (as for `path`)
+//     <string name="estimator" value="balance"/>             balance | weighted (§5)
+//     <boolean name="control_variate" value="true"/>         balance + beta (1 - sum W), unbiased
+//     <string name="mis_set" value="all"/>                   all | selected (published, biased)
+//     <boolean name="select_jacobian" value="true"/>          s_J of §6
+//     <boolean name="select_material" value="true"/>          s_M of §6
+//     <string name="tv" value="peak"/>                        peak | montecarlo (§6)
+//     <boolean name="adaptive" value="true"/>                 native-sample maps (§8)
+//     <integer name="adaptive_warmup" value="4"/> <integer name="adaptive_max" value="16"/>
+//     <float name="adaptive_budget" value="2"/>              mean native samples per pixel and pass
+//   </integrator>
+#include "mvpath.h"
+
+#include "../scene/plugin.h"
+
+namespace mvpt {
+namespace {
+
+std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &) {
+    PathConfig pc;
+    pc.max_depth = int(props.get_int("max_depth", -1));
+    if (pc.max_depth < -1) props.fail("max_depth", "max_depth must be -1 (unlimited) or >= 0");
+    pc.rr_depth = int(props.get_int("rr_depth", 5));
+    if (pc.rr_depth <= 0) props.fail("rr_depth", "rr_depth must be > 0");
+    pc.hide_emitters = props.get_bool("hide_emitters", false);
+
+    MvConfig cfg;
+    std::string est = props.get_string("estimator", "balance");
+    if (est == "balance") cfg.estimator = MvEstimator::Balance;
+    else if (est == "weighted") cfg.estimator = MvEstimator::Weighted;
+    else props.fail("estimator", "'estimator' must be 'balance' or 'weighted', got '" + est + "'");
+    cfg.control_variate = props.get_bool("control_variate", true);
+    std::string set = props.get_string("mis_set", "all");
+    if (set == "all") cfg.mis_selected_only = false;
+    else if (set == "selected") cfg.mis_selected_only = true;
+    else props.fail("mis_set", "'mis_set' must be 'all' or 'selected', got '" + set + "'");
+    cfg.select_jacobian = props.get_bool("select_jacobian", true);
+    cfg.select_material = props.get_bool("select_material", true);
+    std::string tv = props.get_string("tv", "peak");
+    if (tv == "peak") cfg.tv = MvTotalVariation::PeakRatio;
+    else if (tv == "montecarlo") cfg.tv = MvTotalVariation::MonteCarlo;
+    else props.fail("tv", "'tv' must be 'peak' or 'montecarlo', got '" + tv + "'");
+    cfg.adaptive = props.get_bool("adaptive", true);
+    cfg.adaptive_warmup = int(props.get_int("adaptive_warmup", 4));
+    if (cfg.adaptive_warmup < 2) props.fail("adaptive_warmup", "'adaptive_warmup' must be >= 2 passes");
+    cfg.adaptive_max = int(props.get_int("adaptive_max", 16));
+    if (cfg.adaptive_max < 1 || cfg.adaptive_max > 1024)
+        props.fail("adaptive_max", "'adaptive_max' must be in [1, 1024]");
+    cfg.adaptive_budget = props.get_float("adaptive_budget", 2.f);
+    if (!(cfg.adaptive_budget >= 1.f && cfg.adaptive_budget <= float(cfg.adaptive_max)))
+        props.fail("adaptive_budget", "'adaptive_budget' must lie in [1, adaptive_max]");
+    return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
+}
+
+} // namespace
+
+MVPT_REGISTER_PLUGIN("integrator", "mvpath", make_mvpath);
+
+} // namespace mvpt

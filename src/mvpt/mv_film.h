@@ -1,0 +1,61 @@
+// Films of multi-view path tracing: per-thread splat buffers in fixed point, merged
+// once per pass into per-view accumulators (docs/multiview-path-tracing.md §5, §8).
+//
+// Contributions land in any view's pixel from any thread, so a floating-point sum
+// would depend on the order in which threads add them. Integer addition is
+// associative: each contribution is rounded once to a multiple of 2^-30, summed
+// exactly, and the images are bit-identical for any thread count.
+#pragma once
+
+#include "core/math.h"
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace mvpt {
+
+/// Channels of a splat: W*L (3), native-only radiance E (3), W, contribution count.
+inline constexpr int SplatChannels = 8;
+inline constexpr double SplatScale = 0x1p30;
+/// Largest magnitude a single contribution may have (larger ones are dropped and counted).
+inline constexpr double SplatMax = 0x1p32;
+
+/// One thread's splat buffer: per view, SplatChannels int64 per pixel, allocated on first use.
+class SplatBuffer {
+public:
+    explicit SplatBuffer(const std::vector<size_t> &pixels_per_view) : m_pixels(pixels_per_view), m_data(pixels_per_view.size()) {}
+
+    /// Add one contribution; false (nothing added) when a value is not finite or too large.
+    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
+        double v[7] = {lw[0], lw[1], lw[2], e[0], e[1], e[2], w};
+        for (double x : v)
+            if (!(std::abs(x) < SplatMax)) return false;
+        std::vector<int64_t> &buf = m_data[slot];
+        if (buf.empty()) buf.assign(m_pixels[slot] * SplatChannels, 0);
+        int64_t *p = &buf[size_t(pixel) * SplatChannels];
+        for (int c = 0; c < 7; ++c) p[c] += std::llround(v[c] * SplatScale);
+        p[7] += 1;
+        return true;
+    }
+    /// The buffer of view `slot` (empty if nothing was splatted there).
+    std::vector<int64_t> &view(int slot) { return m_data[slot]; }
+
+private:
+    std::vector<size_t> m_pixels;
+    std::vector<std::vector<int64_t>> m_data;
+};
+
+/// Accumulators of one view over all passes.
+struct MvFilm {
+    std::vector<double> lw, e;     ///< sums of W*L and of native-only radiance (3 per pixel)
+    std::vector<double> w;         ///< sum of W
+    std::vector<double> balance;   ///< sum of the balance estimates of the passes (3 per pixel)
+    std::vector<uint32_t> native;  ///< native samples taken so far (the next sample index)
+    std::vector<uint64_t> received;///< contributions received
+    std::vector<uint16_t> map;     ///< n_k(i) of the current pass
+
+    explicit MvFilm(size_t n = 0) : lw(3 * n, 0.0), e(3 * n, 0.0), w(n, 0.0), balance(3 * n, 0.0), native(n, 0), received(n, 0), map(n, 1) {}
+};
+
+} // namespace mvpt

@@ -1,0 +1,275 @@
+// The multi-view pass loop (docs/multiview-path-tracing.md): native samples of every view,
+// shared through mv_native_sample, splatted into per-thread fixed-point buffers that are
+// merged once per pass; adaptive native-sample maps between passes (§8).
+#include "renderer.h"
+
+#include "integrators/mv_adaptive.h"
+#include "integrators/mvpath.h"
+#include "render/camera.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cfloat>
+#include <chrono>
+#include <stdexcept>
+
+namespace mvpt {
+
+namespace {
+constexpr int TileSize = 16;
+
+struct MvTile {
+    int slot;
+    int x0, y0, x1, y1; // crop-window pixel range
+};
+
+/// Sends contributions to a thread's splat buffer, counting those that cannot be stored.
+class BufferSink final : public MvSplatSink {
+public:
+    BufferSink(SplatBuffer &buf, std::vector<uint64_t> &dropped) : m_buf(buf), m_dropped(dropped) {}
+    void splat(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) override {
+        if (!m_buf.add(slot, pixel, lw, w, e)) ++m_dropped[slot];
+    }
+
+private:
+    SplatBuffer &m_buf;
+    std::vector<uint64_t> &m_dropped;
+};
+
+/// Per-thread state of the pass loop.
+struct MvThreadState {
+    SplatBuffer buffer;
+    std::vector<MvViewStats> stats;
+    std::vector<uint64_t> dropped;
+    MvScratch scratch;
+    RayCounters counters;
+    MvThreadState(const std::vector<size_t> &pixels) : buffer(pixels), stats(pixels.size()), dropped(pixels.size(), 0) {}
+};
+
+/// The path tracer and method settings for a multi-view render of `scene`.
+std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scene) {
+    if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) return {&mv->path(), mv->config()};
+    if (auto *pt = dynamic_cast<const PathIntegrator *>(&scene.integrator())) return {pt, MvConfig{}};
+    throw std::runtime_error("multi-view path tracing needs a 'path' or 'mvpath' integrator, the scene has '" +
+                             scene.integrator().name() + "'");
+}
+} // namespace
+
+void Renderer::render_multiview(const std::atomic<bool> &cancel,
+                                const std::function<void(const RenderProgress &)> &progress) {
+    using clock = std::chrono::steady_clock;
+    const auto &cams = m_scene.cameras();
+    auto [path, cfg] = multiview_settings(m_scene);
+    m_stats.method = "mvpt";
+    m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
+                                                              : (cfg.mis_selected_only ? "weighted-selected" : "weighted");
+    int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
+    m_stats.threads = threads;
+    tbb::task_arena arena(threads);
+
+    // The method's context: views by slot, their seeds, the maps of the current pass.
+    m_mv = MvContext{};
+    m_mv.scene = &m_scene;
+    m_mv.path = path;
+    m_mv.cfg = cfg;
+    m_mv.scene_moves = m_scene.is_animated();
+    std::vector<size_t> pixels;
+    m_mv_films.clear();
+    for (int v : m_views) {
+        const Camera &cam = *cams[v];
+        m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
+        m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
+        size_t n = size_t(cam.film.crop_width) * cam.film.crop_height;
+        pixels.push_back(n);
+        m_mv_films.emplace_back(n);
+        // Shared samples land anywhere in a pixel, so each pixel is a box (§5): another
+        // filter cannot be importance-sampled per view and is replaced, with a note.
+        if (!cam.film.filter->is_box() || cam.film.filter->radius() != 0.5f)
+            m_stats.notes.push_back("view '" + cam.id + "': multi-view path tracing uses a box filter of radius 0.5 "
+                                    "(the sensor's rfilter applies to independent path tracing only)");
+    }
+    for (MvFilm &f : m_mv_films) m_mv.native_map.push_back(f.map.data());
+
+    // Target: spp native samples per pixel on average, the same for every view (all views take
+    // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
+    // native sample per pixel until the adaptive maps start, then `adaptive_budget` per pixel.
+    int spp_target = 0;
+    for (int v : m_views) spp_target = std::max(spp_target, m_opts.spp > 0 ? m_opts.spp : cams[v]->sample_count);
+    const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
+    double native_done = 0.0; // mean native samples per pixel so far
+
+    std::vector<MvTile> tiles;
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        const FilmDesc &f = cams[m_views[i]]->film;
+        for (int y = 0; y < f.crop_height; y += TileSize)
+            for (int x = 0; x < f.crop_width; x += TileSize)
+                tiles.push_back({int(i), x, y, std::min(x + TileSize, f.crop_width), std::min(y + TileSize, f.crop_height)});
+    }
+
+    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
+    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
+    tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pixels); });
+    auto t_start = clock::now();
+    double last_pass = 0.0;
+    for (int pass = 0; unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
+        if (cancel.load()) { m_stats.cancelled = true; break; }
+        double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
+        if (pass > 0 && m_opts.time_budget > 0.0 && elapsed + last_pass > m_opts.time_budget) break;
+        auto t_pass = clock::now();
+
+        arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
+                MvThreadState &ts = state.local();
+                BufferSink sink(ts.buffer, ts.dropped);
+                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
+                    const MvTile &tile = tiles[ti];
+                    const FilmDesc &film = m_mv.views[tile.slot].camera->film;
+                    const MvFilm &mf = m_mv_films[tile.slot];
+                    for (int y = tile.y0; y < tile.y1; ++y)
+                        for (int x = tile.x0; x < tile.x1; ++x) {
+                            size_t p = size_t(y) * film.crop_width + x;
+                            for (uint32_t j = 0; j < mf.map[p]; ++j)
+                                mv_native_sample(m_mv, tile.slot, x + film.crop_x, y + film.crop_y, mf.native[p] + j,
+                                                 ts.scratch, sink, ts.counters, ts.stats.data());
+                        }
+                }
+            });
+
+            // Merge the thread buffers (exact integer sums), one view per task.
+            tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) {
+                MvFilm &mf = m_mv_films[slot];
+                FilmBuffer &fb = m_films[slot];
+                const size_t n = pixels[slot];
+                std::vector<int64_t> total(n * SplatChannels, 0);
+                for (MvThreadState &ts : state) {
+                    std::vector<int64_t> &buf = ts.buffer.view(int(slot));
+                    if (buf.empty()) continue;
+                    for (size_t i = 0; i < total.size(); ++i) total[i] += buf[i];
+                    std::fill(buf.begin(), buf.end(), 0);
+                }
+                for (size_t p = 0; p < n; ++p) {
+                    const int64_t *t = &total[p * SplatChannels];
+                    double w = double(t[6]) / SplatScale;
+                    for (int c = 0; c < 3; ++c) {
+                        double lw = double(t[c]) / SplatScale, e = double(t[3 + c]) / SplatScale;
+                        // The balance estimate of this pass, lw + e, plus the control variate
+                        // beta (1 - sum W): E[sum W] = 1 exactly when D sums over every valid
+                        // strategy, and beta, the ratio estimate of the earlier passes, is
+                        // independent of this pass, so the estimate stays unbiased while the
+                        // noise of how many contributions happened to land in the pixel cancels.
+                        double beta = use_cv && mf.w[p] > 0.0 ? (mf.lw[3 * p + c] + mf.e[3 * p + c]) / mf.w[p] : 0.0;
+                        double v = lw + e + beta * (1.0 - w);
+                        mf.lw[3 * p + c] += lw;
+                        mf.e[3 * p + c] += e;
+                        mf.balance[3 * p + c] += v;
+                        fb.sum[3 * p + c] += v;
+                        fb.sum_sq[3 * p + c] += v * v;
+                    }
+                    mf.w[p] += w;
+                    mf.received[p] += uint64_t(t[7]);
+                    mf.native[p] += mf.map[p];
+                    ++fb.count[p];
+                }
+            });
+        });
+        uint64_t pass_samples = 0;
+        for (const MvFilm &mf : m_mv_films)
+            for (uint16_t c : mf.map) pass_samples += c;
+        uint64_t pixels_total = 0;
+        for (size_t n : pixels) pixels_total += n;
+
+        native_done += double(pass_samples) / double(pixels_total);
+        // Native-sample maps of the next pass (§8), frozen during it.
+        if (cfg.adaptive && pass + 1 >= std::max(2, cfg.adaptive_warmup)) {
+            double per_pixel = cfg.adaptive_budget;
+            if (!unbounded) per_pixel = std::min(per_pixel, double(spp_target) - double(native_done));
+            per_pixel = std::max(per_pixel, 1.0);
+            arena.execute([&] {
+                tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) {
+                    const FilmDesc &f = m_mv.views[slot].camera->film;
+                    AdaptiveInput in;
+                    in.width = f.crop_width;
+                    in.height = f.crop_height;
+                    in.passes = pass + 1;
+                    in.sum = m_films[slot].sum.data();
+                    in.sum_sq = m_films[slot].sum_sq.data();
+                    in.native = m_mv_films[slot].native.data();
+                    in.received = m_mv_films[slot].received.data();
+                    adapt_native_map(in, cfg.adaptive_max, per_pixel * double(pixels[slot]), m_mv_films[slot].map);
+                });
+            });
+            for (size_t slot = 0; slot < m_views.size(); ++slot) m_mv.native_map[slot] = m_mv_films[slot].map.data();
+        }
+
+        last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
+        m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
+        m_stats.passes = pass + 1;
+        m_stats.samples += pass_samples;
+        if (progress) {
+            RenderProgress p;
+            p.pass = pass + 1;
+            p.elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
+            p.samples = m_stats.samples;
+            p.fraction = unbounded ? 0.0 : std::min(1.0, double(native_done) / double(spp_target));
+            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
+            progress(p);
+        }
+    }
+    m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
+    std::vector<MvViewStats> per_view(m_views.size());
+    for (MvThreadState &ts : state) {
+        m_stats.counters += ts.counters;
+        for (size_t s = 0; s < m_views.size(); ++s) {
+            per_view[s] += ts.stats[s];
+            *m_films[s].nonfinite += ts.dropped[s];
+            m_stats.counters.nonfinite += ts.dropped[s];
+        }
+    }
+    develop_multiview();
+    for (size_t s = 0; s < m_views.size(); ++s) {
+        m_results[s].mv = per_view[s];
+        m_stats.mv += per_view[s];
+    }
+}
+
+void Renderer::develop_multiview() {
+    const bool weighted = m_mv.cfg.estimator == MvEstimator::Weighted;
+    m_results.clear();
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        const Camera &cam = *m_mv.views[slot].camera;
+        const FilmBuffer &fb = m_films[slot];
+        const MvFilm &mf = m_mv_films[slot];
+        ViewResult r;
+        r.id = cam.id;
+        r.width = cam.film.crop_width;
+        r.height = cam.film.crop_height;
+        size_t n = size_t(r.width) * r.height;
+        r.rgb.resize(3 * n);
+        r.variance.resize(3 * n);
+        r.sample_count = mf.native;
+        r.contributions.assign(mf.received.begin(), mf.received.end());
+        r.nonfinite = fb.nonfinite->load();
+        for (size_t p = 0; p < n; ++p) {
+            double k = fb.count[p]; // passes
+            r.samples += mf.native[p];
+            for (int c = 0; c < 3; ++c) {
+                double mean;
+                if (k == 0) mean = 0.0;
+                else if (weighted) // MWIS: ratio of sums over all passes, plus the plain mean of native-only radiance
+                    mean = mf.e[3 * p + c] / k + (mf.w[p] > 0.0 ? mf.lw[3 * p + c] / mf.w[p] : 0.0);
+                else
+                    mean = mf.balance[3 * p + c] / k;
+                // Variance of the mean from the spread of the per-pass (balance) estimates.
+                double pm = k > 0 ? fb.sum[3 * p + c] / k : 0.0;
+                double var = k > 1 ? std::max(0.0, (fb.sum_sq[3 * p + c] - k * pm * pm) / (k * (k - 1))) : 0.0;
+                r.rgb[3 * p + c] = float(mean);
+                r.variance[3 * p + c] = float(std::min(var, double(FLT_MAX)));
+            }
+        }
+        m_results.push_back(std::move(r));
+    }
+}
+
+} // namespace mvpt
