@@ -41,6 +41,9 @@ class RenderResult:
     sample_count: dict = field(default_factory=dict)
     #: multi-view path tracing only: contributions received per pixel (own native samples included)
     contributions: dict = field(default_factory=dict)
+    #: multi-view path tracing only: mean per pass of the sum of the contributions' weights
+    #: W = 1/D (1 in expectation with the balance estimator: a check of the weights)
+    weight_sum: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
 
     @property
@@ -129,6 +132,7 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         result.sample_count[r["id"]] = r["sample_count"]
         if "contributions" in r:
             result.contributions[r["id"]] = r["contributions"]
+            result.weight_sum[r["id"]] = r["weight_sum"]
     result.stats = _stats(scene, job.stats(), results, index,
                           dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads), method=method))
     if interrupted is not None:

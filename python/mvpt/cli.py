@@ -154,14 +154,36 @@ def print_summary(result, stream=None) -> None:
     r = s["rays"]
     state = "cancelled after" if s.get("cancelled") else "done in"
     stream.write(f"{state} {s['passes']} passes, {s['wall_time']:.2f} s (longest pass {s['max_pass_seconds']:.3f} s), "
-                 f"{s['threads']} threads, integrator '{s['integrator']}'\n")
+                 f"{s['threads']} threads, integrator '{s['integrator']}', method {s.get('method', 'pt')}\n")
     stream.write(f"samples: {s['samples']:,} ({_si(s['samples_per_second'])}/s)   "
                  f"rays: {r['total']:,} ({_si(s['rays_per_second'])}/s; camera {r['camera']:,}, "
                  f"intersect {r['intersect']:,}, shadow {r['shadow']:,})\n")
+    if s.get("method") == "mvpt":
+        print_multiview_summary(s, stream)
+    for note in s.get("notes", []):
+        stream.write(f"note: {note}\n")
     if s.get("nonfinite_samples"):
         f = s.get("first_nonfinite") or {}
         stream.write(f"warning: {s['nonfinite_samples']:,} non-finite samples were dropped (first: view "
                      f"{f.get('view_id')}, pixel ({f.get('x')}, {f.get('y')}), sample {f.get('sample')})\n")
+
+
+_TESTS = ("time", "orientation", "image", "bsdf", "visibility", "selection")
+
+
+def print_multiview_summary(s: dict, stream) -> None:
+    """Per-view statistics of multi-view path tracing (design doc §9): native samples,
+    contributions received, mean sharing set size |S|, rays per native sample, and the share
+    of shifts rejected by each validity test."""
+    rows = []
+    for vid, v in s["views"].items():
+        m = v["multiview"]
+        tried = max(1, m["shifts_tried"])
+        rows.append([vid, f"{m['native_samples']:,}", f"{m['contributions']:,}", f"{m['mean_sharing']:.2f}",
+                     f"{m['rays_per_native_sample']:.1f}"] +
+                    [f"{100.0 * m['rejected'][t] / tried:.1f}%" for t in _TESTS])
+    stream.write(f"multi-view path tracing ({s['estimator']}): rejected shifts by test, in % of those tried\n")
+    stream.write(_table(rows, ["view", "native", "received", "|S|", "rays/native"] + list(_TESTS), "<>>>>>>>>>>"))
 
 
 def _render(scene_path: Path, args, stem: str) -> int:
@@ -184,7 +206,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
     bar = ProgressBar(enabled=False if args.quiet else None)
     try:
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
-                            views=views, progress=bar)
+                            views=views, progress=bar, method=args.method)
     except (RuntimeError, MemoryError, ValueError) as e:
         bar.finish(done=False)
         _error(str(e) or type(e).__name__)
@@ -214,10 +236,15 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="wall-clock budget in seconds (the render ends within about one pass of it)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
     p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
+    p.add_argument("--method", choices=("pt", "mvpt"), default="scene",
+                   help="pt: independent path tracing of every view; mvpt: multi-view path tracing "
+                        "(default: the scene's integrator, 'mvpath' meaning mvpt)")
     p.add_argument("--views", default=None, metavar="LIST",
                    help="comma-separated view ids or indices to render (an id wins over an index)")
     p.add_argument("-o", "--output", type=Path, default=Path("out"), help="output directory (default: out)")
-    p.add_argument("--aovs", action="store_true", help="add variance and sample-count channels to the EXRs")
+    p.add_argument("--aovs", action="store_true",
+                   help="add variance and sample-count channels (mvpt: native samples and contributions "
+                        "received) to the EXRs")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 

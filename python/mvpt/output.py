@@ -68,7 +68,8 @@ def write_outputs(result, out_dir, stem: str, aovs: bool = False, settings: dict
     """Write <stem>_<view>.exr/.png for every view and <stem>.json; returns the paths.
 
     The EXR has channels R, G, B and, with `aovs`, variance.R/G/B (variance of the pixel
-    mean) and sample_count.Y. The JSON holds `result.stats`, its settings updated with
+    mean) and sample_count.Y (multi-view path tracing: native samples, plus contributions.Y,
+    the contributions each pixel received). The JSON holds `result.stats`, its settings updated with
     `settings` (e.g. the scene file and -D defines of the command line)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -83,6 +84,8 @@ def write_outputs(result, out_dir, stem: str, aovs: bool = False, settings: dict
             for i, c in enumerate("RGB"):
                 channels[f"variance.{c}"] = np.ascontiguousarray(var[..., i], dtype=np.float32)
             channels["sample_count.Y"] = np.ascontiguousarray(result.sample_count[vid], dtype=np.float32)
+            if vid in getattr(result, "contributions", {}):  # multi-view: sample_count counts native samples
+                channels["contributions.Y"] = np.ascontiguousarray(result.contributions[vid], dtype=np.float32)
         _core.write_exr(str(exr), channels)
         _core.write_png(str(png), img)
         written += [str(exr), str(png)]

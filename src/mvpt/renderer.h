@@ -45,6 +45,9 @@ struct ViewResult {
     std::vector<float> variance; ///< variance of the pixel mean, 3 floats per pixel
     std::vector<uint32_t> sample_count; ///< samples per pixel (multi-view: native samples)
     std::vector<float> contributions;   ///< multi-view: contributions received per pixel
+    /// Multi-view: mean over passes of the sum of W = 1/D_k per pixel; 1 in expectation when the
+    /// densities D are complete (balance, mis_set=all), so it checks the weights (§5).
+    std::vector<float> weight_sum;
     uint64_t samples = 0;
     MvViewStats mv; ///< multi-view statistics of the view
     uint64_t nonfinite = 0; ///< non-finite samples dropped (recorded as zero)

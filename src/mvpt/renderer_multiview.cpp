@@ -250,10 +250,12 @@ void Renderer::develop_multiview() {
         r.variance.resize(3 * n);
         r.sample_count = mf.native;
         r.contributions.assign(mf.received.begin(), mf.received.end());
+        r.weight_sum.resize(n);
         r.nonfinite = fb.nonfinite->load();
         for (size_t p = 0; p < n; ++p) {
             double k = fb.count[p]; // passes
             r.samples += mf.native[p];
+            r.weight_sum[p] = k > 0 ? float(mf.w[p] / k) : 0.f;
             for (int c = 0; c < 3; ++c) {
                 double mean;
                 if (k == 0) mean = 0.0;

@@ -119,6 +119,7 @@ public:
             d["nonfinite"] = r.nonfinite;
             if (!r.contributions.empty()) {
                 d["contributions"] = make_array(std::vector<float>(r.contributions), {h, w});
+                d["weight_sum"] = make_array(std::vector<float>(r.weight_sum), {h, w});
                 d["multiview"] = mv_stats_dict(r.mv);
             }
             d["width"] = r.width;

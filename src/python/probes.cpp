@@ -1,6 +1,8 @@
 // Test probes: evaluate and sample single plugins (BSDFs) from Python, for
 // the chi-square and energy tests.
 #include "mvpt/core/sampler.h"
+#include "mvpt/integrators/mv_mixture.h"
+#include "mvpt/integrators/mv_selection.h"
 #include "mvpt/render/bsdf.h"
 #include "mvpt/scene/xml_parser.h"
 
@@ -10,6 +12,10 @@
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/shared_ptr.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/array.h>
+
+#include <array>
+#include <vector>
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -81,6 +87,44 @@ struct BsdfProbe {
         return nb::make_tuple(wo, w, pdf, type);
     }
 
+    /// n directions from the lobe mixture of multi-view path tracing for views seen from
+    /// `wis` (m, 3): (wo, mixture pdf, sampled_type, view) arrays.
+    nb::tuple mixture_sample(Vec3Array wis, size_t n, uint32_t seed) {
+        std::vector<Vec3f> wi(wis.shape(0));
+        for (size_t c = 0; c < wi.size(); ++c) wi[c] = Vec3f(wis(c, 0), wis(c, 1), wis(c, 2));
+        OutArray wo = out_array(n, 3), pdf = out_array(n, 1), type = out_array(n, 1), view = out_array(n, 1);
+        Sampler s(SamplerKind::Independent, seed);
+        for (size_t i = 0; i < n; ++i) {
+            s.start(0, 0, 0, uint32_t(i));
+            float u_view = s.next_1d(), u1 = s.next_1d();
+            Vec2f u2 = s.next_2d();
+            MixtureSample ms = sample_lobe_mixture(*bsdf, si, wi.data(), wi.size(), u_view, u1, u2);
+            for (int c = 0; c < 3; ++c) wo.data()[3 * i + c] = ms.bs.wo[c];
+            pdf.data()[i] = ms.weight.is_black() ? 0.f : ms.pdf;
+            type.data()[i] = float(ms.bs.sampled_type);
+            view.data()[i] = float(ms.view);
+        }
+        return nb::make_tuple(wo, pdf, type, view);
+    }
+
+    /// The mixture density of directions `wo` (n, 3) for views seen from `wis` (m, 3).
+    OutArray mixture_pdf(Vec3Array wis, Vec3Array wo) {
+        std::vector<Vec3f> wi(wis.shape(0));
+        for (size_t c = 0; c < wi.size(); ++c) wi[c] = Vec3f(wis(c, 0), wis(c, 1), wis(c, 2));
+        size_t n = wo.shape(0);
+        OutArray r = out_array(n, 1);
+        for (size_t i = 0; i < n; ++i)
+            r.data()[i] = lobe_mixture_pdf(*bsdf, si, wi.data(), wi.size(), Vec3f(wo(i, 0), wo(i, 1), wo(i, 2)));
+        return r;
+    }
+
+    /// Material similarity s_M of two views' lobes (design doc §6), peak-ratio or Monte Carlo TV.
+    float material_similarity(std::array<float, 3> a, std::array<float, 3> b, bool monte_carlo) {
+        ViewLobe la = view_lobe(*bsdf, si, Vec3f(a[0], a[1], a[2])), lb = view_lobe(*bsdf, si, Vec3f(b[0], b[1], b[2]));
+        return mvpt::material_similarity(*bsdf, si, la, lb,
+                                         monte_carlo ? MvTotalVariation::MonteCarlo : MvTotalVariation::PeakRatio);
+    }
+
     /// Bsdf::roughness at the probe's uv, seen from direction wi.
     float roughness(float wx, float wy, float wz) {
         si.wi = Vec3f(wx, wy, wz);
@@ -117,6 +161,9 @@ void bind_probes(nb::module_ &m) {
         .def("roughness", &BsdfProbe::roughness, "wx"_a = 0.f, "wy"_a = 0.f, "wz"_a = 1.f)
         .def("eval", &BsdfProbe::eval, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
         .def("pdf", &BsdfProbe::pdf, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
+        .def("mixture_sample", &BsdfProbe::mixture_sample, "wis"_a, "n"_a, "seed"_a = 0)
+        .def("mixture_pdf", &BsdfProbe::mixture_pdf, "wis"_a, "wo"_a)
+        .def("material_similarity", &BsdfProbe::material_similarity, "wi_a"_a, "wi_b"_a, "monte_carlo"_a = false)
         .def_prop_ro("flags", [](const BsdfProbe &p) { return p.bsdf->flags(); })
         .def_prop_ro_static("flag_values", [](nb::handle) {
             nb::dict d;

@@ -1,5 +1,7 @@
 #include "mv_sample.h"
 
+#include "mv_mixture.h"
+
 #include "../core/warp.h"
 #include "../render/bsdf.h"
 #include "../render/light.h"
@@ -173,6 +175,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
         for (size_t j = 0; j < m; ++j) {
             if (!sc.visible[j]) continue;
             if (int(j) == k) { sum += sc.n[j]; continue; }
+            // Validity of j -> k: shared with l -> j except for time, which is not transitive.
+            if (!time_compatible(ctx.views[cand[j].slot], vk, ctx.scene_moves)) continue;
             float s = selection(ctx, sc, bsdf, si, j, size_t(k));
             if (!(s > 0.f)) continue;
             float tau = time_density_ratio(vk, ctx.views[cand[j].slot], ctx.scene_moves);
@@ -190,11 +194,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     float u_rr = sampler.next_1d();
     auto &contrib = sc.contrib;
     contrib.assign(m, Spectrum(0.f));
-    auto mixture_pdf = [&](Vec3f wo) {
-        float p = 0.f;
-        for (int k : sharing) p += bsdf.pdf(Ctx, si, sc.lobe[k].wi, wo);
-        return p / float(ns); // divided by |S|, not by the number of non-zero terms
-    };
+    auto &wis = sc.sharing_wi;
+    wis.clear();
+    for (int k : sharing) wis.push_back(sc.lobe[k].wi);
     const auto &lights = scene.lights();
     if (!lights.empty()) {
         size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
@@ -213,7 +215,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
                 Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
                 ++counters.shadow_rays;
                 if (!scene.occluded(shadow)) {
-                    float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), mixture_pdf(wo));
+                    // MIS against the bounce, whose density is the lobe mixture.
+                    float w = ls.delta ? 1.f
+                                       : mis_power(ls.pdf / float(lights.size()),
+                                                   lobe_mixture_pdf(bsdf, si, wis.data(), ns, wo));
                     for (int k : sharing) contrib[k] += f[k] * weight * w;
                 }
             }
@@ -222,25 +227,17 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
 
     // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
     sampler.set_dimension(DimBounceView);
-    int c = sharing[std::min(size_t(sampler.next_1d() * float(ns)), ns - 1)];
-    auto [bs, bsdf_weight] = bsdf.sample(Ctx, si, sc.lobe[c].wi, u_lobe, u_dir);
+    MixtureSample mix = sample_lobe_mixture(bsdf, si, wis.data(), ns, sampler.next_1d(), u_lobe, u_dir);
+    const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     bool final_valid = valid_after;
-    if (!bsdf_weight.is_black()) {
+    if (!mix.weight.is_black() && mix.pdf > 0.f) {
         auto &wk = sc.weight;
         wk.assign(m, Spectrum(0.f));
-        bool delta = (bs.sampled_type & BsdfDelta) != 0;
-        float prev_pdf = bs.pdf;
-        if (delta) {
-            // A delta lobe's direction serves only the view that sampled it; its probability in
-            // the mixture is P_c / |S|.
-            wk[c] = bsdf_weight * float(ns);
-        } else {
-            Vec3f wo = bs.wo;
-            prev_pdf = mixture_pdf(wo);
-            if (prev_pdf > 0.f)
-                for (int k : sharing) wk[k] = bsdf.eval(Ctx, si, sc.lobe[k].wi, wo) * (1.f / prev_pdf);
-        }
+        if (mix.delta) // a delta lobe's direction serves only the view that sampled it
+            wk[sharing[mix.view]] = mix.weight * float(ns);
+        else
+            for (int k : sharing) wk[k] = bsdf.eval(Ctx, si, sc.lobe[k].wi, bs.wo) * (1.f / mix.pdf);
         float t_max = 0.f;
         for (int k : sharing) t_max = std::max(t_max, wk[k].max_value());
         bool alive = t_max > 0.f;
@@ -255,8 +252,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             state.depth = 1;
             state.eta = bs.eta;
             state.prev_p = si.p;
-            state.prev_bsdf_pdf = prev_pdf;
-            state.prev_bsdf_delta = delta;
+            state.prev_bsdf_pdf = mix.pdf;
+            state.prev_bsdf_delta = mix.delta;
             state.valid = valid_after;
             Ray next = si.spawn_ray(si.to_world(bs.wo));
             Spectrum ls = ctx.path->trace(scene, next, state, sampler, counters, nullptr, &final_valid);

@@ -61,6 +61,7 @@ struct MvScratch {
     std::vector<float> n, s_sel, d, sm;
     std::vector<uint8_t> visible, selected;
     std::vector<int> sharing;
+    std::vector<Vec3f> sharing_wi;
     std::vector<Spectrum> contrib, weight;
 };
 

@@ -36,18 +36,30 @@ struct ShiftCandidate {
     ShiftGeometry geo;     ///< x_k, u_k, G_k, visible segment length
 };
 
+/// Whether strategy j -> k can produce k's samples with a density in time (§3 test 1), a
+/// symmetric relation. When shapes move (`scene_moves`) the time is kept: zero-length
+/// shutters (Dirac deltas) pair only with each other. Otherwise time is mapped affinely
+/// between shutters, a bijection when both have length or both have none; a shutter of
+/// length facing an instant is fine only when that camera does not move (then its time
+/// changes nothing and integrates out), since otherwise many of its times would map to one.
+inline bool time_compatible(const MvView &j, const MvView &k, bool scene_moves) {
+    if ((j.dt == 0.f) == (k.dt == 0.f)) return true;
+    if (scene_moves) return false;
+    const MvView &timed = j.dt > 0.f ? j : k;
+    return !timed.camera->is_animated();
+}
+
 /// Time of the shifted sample in view `k` (§3 test 1). When shapes move (`scene_moves`) the
 /// time is kept and must lie in k's shutter; otherwise it is mapped affinely between the
 /// shutters, so every view can share. False when the time test fails.
 inline bool shift_time(const MvView &l, const MvView &k, float t, bool scene_moves, float *t_k) {
+    if (!time_compatible(l, k, scene_moves)) return false;
     if (scene_moves) {
-        // Zero-length shutters are Dirac deltas in time: they share only with each other.
-        if ((l.dt == 0.f) != (k.dt == 0.f)) return false;
         if (k.dt == 0.f ? t != k.t0 : !(t >= k.t0 && t <= k.t0 + k.dt)) return false;
         *t_k = t;
         return true;
     }
-    *t_k = l.dt > 0.f ? k.t0 + (t - l.t0) * (k.dt / l.dt) : k.t0;
+    *t_k = l.dt > 0.f && k.dt > 0.f ? k.t0 + (t - l.t0) * (k.dt / l.dt) : k.t0 + 0.5f * k.dt;
     return true;
 }
 
