@@ -28,7 +28,8 @@ h1 { font-size: 1.5em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
 table { border-collapse: collapse; margin: .5em 0; }
 td, th { border: 1px solid #ddd; padding: 3px 8px; text-align: right; vertical-align: top; }
 th { background: #f4f4f4; } td.l, th.l { text-align: left; }
-figure { display: inline-block; margin: 0 8px 8px 0; text-align: center; }
+figure { margin: 0 8px 8px 0; text-align: center; }
+div.grid { display: grid; }
 figcaption { font-size: 12px; color: #444; }
 img.px { image-rendering: pixelated; width: 192px; }
 img.plot { max-width: 100%; }
@@ -163,6 +164,19 @@ def _summary_table(result: BenchResult) -> str:
             "<th>samples/s</th><th>RMSE</th><th>relMSE</th><th>FLIP</th></tr>" + "".join(rows) + "</table>")
 
 
+def _outline(rgb8: np.ndarray, y: int, x: int, h: int, w: int) -> np.ndarray:
+    """A copy of `rgb8` with a 1-pixel red rectangle around the crop."""
+    out = rgb8.copy()
+    red = np.array([255, 0, 0], np.uint8)
+    out[y, x:x + w] = out[y + h - 1, x:x + w] = red
+    out[y:y + h, x] = out[y:y + h, x + w - 1] = red
+    return out
+
+
+def _figure(uri: str, alt: str, caption: str) -> str:
+    return f'<figure><img class=px src="{uri}" alt="{_e(alt)}"><figcaption>{_e(caption)}</figcaption></figure>'
+
+
 def _view_section(result: BenchResult, vid: str) -> str:
     ref = as_rgb(result.reference.images[vid] if vid in result.reference.images
                  else next(iter(result.reference.images.values())))
@@ -171,17 +185,21 @@ def _view_section(result: BenchResult, vid: str) -> str:
     y, x, h, w = best_crop(sum(maps.values()), CROP)
     crop = (slice(y, y + h), slice(x, x + w))
     whole = h == ref.shape[0] and w == ref.shape[1]
-    where = "whole view" if whole else f"crop x {x}..{x + w - 1}, y {y}..{y + h - 1} (largest FLIP error)"
-    figs = [f'<figure><img class=px src="{_png_uri(srgb8(ref[crop]))}" alt="reference {_e(vid)}">'
-            f"<figcaption>reference</figcaption></figure>"]
+    # Row 1: the reference and each method on the crop; row 2: where the crop lies, and each
+    # method's FLIP error map on the crop (magma: black = no visible difference, 1 = yellow).
+    top = [_figure(_png_uri(srgb8(ref[crop])), f"reference {vid}", "reference")]
+    bottom = [_figure(_png_uri(_outline(srgb8(ref), y, x, h, w)), f"crop of {vid}", "crop in the full view")
+              if not whole else "<figure></figure>"]
     for m, img in tests.items():
         e = result.methods[m].errors.views[vid]
-        figs.append(f'<figure><img class=px src="{_png_uri(srgb8(img[crop]))}" alt="{_e(m)} {_e(vid)}">'
-                    f"<figcaption>{_e(m)}: relMSE {_num(e.relmse)}, FLIP {_num(e.flip)}</figcaption></figure>")
-    errs = [f'<figure><img class=px src="{_png_uri(colorize(maps[m][crop]))}" alt="FLIP error {_e(m)} {_e(vid)}">'
-            f"<figcaption>FLIP error, {_e(m)}</figcaption></figure>" for m in tests]
-    return (f"<h3>{_e(vid)}</h3><p>{_e(where)}; {ref.shape[1]}x{ref.shape[0]} pixels.</p>"
-            f"<div>{''.join(figs)}</div><div>{''.join(errs)}</div>")
+        top.append(_figure(_png_uri(srgb8(img[crop])), f"{m} {vid}",
+                           f"{m}: relMSE {_num(e.relmse)}, FLIP {_num(e.flip)}"))
+        bottom.append(_figure(_png_uri(colorize(maps[m][crop])), f"FLIP error {m} {vid}", f"FLIP error, {m}"))
+    where = ("whole view" if whole else
+             f"crop x {x}..{x + w - 1}, y {y}..{y + h - 1}, where the FLIP error is largest")
+    return (f"<h3>{_e(vid)}</h3><p>{ref.shape[1]}x{ref.shape[0]} pixels; {_e(where)}.</p>"
+            f'<div class=grid style="grid-template-columns: repeat({len(top)}, max-content)">'
+            f"{''.join(top)}{''.join(bottom)}</div>")
 
 
 def _stats_section(result: BenchResult) -> str:

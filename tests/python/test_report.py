@@ -22,6 +22,11 @@ pytest.importorskip("matplotlib", reason="the report's plots need matplotlib")
 pytest.importorskip("flip_evaluator", reason="the report's FLIP numbers need flip-evaluator")
 from PIL import Image  # noqa: E402
 
+# Per view: reference crop, crop outline, one crop and one FLIP map per method; and two plots.
+def _image_count(methods) -> int:
+    return 2 * (2 + 2 * len(methods)) + 2
+
+
 # "mvpt" joins as soon as this build's mvpt.render takes method= (the multi-view integrator).
 METHODS = ["pt", "mvpt"] if bench.render_supports_method() else ["pt"]
 
@@ -44,7 +49,10 @@ class _Refs(HTMLParser):
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
-    """One small benchmark: 2 views of 16x16, 0.4 s per method, a 32-spp reference; run twice."""
+    """One small benchmark: 2 views of 16x16, 0.4 s per method, a 32-spp reference; run twice.
+
+    Crops are 8x8 here, so each view also shows where its crop lies (one more image)."""
+    from mvpt import report as report_module
     d = tmp_path_factory.mktemp("bench")
     xml = scene(sensor("left", res=16, spp=2, origin="-1, 1, 4") + sensor("right", res=16, spp=2, origin="1, 1, 4"))
     path = d / "two.xml"
@@ -52,10 +60,14 @@ def report(tmp_path_factory):
     out = d / "report"
     argv = ["bench-equal-time", str(path), "--time", "0.4", "--methods", ",".join(METHODS),
             "--reference-spp", "32", "--seed", "3", "--threads", "1", "-o", str(out), "-q"]
-    assert cli.main(argv) == 0
-    ref_json = out / "reference" / "two.json"
-    first_ref = ref_json.stat().st_mtime_ns
-    assert cli.main(argv) == 0  # second run: the matching reference is reused, not re-rendered
+    crop, report_module.CROP = report_module.CROP, 8
+    try:
+        assert cli.main(argv) == 0
+        ref_json = out / "reference" / "two.json"
+        first_ref = ref_json.stat().st_mtime_ns
+        assert cli.main(argv) == 0  # second run: the matching reference is reused, not re-rendered
+    finally:
+        report_module.CROP = crop
     return {"out": out, "scene": path, "argv": argv, "ref_mtime": (first_ref, ref_json.stat().st_mtime_ns)}
 
 
@@ -100,8 +112,7 @@ def test_html_is_self_contained_and_every_image_decodes(report):
     text = page.read_text()
     refs = _Refs()
     refs.feed(text)
-    # reference crop + one crop and one error map per method per view, and the two plots
-    assert len(refs.imgs) == 2 * (1 + 2 * len(METHODS)) + 2
+    assert len(refs.imgs) == _image_count(METHODS)
     for src in refs.imgs:
         if src.startswith("data:"):
             assert src.startswith("data:image/png;base64,")
@@ -122,7 +133,7 @@ def test_report_loads_in_headless_chromium(report):
     assert m, "the page has no load-status element"
     attrs = dict(re.findall(r'data-(\w+)="([^"]*)"', m.group(1)))
     assert attrs.get("state") == "loaded", f"the page did not finish loading: {m.group(0)}"
-    assert int(attrs["images"]) == 2 * (1 + 2 * len(METHODS)) + 2
+    assert int(attrs["images"]) == _image_count(METHODS)
     assert attrs["broken"] == "0", m.group(2)
     assert attrs["errors"] == "0", m.group(2)
     assert not console, f"console output: {console}"
@@ -141,3 +152,14 @@ def test_unknown_method_is_a_clear_error(tmp_path, capsys):
 def test_bench_rejects_a_bad_time():
     with pytest.raises(ValueError, match="time budget"):
         bench.run_bench(bench.BenchConfig(scene=Path("x.xml"), time=0.0))
+
+
+def test_best_crop_finds_the_largest_error_window():
+    from mvpt.report import best_crop
+
+    err = np.zeros((40, 30))
+    err[25:29, 3:6] = 1.0
+    y, x, h, w = best_crop(err, 8)
+    assert (h, w) == (8, 8)
+    assert y <= 25 and y + h >= 29 and x <= 3 and x + w >= 6
+    assert best_crop(err, 100) == (0, 0, 40, 30)  # views smaller than the crop are shown whole
