@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 
 import mvpt
-from mvpt import _core, cli
+from mvpt import _core, cli, movie
 from mvpt.output import write_multiview_exr
 from mvpt.runs import load_run
 
 from small_scenes import scene, sensor, views
 
 OpenEXR = pytest.importorskip("OpenEXR", reason="the multi-view EXR test reads files with the OpenEXR bindings")
+Image = pytest.importorskip("PIL.Image", reason="the display outputs need Pillow")
 
 
 @pytest.fixture(scope="module")
@@ -85,8 +86,22 @@ def test_cli_writes_multiview_exr_and_displays(tmp_path):
     assert [p[0] for p in _parts(out / "rig.exr")] == ["v0", "v1", "v2", "v3"]
     assert (out / "rig_qs2x2a1.png").is_file()
     assert (out / "rig_contact.png").is_file() and (out / "rig.gif").is_file()
+    with Image.open(out / "rig.gif") as gif:
+        assert gif.n_frames == 4
     # the directory is still one run for `mvpt compare` (the multi-view EXR does not confuse it)
     assert list(load_run(out).images) == ["v0", "v1", "v2", "v3"]
+
+
+def test_cli_writes_mp4(tmp_path):
+    try:
+        movie.ffmpeg_executable()
+    except RuntimeError as e:
+        pytest.skip(str(e))
+    path = tmp_path / "rig.xml"
+    path.write_text(scene(views(3, res=8, spp=1)))
+    out = tmp_path / "out"
+    assert cli.main(["render", str(path), "-o", str(out), "-q", "--threads", "1", "--mp4", "--fps", "3"]) == 0
+    assert (out / "rig.mp4").stat().st_size > 0
 
 
 def test_cli_stereo_needs_multiview_exr(tmp_path, capsys):
