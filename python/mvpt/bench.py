@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import __version__, api, metrics
-from .output import output_paths, write_outputs
+from .output import write_outputs
 from .runs import Run, load_run, match_views
 
 CURVE_FRACTIONS = (0.125, 0.25, 0.5, 1.0)
