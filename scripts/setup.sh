@@ -14,5 +14,6 @@ $SUDO apt-get install -y -qq --no-install-recommends \
     libstb-dev zlib1g-dev libgtest-dev libllvm19 >/dev/null
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/pip install -q --upgrade pip
-.venv/bin/pip install -q .
+# With the extras for comparison reports and display outputs (Pillow, matplotlib, FLIP, ffmpeg).
+.venv/bin/pip install -q ".[reports]"
 .venv/bin/mvpt demo -o out

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from . import __version__, api
 from ._core import SceneError
+from . import displays, reports_cli
 from .output import write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -188,6 +189,10 @@ def print_multiview_summary(s: dict, stream) -> None:
 
 def _render(scene_path: Path, args, stem: str) -> int:
     defines = dict(args.define or [])
+    problem = displays.check_display_options(args)
+    if problem:
+        _error(problem)
+        return EXIT_USAGE
     try:
         scene = api.load_file(scene_path, **defines)
     except SceneError as e:
@@ -216,7 +221,9 @@ def _render(scene_path: Path, args, stem: str) -> int:
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
     try:
         paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
-    except (OSError, RuntimeError, ValueError) as e:
+        if displays.wants_displays(args):
+            paths += displays.write_displays(result, args, args.output, stem)
+    except (OSError, RuntimeError, ValueError, ImportError) as e:
         _error(str(e))
         return EXIT_ERROR
     if not args.quiet:
@@ -246,6 +253,7 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="add variance and sample-count channels (mvpt: native samples and contributions "
                         "received) to the EXRs")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    displays.add_display_options(p)
 
 
 def main(argv=None) -> int:
@@ -257,6 +265,7 @@ def main(argv=None) -> int:
     _add_render_options(p_render)
     p_demo = sub.add_parser("demo", help="render the built-in demo scene")
     _add_render_options(p_demo)
+    reports_cli.add_commands(sub)
     try:
         args = parser.parse_args(argv)
     except SystemExit as e:
@@ -268,6 +277,8 @@ def main(argv=None) -> int:
     try:
         if args.command == "render":
             return _render(args.scene, args, args.scene.stem)
+        if args.command in reports_cli.COMMANDS:
+            return reports_cli.run(args)
         with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
             return _render(demo, args, "demo")
     except KeyboardInterrupt:

@@ -94,3 +94,36 @@ def write_outputs(result, out_dir, stem: str, aovs: bool = False, settings: dict
     write_json_atomic(json_path, summary)
     written.append(str(json_path))
     return written
+
+
+STEREO_NAMES = ("left", "right")
+
+
+def multiview_exr_path(out_dir, stem: str) -> Path:
+    """Where `write_multiview_exr` puts a run's multi-view EXR: <out>/<stem>.exr (per-view files add _<view>)."""
+    return Path(out_dir) / f"{_safe(stem)}.exr"
+
+
+def write_multiview_exr(result, path, stereo: bool = False, aovs: bool = False) -> str:
+    """All views of `result` in one multi-part EXR: one part per view, in scene order.
+
+    A part's name and `view` attribute are the view id, or with `stereo` (exactly two
+    views) the standard names "left" (the first view) and "right"; every part lists all
+    names in a `multiView` attribute, so the first view is the default view. Channels as
+    in `write_outputs` (R, G, B, and with `aovs` variance.R/G/B and sample_count.Y)."""
+    ids = list(result.images)
+    if stereo and len(ids) != 2:
+        raise ValueError(f"stereo names need exactly two views, the render has {len(ids)}")
+    names = list(STEREO_NAMES) if stereo else ids
+    parts = []
+    for name, vid in zip(names, ids):
+        img = np.asarray(result.images[vid], dtype=np.float32)
+        channels = {c: np.ascontiguousarray(img[..., i]) for i, c in enumerate("RGB")}
+        if aovs:
+            var = np.asarray(result.variance[vid], dtype=np.float32)
+            for i, c in enumerate("RGB"):
+                channels[f"variance.{c}"] = np.ascontiguousarray(var[..., i])
+            channels["sample_count.Y"] = np.ascontiguousarray(result.sample_count[vid], dtype=np.float32)
+        parts.append((str(name), channels))
+    _core.write_multiview_exr(str(path), parts)
+    return str(path)

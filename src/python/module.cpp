@@ -1,6 +1,7 @@
 // The `mvpt._core` extension: scene loading, a background render job that
 // Python polls (GIL released while waiting), NumPy images out, image writers.
 #include "mvpt/io/image_io.h"
+#include "mvpt/io/multiview_exr.h"
 #include "mvpt/renderer.h"
 #include "mvpt/scene/scene.h"
 
@@ -284,6 +285,33 @@ NB_MODULE(_core, m) {
         if (ch.empty()) throw std::invalid_argument("no channels");
         write_exr(path, w, h, ch);
     }, "path"_a, "channels"_a);
+    m.def("write_multiview_exr", [](const std::string &path,
+                                    std::vector<std::pair<std::string, std::map<std::string, nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>>>> views) {
+        std::vector<ExrView> out;
+        for (auto &[name, channels] : views) {
+            ExrView v;
+            v.name = name;
+            v.height = v.width = -1;
+            for (auto &[cname, arr] : channels) {
+                if (v.width < 0) { v.height = int(arr.shape(0)); v.width = int(arr.shape(1)); }
+                if (int(arr.shape(0)) != v.height || int(arr.shape(1)) != v.width)
+                    throw std::invalid_argument("the channels of view '" + name + "' differ in size");
+                v.channels.push_back({cname, std::vector<float>(arr.data(), arr.data() + arr.size())});
+            }
+            out.push_back(std::move(v));
+        }
+        write_multiview_exr(path, out);
+    }, "path"_a, "views"_a, "One multi-part EXR: a part per (name, {channel: HxW float32}) view; part name = view attribute = name.");
+    m.def("read_multiview_exr", [](const std::string &path) {
+        std::vector<std::pair<std::string, std::map<std::string, FloatArray>>> out;
+        for (ExrView &v : read_multiview_exr(path)) {
+            std::map<std::string, FloatArray> channels;
+            for (ExrChannel &c : v.channels)
+                channels.emplace(c.name, make_array(std::move(c.data), {size_t(v.height), size_t(v.width)}));
+            out.emplace_back(v.name, std::move(channels));
+        }
+        return out;
+    }, "path"_a, "Every part of an EXR as (name, {channel: HxW float32}); name = view attribute, else part name.");
     m.def("write_png", [](const std::string &path, nb::ndarray<float, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu> rgb) {
         write_png_srgb(path, int(rgb.shape(1)), int(rgb.shape(0)), rgb.data());
     }, "path"_a, "rgb"_a);

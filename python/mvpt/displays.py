@@ -1,0 +1,83 @@
+"""The display outputs of `mvpt render` beyond the per-view files, chosen by command-line options:
+--multiview-exr (and --stereo), --quilt, --contact-sheet, --gif and --mp4 (views as frames)."""
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+from . import contact_sheet, movie, quilt
+from .output import _safe, multiview_exr_path, write_multiview_exr
+
+
+def _grid(text: str) -> tuple:
+    m = re.fullmatch(r"\s*(\d+)\s*x\s*(\d+)\s*", text or "")
+    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
+        raise argparse.ArgumentTypeError(f"expected COLUMNSxROWS such as 8x6, got '{text}'")
+    return int(m.group(1)), int(m.group(2))
+
+
+def _fps(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"expected frames per second > 0, got '{text}'")
+    return v
+
+
+def add_display_options(p: argparse.ArgumentParser) -> None:
+    """Add the display-output options to a render-like subcommand."""
+    g = p.add_argument_group("display outputs")
+    g.add_argument("--multiview-exr", action="store_true",
+                   help="also write <stem>.exr: one part per view, part name and 'view' attribute = view id")
+    g.add_argument("--stereo", action="store_true",
+                   help="name the two views of the multi-view EXR 'left' (first) and 'right'")
+    g.add_argument("--quilt", nargs="?", const="auto", default=None, metavar="COLSxROWS",
+                   help="write a Looking Glass quilt <stem>_qs{cols}x{rows}a{aspect}.png (view 0 bottom-left; "
+                        "default layout near-square)")
+    g.add_argument("--contact-sheet", action="store_true", help="write <stem>_contact.png: labelled thumbnails")
+    g.add_argument("--gif", action="store_true", help="write <stem>.gif with the views as frames, in scene order")
+    g.add_argument("--mp4", action="store_true", help="write <stem>.mp4 (H.264) with the views as frames")
+    g.add_argument("--fps", type=_fps, default=12.0, help="frame rate of --gif/--mp4 (default: 12)")
+    g.add_argument("--exposure", type=float, default=0.0, help="exposure in stops for the 8-bit displays (default: 0)")
+
+
+def check_display_options(args) -> str | None:
+    """A usage error message for inconsistent display options, or None."""
+    if args.stereo and not args.multiview_exr:
+        return "--stereo names the views of --multiview-exr; add --multiview-exr"
+    if args.quilt not in (None, "auto"):
+        try:
+            args.quilt = _grid(args.quilt)
+        except argparse.ArgumentTypeError as e:
+            return f"--quilt: {e}"
+    return None
+
+
+def wants_displays(args) -> bool:
+    return bool(getattr(args, "multiview_exr", False) or getattr(args, "quilt", None) or
+                getattr(args, "contact_sheet", False) or getattr(args, "gif", False) or getattr(args, "mp4", False))
+
+
+def write_displays(result, args, out_dir, stem: str) -> list:
+    """Write the display outputs `args` asks for; returns their paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    views = list(result.images.values())
+    written = []
+    if args.multiview_exr:
+        written.append(write_multiview_exr(result, multiview_exr_path(out, stem), stereo=args.stereo,
+                                           aovs=getattr(args, "aovs", False)))
+    if args.quilt:
+        cols, rows = (None, None) if args.quilt == "auto" else args.quilt
+        written.append(quilt.write_quilt(views, out, _safe(stem), cols, rows, exposure=args.exposure))
+    if args.contact_sheet:
+        written.append(contact_sheet.write_contact_sheet(result.images, out / f"{_safe(stem)}_contact.png",
+                                                         exposure=args.exposure))
+    if args.gif:
+        written.append(movie.write_gif(views, out / f"{_safe(stem)}.gif", fps=args.fps, exposure=args.exposure))
+    if args.mp4:
+        written.append(movie.write_mp4(views, out / f"{_safe(stem)}.mp4", fps=args.fps, exposure=args.exposure))
+    return written
