@@ -167,7 +167,7 @@ def print_summary(result, stream=None) -> None:
 def _render(scene_path: Path, args, stem: str) -> int:
     defines = dict(args.define or [])
     try:
-        scene = api.load_file(scene_path, **defines)
+        scene = api.load_file(scene_path, rig=args.rig, **defines)
     except SceneError as e:
         _error(str(e))
         return EXIT_ERROR
@@ -192,6 +192,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
+    if args.rig:
+        settings["rig"] = args.rig
     try:
         paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
     except (OSError, RuntimeError, ValueError) as e:
@@ -214,6 +216,10 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="wall-clock budget in seconds (the render ends within about one pass of it)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
     p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
+    p.add_argument("--rig", default=None, metavar="SPEC",
+                   help="replace the sensors by a rig around the first one: stereo:ipd=0.064, "
+                        "linear:n=45,baseline=0.5, grid:9x9,spacing=0.05[,focus_distance=D], "
+                        "orbit:n=60,radius=4, path:keys.json,frames=100,fps=24,shutter=0.5")
     p.add_argument("--views", default=None, metavar="LIST",
                    help="comma-separated view ids or indices to render (an id wins over an index)")
     p.add_argument("-o", "--output", type=Path, default=Path("out"), help="output directory (default: out)")
