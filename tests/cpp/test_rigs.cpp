@@ -104,6 +104,27 @@ TEST(Rigs, GridPosesIdsAndSharedFocalPlane) {
     }
 }
 
+TEST(Rigs, StereoAndLinearShareTheFocalPlaneToo) {
+    const float D = 3.f;
+    Transform to_world = Transform::look_at({1, 2, 6}, {0, 0.5f, 0}, {0, 1, 0});
+    for (const char *attrs : {R"(type="stereo" ipd="0.2" focus_distance="3")", R"(type="linear" n="7" baseline="0.9" focus_distance="3")"}) {
+        auto s = load_rig(attrs);
+        for (float qx : {-0.25f, 0.f, 0.3f}) {
+            Point3f on = to_world.point({qx * D, 0.1f * D, D}), near = to_world.point({qx * 2.f, 0.2f, 2.f});
+            Vec2f x0, x, n0, n;
+            ASSERT_TRUE(s->cameras()[0]->project(on, 0.f, {0.f, 0.f}, &x0));
+            ASSERT_TRUE(s->cameras()[0]->project(near, 0.f, {0.f, 0.f}, &n0));
+            for (auto &c : s->cameras()) {
+                ASSERT_TRUE(c->project(on, 0.f, {0.f, 0.f}, &x));
+                EXPECT_NEAR(x.x, x0.x, 2e-3f) << attrs << " " << c->id;
+                EXPECT_NEAR(x.y, x0.y, 2e-3f) << attrs << " " << c->id;
+                ASSERT_TRUE(c->project(near, 0.f, {0.f, 0.f}, &n));
+                if (c != s->cameras()[0]) EXPECT_GT(std::abs(n.x - n0.x), 0.5f) << attrs << " " << c->id; // parallax off the plane
+            }
+        }
+    }
+}
+
 TEST(Rigs, GridWithoutFocusDistanceIsParallel) {
     auto s = load_rig(R"(type="grid" cols="2" rows="2" spacing="0.2")");
     auto base = load_base();
@@ -291,6 +312,11 @@ TEST(RigErrors, BadTypeParameterOrStructure) {
     e = error_of([&] { load_rig(R"(type="stereo")", R"(<sensor type="perspective"><animation name="to_world">
         <transform time="0"><translate x="1"/></transform><transform time="1"><translate x="2"/></transform></animation></sensor>)"); });
     EXPECT_NE(e.find("static 'to_world'"), std::string::npos) << e;
+    e = error_of([&] {
+        load_scene_string(std::string("<scene version=\"3.0.0\"><shape type=\"sphere\"><mvpt:rig type=\"stereo\">") + BaseSensor +
+                              "</mvpt:rig></shape></scene>", ".");
+    });
+    EXPECT_NE(e.find("<mvpt:rig> must be placed directly inside <scene>"), std::string::npos) << e;
     e = error_of([&] { load_scene_string("<scene version=\"3.0.0\"><shape type=\"sphere\"/></scene>", ".", {}, "stereo"); });
     EXPECT_NE(e.find("has no <sensor>"), std::string::npos) << e;
     e = error_of([&] { load_scene_string(std::string("<scene version=\"3.0.0\">") + BaseSensor + "</scene>", ".", {}, "stereo:0.1"); });
