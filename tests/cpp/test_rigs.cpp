@@ -256,6 +256,27 @@ TEST(Rigs, RigOptionReplacesTheSensors) {
     EXPECT_EQ(load_scene_string(xml, ".", {}, "orbit:n=60,radius=4")->cameras().size(), 60u);
 }
 
+TEST(Rigs, ReferencedFilmSetsTheShear) {
+    // The shear needs the film's aspect: a <ref>'d film (as in scenes/cornell-glossy-9.xml) is
+    // looked up, so a point on the focal plane stays on one pixel vertically too.
+    std::string film = R"(<film type="hdrfilm" id="f"><integer name="width" value="32"/><integer name="height" value="32"/></film>)";
+    std::string sensor = R"(<sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform><ref id="f"/></sensor>)";
+    auto xml_rig = load_scene_string("<scene version=\"3.0.0\">" + film + "<mvpt:rig type=\"grid\" size=\"3x3\" spacing=\"0.2\" focus_distance=\"5\">" +
+                                         sensor + "</mvpt:rig></scene>", ".");
+    auto opt_rig = load_scene_string("<scene version=\"3.0.0\">" + film + sensor + "</scene>", ".", {}, "grid:3x3,spacing=0.2,focus_distance=5");
+    for (auto *s : {xml_rig.get(), opt_rig.get()}) {
+        ASSERT_EQ(s->cameras().size(), 9u);
+        for (auto &c : s->cameras()) {
+            Vec2f x;
+            ASSERT_TRUE(c->project({0.3f, -0.4f, 0.f}, 0.f, {0.f, 0.f}, &x));
+            Vec2f want(16.f + 0.3f * 16.f / std::tan(20.f * Pi / 180.f) / 5.f, 16.f + 0.4f * 16.f / std::tan(20.f * Pi / 180.f) / 5.f);
+            EXPECT_NEAR(x.x, want.x, 2e-3f) << c->id;
+            EXPECT_NEAR(x.y, want.y, 2e-3f) << c->id;
+        }
+    }
+}
+
 TEST(Rigs, ThinLensBaseKeepsItsLens) {
     auto s = load_rig(R"(type="stereo" focus_distance="5")", R"(<sensor type="thinlens"><float name="aperture_radius" value="0.1"/>
         <float name="focus_distance" value="5"/></sensor>)");

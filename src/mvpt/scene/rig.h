@@ -75,8 +75,10 @@ struct RigView {
 std::vector<RigView> generate_rig(const RigSpec &spec, const RigBase &base,
                                   const std::vector<std::filesystem::path> &search_dirs);
 
-/// The sensors of a <mvpt:rig> element (its one child <sensor> is the base camera).
-std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const std::vector<std::filesystem::path> &search_dirs);
+/// The sensors of a <mvpt:rig> element (its one child <sensor> is the base camera); `scene`
+/// holds the top-level elements read so far (a <ref>'d film is looked up there).
+std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene,
+                                        const std::vector<std::filesystem::path> &search_dirs);
 
 /// The `--rig` option: replace the scene's top-level sensors by the rig generated from the
 /// first one. Relative key files resolve against the working directory, then the scene's.

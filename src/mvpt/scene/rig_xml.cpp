@@ -52,8 +52,9 @@ XmlNode float_node(const std::string &name, double value, const XmlNode &like) {
     return element("float", {XmlAttr("name", name, like.loc), XmlAttr("value", format_number(value, 9), like.loc)}, like);
 }
 
-/// The pose, field of view and principal point of the base camera `sensor`.
-RigBase rig_base(const XmlNode &sensor, const std::string &where) {
+/// The pose, field of view and principal point of the base camera `sensor`; a film given as
+/// <ref id="..."/> is looked up among the top-level elements of `scene`.
+RigBase rig_base(const XmlNode &sensor, const std::string &where, const XmlNode &scene) {
     const std::string *type = sensor.attr("type");
     if (!type || (*type != "perspective" && *type != "thinlens"))
         throw SceneError(sensor.loc, where + ": the base camera must be a perspective or thinlens <sensor>" +
@@ -72,8 +73,15 @@ RigBase rig_base(const XmlNode &sensor, const std::string &where) {
                    (*name == "fov" || *name == "fov_axis" || *name == "focal_length" ||
                     *name == "principal_point_offset_x" || *name == "principal_point_offset_y")) {
             parse_value_node(c, props, {});
-        } else if (c.tag == "film") {
-            for (const XmlNode &f : c.children) {
+        } else if (c.tag == "film" || c.tag == "ref") {
+            const XmlNode *film = &c;
+            if (c.tag == "ref") {
+                film = nullptr;
+                for (const XmlNode &top : scene.children)
+                    if (top.tag == "film" && top.attr("id") && c.attr("id") && *top.attr("id") == *c.attr("id")) film = &top;
+                if (!film) continue; // a shared sampler, or a film declared later (then hdrfilm's default size)
+            }
+            for (const XmlNode &f : film->children) {
                 const std::string *fname = f.attr("name"), *value = f.attr("value");
                 if (f.tag != "integer" || !fname || !value) continue;
                 if (*fname == "width") width = int(parse_int(*value, f.attr_loc("value"), "film width"));
@@ -128,7 +136,7 @@ XmlNode view_sensor(const XmlNode &base, const RigView &view, const XmlNode &at)
 
 } // namespace
 
-std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const std::vector<fs::path> &search_dirs) {
+std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene, const std::vector<fs::path> &search_dirs) {
     RigSpec spec;
     spec.where = "<" + rig.tag + ">";
     spec.loc = rig.loc;
@@ -147,7 +155,7 @@ std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const std::vector<fs
     }
     if (!base) throw SceneError(rig.loc, spec.where + " needs a <sensor> inside it: the base camera of the rig");
     std::vector<XmlNode> out;
-    for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where), search_dirs))
+    for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where, scene), search_dirs))
         out.push_back(view_sensor(*base, v, rig));
     return out;
 }
@@ -163,7 +171,7 @@ void apply_rig_option(XmlNode &root, const std::string &text) {
     for (auto &d : root.search_dirs) dirs.push_back(d);
     const XmlNode base = root.children[first];
     std::vector<XmlNode> views;
-    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig"), dirs)) views.push_back(view_sensor(base, v, base));
+    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs)) views.push_back(view_sensor(base, v, base));
     std::vector<XmlNode> children;
     for (size_t i = 0; i < root.children.size(); ++i) {
         if (i == first)
