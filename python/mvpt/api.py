@@ -19,17 +19,20 @@ def _defines(kwargs: dict) -> dict:
     return out
 
 
-def load_file(path: str | os.PathLike, **defines) -> _core.Scene:
+def load_file(path: str | os.PathLike, rig: Optional[str] = None, **defines) -> _core.Scene:
     """Load a Mitsuba 3 XML scene; keyword arguments override its <default> values.
 
+    `rig` (e.g. "stereo:ipd=0.064", "grid:5x5,spacing=0.05,focus_distance=3",
+    "path:keys.json,frames=100,fps=24,shutter=0.5"; the CLI's --rig) replaces the scene's
+    sensors by the views generated from its first sensor (README, "Camera rigs and shots").
     Raises mvpt.SceneError (a ValueError) naming file:line:col on bad input; the error
     also has the attributes file, line, column and message."""
-    return _core.load_file(os.fspath(path), _defines(defines))
+    return _core.load_file(os.fspath(path), _defines(defines), rig or "")
 
 
-def load_string(xml: str, base_dir: str | os.PathLike = ".", **defines) -> _core.Scene:
+def load_string(xml: str, base_dir: str | os.PathLike = ".", rig: Optional[str] = None, **defines) -> _core.Scene:
     """Load a scene from an XML string; relative file names resolve in `base_dir`."""
-    return _core.load_string(xml, os.fspath(base_dir), _defines(defines))
+    return _core.load_string(xml, os.fspath(base_dir), _defines(defines), rig or "")
 
 
 @dataclass

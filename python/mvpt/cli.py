@@ -194,7 +194,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
         _error(problem)
         return EXIT_USAGE
     try:
-        scene = api.load_file(scene_path, **defines)
+        scene = api.load_file(scene_path, rig=args.rig, **defines)
     except SceneError as e:
         _error(str(e))
         return EXIT_ERROR
@@ -219,6 +219,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
+    if args.rig:
+        settings["rig"] = args.rig
     try:
         paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
         if displays.wants_displays(args):
@@ -246,6 +248,10 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=("pt", "mvpt"), default="scene",
                    help="pt: independent path tracing of every view; mvpt: multi-view path tracing "
                         "(default: the scene's integrator, 'mvpath' meaning mvpt)")
+    p.add_argument("--rig", default=None, metavar="SPEC",
+                   help="replace the sensors by a rig around the first one: stereo:ipd=0.064, "
+                        "linear:n=45,baseline=0.5, grid:9x9,spacing=0.05[,focus_distance=D], "
+                        "orbit:n=60,radius=4, path:keys.json,frames=100,fps=24,shutter=0.5")
     p.add_argument("--views", default=None, metavar="LIST",
                    help="comma-separated view ids or indices to render (an id wins over an index)")
     p.add_argument("-o", "--output", type=Path, default=Path("out"), help="output directory (default: out)")

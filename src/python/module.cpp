@@ -248,12 +248,13 @@ NB_MODULE(_core, m) {
         }, "view"_a, "y"_a, "n"_a, "time"_a = 0.f, "lens"_a = Vec2{0.f, 0.f},
            "G(y): film area (pixels^2) per unit surface area at y with normal n (design doc §4).");
 
-    m.def("load_file", [](const std::string &path, const std::map<std::string, std::string> &defines) {
-        return std::shared_ptr<Scene>(load_scene_file(path, defines));
-    }, "path"_a, "defines"_a = std::map<std::string, std::string>{});
-    m.def("load_string", [](const std::string &xml, const std::string &base_dir, const std::map<std::string, std::string> &defines) {
-        return std::shared_ptr<Scene>(load_scene_string(xml, base_dir, defines));
-    }, "xml"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{});
+    m.def("load_file", [](const std::string &path, const std::map<std::string, std::string> &defines, const std::string &rig) {
+        return std::shared_ptr<Scene>(load_scene_file(path, defines, rig));
+    }, "path"_a, "defines"_a = std::map<std::string, std::string>{}, "rig"_a = "");
+    m.def("load_string", [](const std::string &xml, const std::string &base_dir, const std::map<std::string, std::string> &defines,
+                            const std::string &rig) {
+        return std::shared_ptr<Scene>(load_scene_string(xml, base_dir, defines, rig));
+    }, "xml"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{}, "rig"_a = "");
 
     nb::class_<RenderJob>(m, "RenderJob")
         .def("__init__", [](RenderJob *self, std::shared_ptr<Scene> scene, int spp, double time, std::optional<uint32_t> seed,

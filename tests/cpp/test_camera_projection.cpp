@@ -47,7 +47,16 @@ const char *CameraXml = R"(
       <transform time="0.5"><rotate x="1" angle="8"/><rotate y="1" angle="185"/><translate x="0" y="1" z="6.5"/></transform>
       <transform time="1"><rotate y="1" angle="195"/><translate x="1.5" y="0.8" z="6"/></transform>
     </animation>
-    <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="64"/></film></sensor>)";
+    <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="64"/></film></sensor>
+  <sensor type="perspective" id="offaxis_g"><float name="fov" value="42"/>
+    <float name="principal_point_offset_x" value="0.17"/><float name="principal_point_offset_y" value="-0.11"/>
+    <transform name="to_world"><lookat origin="0.8,0.6,6" target="0.3,0.1,0" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="72"/><integer name="height" value="40"/></film></sensor>
+  <sensor type="thinlens" id="offaxis_lens_h"><float name="fov" value="38"/><string name="fov_axis" value="y"/>
+    <float name="principal_point_offset_x" value="-0.09"/><float name="principal_point_offset_y" value="0.13"/>
+    <float name="aperture_radius" value="0.12"/><float name="focus_distance" value="6"/>
+    <transform name="to_world"><lookat origin="-1.2,0.4,6.2" target="-0.2,0.2,0" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="56"/><integer name="height" value="64"/></film></sensor>)";
 
 std::unique_ptr<Scene> load(const std::string &body) {
     return load_scene_string("<scene version=\"3.0.0\">" + body + "</scene>", ".");
@@ -138,6 +147,36 @@ TEST(CameraProjection, ProjectInvertsGenerateRay) {
     }
 }
 
+TEST(CameraProjection, PrincipalPointOffsetShiftsTheImage) {
+    // Mitsuba's principal_point_offset_x/_y (fractions of the film size) are added to the film
+    // position before the near-plane map: the ray through film position x of the off-axis camera
+    // equals the ray through x + (ppo_x W, ppo_y H) of the same camera without offset, and the
+    // optical axis lands at ((0.5 - ppo_x) W, (0.5 - ppo_y) H).
+    for (const char *type : {"perspective", "thinlens"}) {
+        std::string lens = std::string(type) == "thinlens"
+                               ? "<float name=\"aperture_radius\" value=\"0.1\"/><float name=\"focus_distance\" value=\"4\"/>"
+                               : "";
+        std::string pose = "<transform name=\"to_world\"><lookat origin=\"1,2,3\" target=\"0,0,0\" up=\"0,1,0\"/></transform>"
+                           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"40\"/><integer name=\"height\" value=\"30\"/></film>";
+        auto s = load("<sensor type=\"" + std::string(type) + "\">" + lens + pose +
+                      "<float name=\"principal_point_offset_x\" value=\"0.25\"/><float name=\"principal_point_offset_y\" value=\"-0.1\"/></sensor>"
+                      "<sensor type=\"" + std::string(type) + "\">" + lens + pose + "</sensor>");
+        const Camera &off = *s->cameras()[0], &on = *s->cameras()[1];
+        Rng rng(9);
+        for (int i = 0; i < 100; ++i) {
+            Vec2f x(rng.next() * 40.f, rng.next() * 30.f), xi = warp::square_to_uniform_disk_concentric(rng.next_2d());
+            Ray a = off.generate_ray(x, xi, 0.f), b = on.generate_ray(x + Vec2f(0.25f * 40.f, -0.1f * 30.f), xi, 0.f);
+            EXPECT_LT(norm(a.o - b.o), 1e-6f) << type;
+            EXPECT_LT(norm(a.d - b.d), 1e-6f) << type;
+        }
+        Ray axis = on.generate_ray({20.f, 15.f}, {0.f, 0.f}, 0.f);
+        Vec2f x;
+        ASSERT_TRUE(off.project(axis.at(2.f), 0.f, {0.f, 0.f}, &x));
+        EXPECT_NEAR(x.x, (0.5f - 0.25f) * 40.f, 1e-4f) << type;
+        EXPECT_NEAR(x.y, (0.5f + 0.1f) * 30.f, 1e-4f) << type;
+    }
+}
+
 TEST(CameraProjection, ProjectRejectsPointsOutsideTheDepthRange) {
     auto s = load(R"(<sensor type="thinlens"><float name="near_clip" value="0.5"/><float name="far_clip" value="20"/>
         <float name="aperture_radius" value="0.1"/><float name="focus_distance" value="4"/>
@@ -166,7 +205,8 @@ TEST(CameraProjection, ShiftJacobianEqualsFilmDensityRatio) {
     std::vector<std::pair<const Camera *, const Camera *>> pairs = {
         {cam("pin_a"), cam("pin_b")},    {cam("pin_b"), cam("pin_a")},   {cam("lens_c"), cam("lens_d")},
         {cam("lens_d"), cam("lens_c")},  {cam("pin_a"), cam("lens_c")},  {cam("lens_d"), cam("pin_b")},
-        {cam("moving_e"), cam("moving_f")}, {cam("moving_f"), cam("lens_c")}, {cam("pin_a"), cam("moving_e")}};
+        {cam("moving_e"), cam("moving_f")}, {cam("moving_f"), cam("lens_c")}, {cam("pin_a"), cam("moving_e")},
+        {cam("offaxis_g"), cam("pin_a")}, {cam("lens_c"), cam("offaxis_lens_h")}, {cam("offaxis_lens_h"), cam("offaxis_g")}};
     Rng rng(2);
     // Step (pixels): smaller steps let float rounding of the hit point dominate, larger ones
     // the O(h^4) remainder; at 0.4 both stay below 1e-3 relative (worst seen: 3e-4).

@@ -100,7 +100,8 @@ Vec3f parse_vec3_attr(const XmlNode &n, const char *attr, const std::string &wha
     return {float(l[0]), float(l[1]), float(l[2])};
 }
 
-/// Compose the operations inside a <transform>; each one applies after the previous.
+} // namespace
+
 Transform parse_transform_ops(const XmlNode &node) {
     Transform t;
     for (auto &op : node.children) {
@@ -154,6 +155,8 @@ Transform parse_transform_ops(const XmlNode &node) {
     if (!t.matrix().is_finite()) throw SceneError(node.loc, "transform is not finite");
     return t;
 }
+
+namespace {
 
 /// `wavelength:value, ...` pairs, or one constant (Mitsuba's Properties::Spectrum).
 SpectrumCurve parse_spectrum_pairs(const std::string &text, const FileLoc &loc, const std::string &what) {

@@ -24,6 +24,9 @@ int64_t parse_int(const std::string &s, const FileLoc &loc, const std::string &w
 /// Comma- and/or space-separated list of finite floats.
 std::vector<double> parse_float_list(const std::string &s, const FileLoc &loc, const std::string &what);
 
+/// Compose the operations inside a <transform> element; each one applies after the previous.
+Transform parse_transform_ops(const XmlNode &node);
+
 /// Parse one value element (not an object) and store it in `props`; `ctx` resolves
 /// file names (`<spectrum filename="...">`).
 void parse_value_node(const XmlNode &node, Properties &props, const LoadContext &ctx);

@@ -1,6 +1,7 @@
 #include "scene.h"
 
 #include "plugin.h"
+#include "rig.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -154,8 +155,10 @@ bool Scene::occluded(const Ray &ray) const {
     return r.tfar < 0.f;
 }
 
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const std::map<std::string, std::string> &defines) {
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const std::map<std::string, std::string> &defines,
+                                       const std::string &rig) {
     XmlNode root = parse_scene_file(path, defines);
+    if (!rig.empty()) apply_rig_option(root, rig);
     SceneTree tree = instantiate_scene(root, std::filesystem::absolute(path).parent_path());
     auto scene = std::make_unique<Scene>();
     scene->build(tree);
@@ -163,8 +166,9 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const 
 }
 
 std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
-                                         const std::map<std::string, std::string> &defines) {
+                                         const std::map<std::string, std::string> &defines, const std::string &rig) {
     XmlNode root = parse_scene_string(xml, base_dir, defines);
+    if (!rig.empty()) apply_rig_option(root, rig);
     SceneTree tree = instantiate_scene(root, std::filesystem::absolute(base_dir));
     auto scene = std::make_unique<Scene>();
     scene->build(tree);

@@ -59,10 +59,14 @@ private:
     bool m_animated = false;
 };
 
-/// Load a Mitsuba 3 XML scene; `defines` override its <default> values.
+/// Load a Mitsuba 3 XML scene; `defines` override its <default> values. A non-empty `rig`
+/// (e.g. "grid:5x5,spacing=0.05", see scene/rig.h) replaces the sensors by the views it
+/// generates from the scene's first sensor.
 std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path,
-                                       const std::map<std::string, std::string> &defines = {});
+                                       const std::map<std::string, std::string> &defines = {},
+                                       const std::string &rig = {});
 std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
-                                         const std::map<std::string, std::string> &defines = {});
+                                         const std::map<std::string, std::string> &defines = {},
+                                         const std::string &rig = {});
 
 } // namespace mvpt

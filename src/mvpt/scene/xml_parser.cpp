@@ -2,6 +2,7 @@
 
 #include "parse_values.h"
 #include "plugin.h"
+#include "rig.h"
 #include "suggest.h"
 
 #include <pugixml.hpp>
@@ -257,6 +258,16 @@ private:
             if (++m_nesting > 256) throw SceneError(loc, "elements nested more than 256 levels deep");
             expand_children(c, src, dir, n, depth);
             --m_nesting;
+            if (is_rig_element(tag)) {
+                // A camera rig becomes plain sensors here, before instantiation (rig_xml.cpp).
+                if (std::string(parent.name()) != "scene")
+                    throw SceneError(loc, "<" + tag + "> must be placed directly inside <scene>");
+                std::vector<fs::path> dirs = {dir};
+                dirs.insert(dirs.end(), m_path_dirs.begin(), m_path_dirs.end());
+                dirs.push_back(m_root_dir);
+                for (XmlNode &s : expand_rig_element(n, out, dirs)) out.children.push_back(std::move(s));
+                continue;
+            }
             out.children.push_back(std::move(n));
         }
     }

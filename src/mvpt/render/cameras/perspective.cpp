@@ -4,6 +4,7 @@
 #include "../../scene/plugin.h"
 #include "../camera.h"
 #include "camera_pose.h"
+#include "field_of_view.h"
 #include "sensor_common.h"
 
 #include <cmath>
@@ -35,34 +36,13 @@ public:
             if (!(m_aperture_radius >= 0.f)) props.fail("aperture_radius", "'aperture_radius' must be >= 0");
             if (!(m_focus_distance > 0.f)) props.fail("focus_distance", "'focus_distance' must be > 0");
         }
-        float aspect = float(film.width) / float(film.height);
-        std::string axis = props.get_string("fov_axis", "x");
-        float fov;
-        if (props.has("fov")) {
-            if (props.has("focal_length")) props.fail("focal_length", "give either 'fov' or 'focal_length', not both");
-            fov = props.get_float("fov");
-        } else {
-            // 35 mm film equivalent: the focal length fixes the diagonal field of view.
-            std::string fl = props.get_string("focal_length", "50mm");
-            float f = std::strtof(fl.c_str(), nullptr);
-            if (!(f > 0.f)) props.fail("focal_length", "cannot read focal_length '" + fl + "' (expected e.g. \"50mm\")");
-            fov = 2.f * std::atan(std::sqrt(36.f * 36.f + 24.f * 24.f) / (2.f * f)) * 180.f / Pi;
-            axis = "diagonal";
-        }
-        if (!(fov > 0.f && fov < 180.f)) props.fail("fov", "'fov' must lie in (0, 180) degrees, got " + std::to_string(fov));
-        float t = std::tan(deg_to_rad(fov) * 0.5f);
-        if (axis == "smaller") axis = aspect > 1.f ? "y" : "x";
-        else if (axis == "larger") axis = aspect > 1.f ? "x" : "y";
-        if (axis == "x") {
-            m_tan_x = t; m_tan_y = t / aspect;
-        } else if (axis == "y") {
-            m_tan_y = t; m_tan_x = t * aspect;
-        } else if (axis == "diagonal") {
-            float diag = std::sqrt(float(film.width) * film.width + float(film.height) * film.height);
-            m_tan_x = t * film.width / diag; m_tan_y = t * film.height / diag;
-        } else {
-            props.fail("fov_axis", "'fov_axis' must be x, y, diagonal, smaller or larger, got '" + axis + "'");
-        }
+        read_field_of_view(props, film.width, film.height, &m_tan_x, &m_tan_y);
+        // Off-axis (sheared) frustum: Mitsuba's principal_point_offset_x/_y, in units of the
+        // full film's width/height, are added to the film position before it is mapped to the
+        // near plane (so +x moves the image content left). Mitsuba 3 has them on `perspective`
+        // only; mvpt also accepts them on `thinlens` (camera rigs shear thin-lens views too).
+        m_ppo_x = props.get_float("principal_point_offset_x", 0.f);
+        m_ppo_y = props.get_float("principal_point_offset_y", 0.f);
         // Pixels are square for every fov_axis (tan_x / W == tan_y / H), so one film distance serves.
         m_film_distance = 0.5f * float(film.width) / m_tan_x;
     }
@@ -152,12 +132,13 @@ private:
     /// Film position (pixels) -> camera-space point on the plane z = 1 (Mitsuba's sample_to_camera:
     /// film x grows to the camera's right = -x, film y grows downwards = -y).
     Vec3f plane_from_film(Vec2f film_pos) const {
-        float u = film_pos.x / float(film.width), v = film_pos.y / float(film.height);
+        float u = film_pos.x / float(film.width) + m_ppo_x, v = film_pos.y / float(film.height) + m_ppo_y;
         return {-(2.f * u - 1.f) * m_tan_x, -(2.f * v - 1.f) * m_tan_y, 1.f};
     }
     /// Inverse of `plane_from_film`.
     Vec2f film_from_plane(float qx, float qy) const {
-        return {0.5f * (1.f - qx / m_tan_x) * float(film.width), 0.5f * (1.f - qy / m_tan_y) * float(film.height)};
+        return {(0.5f * (1.f - qx / m_tan_x) - m_ppo_x) * float(film.width),
+                (0.5f * (1.f - qy / m_tan_y) - m_ppo_y) * float(film.height)};
     }
 
     Point3f lens_point_in_pose(const CameraPose &pose, Vec2f lens) const {
@@ -191,6 +172,7 @@ private:
     bool m_animated = false;
     float m_near, m_far, m_focus_distance, m_aperture_radius = 0.f;
     float m_tan_x = 1.f, m_tan_y = 1.f;
+    float m_ppo_x = 0.f, m_ppo_y = 0.f; ///< principal point offset (fractions of the film size)
     float m_film_distance = 1.f; ///< f = (W/2) / tan(fov_x/2), in pixels
 };
 

@@ -1,0 +1,184 @@
+// Rigs in scene files and on the command line: expansion into plain <sensor> elements.
+//
+// Scene files write a rig as an element of mvpt's own namespace,
+//   <scene version="3.0.0" xmlns:mvpt="urn:mvpt">
+//     <mvpt:rig type="grid" size="5x5" spacing="0.05" focus_distance="3" id="lf">
+//       <sensor type="perspective"> ... the base camera ... </sensor>
+//     </mvpt:rig>
+// directly inside <scene>. The element name is matched literally as `mvpt:rig` (the XML is
+// not namespace-processed, and the xmlns declaration is optional but keeps the file valid
+// namespaced XML); every attribute but `type` and `id` is a rig parameter (rig.h), `id` prefixes
+// the view ids ("lf_r0c0"). Each generated sensor is a copy of the base camera with its own
+// id, a `to_world` matrix (an <animation> of matrices over the shutter for path rigs),
+// principal_point_offset_x/_y when sheared, and shutter_open/_close for path rigs.
+#include "rig.h"
+
+#include "../render/cameras/field_of_view.h"
+#include "parse_values.h"
+
+#include <cstdio>
+
+namespace mvpt {
+
+namespace fs = std::filesystem;
+
+bool is_rig_element(const std::string &tag) { return tag == "mvpt:rig"; }
+
+namespace {
+
+std::string format_number(double v, int digits) {
+    char buf[40];
+    std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+    return buf;
+}
+
+XmlNode element(const std::string &tag, XmlAttrs attrs, const XmlNode &like) {
+    XmlNode n;
+    n.tag = tag;
+    n.attrs = std::move(attrs);
+    n.loc = like.loc;
+    n.dir = like.dir;
+    return n;
+}
+
+XmlNode matrix_node(const Transform &t, const XmlNode &like) {
+    std::string v;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) v += (v.empty() ? "" : " ") + format_number(t.matrix().m[i][j], 17);
+    return element("matrix", {XmlAttr("value", v, like.loc)}, like);
+}
+
+XmlNode float_node(const std::string &name, double value, const XmlNode &like) {
+    return element("float", {XmlAttr("name", name, like.loc), XmlAttr("value", format_number(value, 9), like.loc)}, like);
+}
+
+/// The pose, field of view and principal point of the base camera `sensor`; a film given as
+/// <ref id="..."/> is looked up among the top-level elements of `scene`.
+RigBase rig_base(const XmlNode &sensor, const std::string &where, const XmlNode &scene) {
+    const std::string *type = sensor.attr("type");
+    if (!type || (*type != "perspective" && *type != "thinlens"))
+        throw SceneError(sensor.loc, where + ": the base camera must be a perspective or thinlens <sensor>" +
+                                         (type ? ", got '" + *type + "'" : std::string()));
+    RigBase base;
+    Properties props("sensor", *type, sensor.loc);
+    int width = 768, height = 576; // hdrfilm's defaults
+    for (const XmlNode &c : sensor.children) {
+        const std::string *name = c.attr("name");
+        if (name && *name == "to_world") {
+            if (c.tag == "animation")
+                throw SceneError(c.loc, where + ": the base camera of a rig must have a static 'to_world' "
+                                                "(a path rig animates the views itself)");
+            if (c.tag == "transform") base.to_world = parse_transform_ops(c);
+        } else if (name && (c.tag == "float" || c.tag == "string") &&
+                   (*name == "fov" || *name == "fov_axis" || *name == "focal_length" ||
+                    *name == "principal_point_offset_x" || *name == "principal_point_offset_y")) {
+            parse_value_node(c, props, {});
+        } else if (c.tag == "film" || c.tag == "ref") {
+            const XmlNode *film = &c;
+            if (c.tag == "ref") {
+                film = nullptr;
+                for (const XmlNode &top : scene.children)
+                    if (top.tag == "film" && top.attr("id") && c.attr("id") && *top.attr("id") == *c.attr("id")) film = &top;
+                if (!film) continue; // a shared sampler, or a film declared later (then hdrfilm's default size)
+            }
+            for (const XmlNode &f : film->children) {
+                const std::string *fname = f.attr("name"), *value = f.attr("value");
+                if (f.tag != "integer" || !fname || !value) continue;
+                if (*fname == "width") width = int(parse_int(*value, f.attr_loc("value"), "film width"));
+                if (*fname == "height") height = int(parse_int(*value, f.attr_loc("value"), "film height"));
+            }
+        }
+    }
+    if (width <= 0 || height <= 0) throw SceneError(sensor.loc, where + ": the base camera's film size must be positive");
+    read_field_of_view(props, width, height, &base.tan_x, &base.tan_y);
+    base.ppo_x = props.get_float("principal_point_offset_x", 0.f);
+    base.ppo_y = props.get_float("principal_point_offset_y", 0.f);
+    return base;
+}
+
+/// A copy of the base sensor posed as `view`; new elements carry the location `at`.
+XmlNode view_sensor(const XmlNode &base, const RigView &view, const XmlNode &at) {
+    XmlNode s = base;
+    s.attrs.clear();
+    for (const XmlAttr &a : base.attrs)
+        if (a.first != "id") s.attrs.push_back(a);
+    s.attrs.emplace_back("id", view.id, at.loc);
+    auto replaced = [&](const XmlNode &c) {
+        const std::string *name = c.attr("name");
+        if (!name) return false;
+        if (*name == "to_world" || *name == "principal_point_offset_x" || *name == "principal_point_offset_y") return true;
+        return view.has_shutter && (*name == "shutter_open" || *name == "shutter_close");
+    };
+    s.children.clear();
+    for (const XmlNode &c : base.children)
+        if (!replaced(c)) s.children.push_back(c);
+    if (view.motion.empty()) {
+        XmlNode t = element("transform", {XmlAttr("name", "to_world", at.loc)}, at);
+        t.children.push_back(matrix_node(view.to_world, at));
+        s.children.push_back(std::move(t));
+    } else {
+        XmlNode anim = element("animation", {XmlAttr("name", "to_world", at.loc)}, at);
+        for (auto &[time, pose] : view.motion) {
+            XmlNode key = element("transform", {XmlAttr("time", format_number(time, 9), at.loc)}, at);
+            key.children.push_back(matrix_node(pose, at));
+            anim.children.push_back(std::move(key));
+        }
+        s.children.push_back(std::move(anim));
+    }
+    if (view.ppo_x != 0.f) s.children.push_back(float_node("principal_point_offset_x", view.ppo_x, at));
+    if (view.ppo_y != 0.f) s.children.push_back(float_node("principal_point_offset_y", view.ppo_y, at));
+    if (view.has_shutter) {
+        s.children.push_back(float_node("shutter_open", view.shutter_open, at));
+        s.children.push_back(float_node("shutter_close", view.shutter_close, at));
+    }
+    return s;
+}
+
+} // namespace
+
+std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene, const std::vector<fs::path> &search_dirs) {
+    RigSpec spec;
+    spec.where = "<" + rig.tag + ">";
+    spec.loc = rig.loc;
+    spec.type = required(rig.attrs, "type", rig.tag, rig.loc);
+    for (const XmlAttr &a : rig.attrs) {
+        if (a.first == "type") continue;
+        if (a.first == "id") spec.id_prefix = a.second;
+        else if (a.first.rfind("xmlns", 0) != 0) spec.params[a.first] = {a.second, a.loc.line > 0 ? a.loc : rig.loc};
+    }
+    const XmlNode *base = nullptr;
+    for (const XmlNode &c : rig.children) {
+        if (c.tag != "sensor" || base)
+            throw SceneError(c.loc, spec.where + " contains exactly one <sensor> (the base camera), got " +
+                                        (c.tag == "sensor" ? "a second <sensor>" : "<" + c.tag + ">"));
+        base = &c;
+    }
+    if (!base) throw SceneError(rig.loc, spec.where + " needs a <sensor> inside it: the base camera of the rig");
+    std::vector<XmlNode> out;
+    for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where, scene), search_dirs))
+        out.push_back(view_sensor(*base, v, rig));
+    return out;
+}
+
+void apply_rig_option(XmlNode &root, const std::string &text) {
+    RigSpec spec = RigSpec::parse(text);
+    size_t first = root.children.size();
+    for (size_t i = 0; i < root.children.size() && first == root.children.size(); ++i)
+        if (root.children[i].tag == "sensor") first = i;
+    if (first == root.children.size())
+        throw SceneError(root.loc, "--rig needs a base camera, but the scene has no <sensor>");
+    std::vector<fs::path> dirs = {fs::current_path(), root.dir};
+    for (auto &d : root.search_dirs) dirs.push_back(d);
+    const XmlNode base = root.children[first];
+    std::vector<XmlNode> views;
+    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs)) views.push_back(view_sensor(base, v, base));
+    std::vector<XmlNode> children;
+    for (size_t i = 0; i < root.children.size(); ++i) {
+        if (i == first)
+            for (auto &v : views) children.push_back(std::move(v));
+        if (root.children[i].tag != "sensor") children.push_back(std::move(root.children[i]));
+    }
+    root.children = std::move(children);
+}
+
+} // namespace mvpt
