@@ -34,7 +34,10 @@ public:
         std::vector<int64_t> &buf = m_data[slot];
         if (buf.empty()) buf.assign(m_pixels[slot] * SplatChannels, 0);
         int64_t *p = &buf[size_t(pixel) * SplatChannels];
-        for (int c = 0; c < 7; ++c) p[c] += std::llround(v[c] * SplatScale);
+        for (int c = 0; c < 7; ++c) { // round to nearest (an inlined conversion, unlike llround)
+            double x = v[c] * SplatScale;
+            p[c] += int64_t(x + (x >= 0.0 ? 0.5 : -0.5));
+        }
         p[7] += 1;
         return true;
     }

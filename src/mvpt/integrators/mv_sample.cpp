@@ -27,7 +27,7 @@ float cached_similarity(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, c
     if (a == b) return 1.f;
     size_t m = sc.cand.size();
     float &v = sc.sm[a * m + b];
-    if (v < 0.f) v = sc.sm[b * m + a] = material_similarity(bsdf, si, sc.lobe[a], sc.lobe[b], ctx.cfg.tv);
+    if (v < 0.f) v = sc.sm[b * m + a] = material_similarity(bsdf, si, sc.lobe[a], sc.lobe[b], ctx.cfg.tv, sc.alpha);
     return v;
 }
 
@@ -133,6 +133,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     sc.visible.assign(m, 1);
     sc.selected.assign(m, 1);
     sc.sm.assign(m * m, -1.f);
+    sc.alpha = bsdf.roughness(si);
     for (size_t i = 0; i < m; ++i) {
         const ShiftCandidate &c = cand[i];
         sc.n[i] = float(ctx.native_map[c.slot][c.pixel]);
@@ -141,22 +142,38 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     }
 
     // ---------------- Selection (§6) and visibility (§3 test 5) ----------------
+    // The balance estimator needs the visibility of every candidate (it enters D); the
+    // published variant only that of the selected ones. The rays are traced as packets.
+    auto &rays = sc.rays;
+    auto &ray_of = sc.ray_of;
+    rays.clear();
+    ray_of.clear();
     for (size_t i = 1; i < m; ++i) {
         sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
         sampler.set_dimension(DimSelectBase + ctx.views[cand[i].slot].scene_index);
         sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
-        // The balance estimator needs the visibility of every candidate (it enters D); the
-        // published variant only that of the selected ones.
-        bool need = ctx.cfg.mis_selected_only ? sc.selected[i] : true;
-        if (ctx.cfg.mis_selected_only && !sc.selected[i]) ++st_l.rejected[int(ShiftTest::Selection)];
-        if (!need) { sc.visible[i] = 0; continue; }
+        if (ctx.cfg.mis_selected_only && !sc.selected[i]) {
+            ++st_l.rejected[int(ShiftTest::Selection)];
+            sc.visible[i] = 0;
+            continue;
+        }
         const ShiftCandidate &c = cand[i];
         Point3f o = si.offset_p(c.geo.lens_point - si.p);
         Vec3f d = c.geo.lens_point - o;
         float dist = norm(d);
+        // Up to k's near clip plane: what is closer to the lens is invisible to its camera rays too.
         float len = c.geo.visible_length - (norm(c.geo.lens_point - si.p) - dist);
-        ++counters.shadow_rays;
-        sc.visible[i] = !(len > 0.f) || !scene.occluded(Ray{o, d / dist, 0.f, len * (1.f - ShadowEpsilon), t});
+        if (!(len > 0.f)) continue; // y itself lies at the near plane: nothing can block
+        rays.push_back(Ray{o, d / dist, 0.f, len * (1.f - ShadowEpsilon), t});
+        ray_of.push_back(uint32_t(i));
+    }
+    auto &blocked = sc.blocked;
+    blocked.assign(rays.size(), 0);
+    if (!rays.empty()) scene.occluded(rays.data(), rays.size(), blocked.data());
+    counters.shadow_rays += rays.size();
+    for (size_t r = 0; r < rays.size(); ++r) {
+        uint32_t i = ray_of[r];
+        sc.visible[i] = !blocked[r];
         if (!sc.visible[i]) ++st_l.rejected[int(ShiftTest::Visibility)];
         else if (!ctx.cfg.mis_selected_only && !sc.selected[i]) ++st_l.rejected[int(ShiftTest::Selection)];
     }
@@ -168,19 +185,28 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     const size_t ns = sharing.size();
 
     // ---------------- Balance-heuristic densities D_k (§5) ----------------
+    //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
+    // over the strategies j whose shift to k is valid (visibility included).
+    auto &valid_set = sc.valid_set;
+    valid_set.clear();
+    for (size_t j = 0; j < m; ++j)
+        if (sc.visible[j]) valid_set.push_back(uint32_t(j));
+    const bool material = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy);
     sc.d.assign(m, 0.f);
     for (int k : sharing) {
         const MvView &vk = ctx.views[cand[k].slot];
-        double sum = 0.0;
-        for (size_t j = 0; j < m; ++j) {
-            if (!sc.visible[j]) continue;
-            if (int(j) == k) { sum += sc.n[j]; continue; }
-            // Validity of j -> k: shared with l -> j except for time, which is not transitive.
-            if (!time_compatible(ctx.views[cand[j].slot], vk, ctx.scene_moves)) continue;
-            float s = selection(ctx, sc, bsdf, si, j, size_t(k));
-            if (!(s > 0.f)) continue;
-            float tau = time_density_ratio(vk, ctx.views[cand[j].slot], ctx.scene_moves);
-            sum += double(sc.n[j]) * tau * (cand[j].geo.density / cand[k].geo.density) * s;
+        const float inv_gk = 1.f / cand[k].geo.density;
+        double sum = sc.n[k];
+        for (uint32_t j : valid_set) {
+            if (int(j) == k) continue;
+            const MvView &vj = ctx.views[cand[j].slot];
+            // Validity of j -> k is that of l -> j and l -> k except for time, which is not transitive.
+            if (!ctx.all_time_compatible && !time_compatible(vj, vk, ctx.scene_moves)) continue;
+            float ratio = cand[j].geo.density * inv_gk; // |T'_{k->j}| = G_j / G_k
+            float s = ctx.cfg.select_jacobian ? std::min(1.f, ratio) : 1.f;
+            if (material && s > 0.f) s *= cached_similarity(ctx, sc, bsdf, si, j, size_t(k));
+            float tau = time_density_ratio(vk, vj, ctx.scene_moves);
+            sum += double(sc.n[j]) * double(tau * ratio * s);
         }
         sc.d[k] = float(sum);
     }

@@ -43,6 +43,7 @@ struct MvContext {
     std::vector<const uint16_t *> native_map;  ///< n_k(i) of the current pass, by slot
     std::vector<uint32_t> seeds;               ///< sampler seed, by slot
     bool scene_moves = false;                  ///< some shape moves: shifts keep time (§3)
+    bool all_time_compatible = true;           ///< every pair of views passes `time_compatible`
 };
 
 /// Receives contributions: `lw` = W * L with W = 1/D_k (the part shared by MIS), `w` = W,
@@ -59,8 +60,11 @@ struct MvScratch {
     std::vector<ShiftCandidate> cand;
     std::vector<ViewLobe> lobe;
     std::vector<float> n, s_sel, d, sm;
-    std::vector<uint8_t> visible, selected;
+    std::vector<uint8_t> visible, selected, blocked;
+    std::vector<Ray> rays;
+    std::vector<uint32_t> ray_of, valid_set;
     std::vector<int> sharing;
+    float alpha = 1.f; ///< roughness at the current shared vertex
     std::vector<Vec3f> sharing_wi;
     std::vector<Spectrum> contrib, weight;
 };

@@ -55,12 +55,18 @@ float total_variation_mc(const Bsdf &bsdf, const SurfaceInteraction &si, Vec3f w
 
 float material_similarity(const Bsdf &bsdf, const SurfaceInteraction &si, const ViewLobe &a, const ViewLobe &b,
                           MvTotalVariation tv) {
+    return material_similarity(bsdf, si, a, b, tv, bsdf.roughness(si));
+}
+
+float material_similarity(const Bsdf &bsdf, const SurfaceInteraction &si, const ViewLobe &a, const ViewLobe &b,
+                          MvTotalVariation tv, float alpha) {
     if (!(bsdf.flags() & BsdfGlossy)) return 1.f; // diffuse lobes do not depend on the view
     float d = tv == MvTotalVariation::PeakRatio ? total_variation_peak(bsdf, si, a, b)
                                                 : total_variation_mc(bsdf, si, a.wi, b.wi);
     // Phong exponent e maps to alpha = sqrt(2 / (e + 2)) (Bsdf::roughness).
-    float alpha = std::clamp(bsdf.roughness(si), 1e-3f, 1.f);
-    float s = std::pow(std::clamp(1.f - d, 0.f, 1.f), 1.f / alpha);
+    alpha = std::clamp(alpha, 1e-3f, 1.f);
+    float one_minus = std::clamp(1.f - d, 0.f, 1.f);
+    float s = one_minus >= 1.f ? 1.f : std::pow(one_minus, 1.f / alpha);
     return std::isfinite(s) ? s : 0.f;
 }
 

@@ -27,6 +27,9 @@ ViewLobe view_lobe(const Bsdf &bsdf, const SurfaceInteraction &si, Vec3f wi);
 /// probability that enters the MIS sums D (§5) is the one used to select.
 float material_similarity(const Bsdf &bsdf, const SurfaceInteraction &si, const ViewLobe &a, const ViewLobe &b,
                           MvTotalVariation tv);
+/// The same with the roughness alpha at `si` given (it is the same for every pair of views).
+float material_similarity(const Bsdf &bsdf, const SurfaceInteraction &si, const ViewLobe &a, const ViewLobe &b,
+                          MvTotalVariation tv, float alpha);
 
 /// Total variation distance 1/2 int |rho_a - rho_b| of two lobes, estimated with a fixed
 /// quasi-random point set from both sides and averaged (the Monte Carlo switch of §6).

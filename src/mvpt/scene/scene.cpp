@@ -155,6 +155,34 @@ bool Scene::occluded(const Ray &ray) const {
     return r.tfar < 0.f;
 }
 
+void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
+    // Packets of up to 8 rays: the visibility rays of a shared vertex leave one point towards
+    // nearby lenses, coherent enough for Embree's packet traversal.
+    for (size_t first = 0; first < n; first += 8) {
+        size_t count = std::min<size_t>(8, n - first);
+        alignas(32) int valid[8];
+        RTCRay8 r;
+        for (size_t i = 0; i < 8; ++i) {
+            const Ray &ray = rays[first + std::min(i, count - 1)];
+            bool ok = i < count && embree_can_trace(ray);
+            valid[i] = ok ? -1 : 0;
+            r.org_x[i] = ray.o.x; r.org_y[i] = ray.o.y; r.org_z[i] = ray.o.z;
+            r.dir_x[i] = ray.d.x; r.dir_y[i] = ray.d.y; r.dir_z[i] = ray.d.z;
+            r.tnear[i] = ray.tmin;
+            r.tfar[i] = ray.tmax;
+            r.time[i] = m_animated ? m_motion.to_embree(ray.time) : 0.f;
+            r.mask[i] = 0xffffffffu;
+            r.flags[i] = 0;
+            r.id[i] = 0;
+        }
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        rtcOccluded8(valid, m_scene, &ctx, &r);
+        for (size_t i = 0; i < count; ++i) blocked[first + i] = valid[i] != 0 && r.tfar[i] < 0.f;
+    }
+}
+
 std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const std::map<std::string, std::string> &defines,
                                        const std::string &rig) {
     XmlNode root = parse_scene_file(path, defines);

@@ -31,6 +31,8 @@ public:
     bool intersect(const Ray &ray, SurfaceInteraction &si) const;
     /// True if anything blocks `ray` within [tmin, tmax).
     bool occluded(const Ray &ray) const;
+    /// `occluded` for `n` rays at once (traced as packets); results in `blocked`.
+    void occluded(const Ray *rays, size_t n, uint8_t *blocked) const;
 
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
     const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
