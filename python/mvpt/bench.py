@@ -29,7 +29,7 @@ class BenchConfig:
 
     scene: Path
     time: float
-    methods: tuple = ("pt",)
+    methods: tuple = ("pt", "mvpt")
     reference: Path | None = None
     reference_spp: int = DEFAULT_REFERENCE_SPP
     defines: dict = field(default_factory=dict)

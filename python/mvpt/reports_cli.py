@@ -53,7 +53,7 @@ def add_commands(sub) -> None:
                                    "<output>/index.html (self-contained) and <output>/bench.json.")
     b.add_argument("scene", type=Path)
     b.add_argument("--time", type=_positive_seconds, required=True, help="wall-clock seconds per method")
-    b.add_argument("--methods", default="pt", help="comma-separated methods (default: pt)")
+    b.add_argument("--methods", default="pt,mvpt", help="comma-separated methods (default: pt,mvpt)")
     g = b.add_mutually_exclusive_group()
     g.add_argument("--reference", type=Path, default=None, help="a reference run (directory, JSON or EXR)")
     g.add_argument("--reference-spp", type=_count, default=None,

@@ -154,6 +154,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                 for (size_t p = 0; p < n; ++p) {
                     const int64_t *t = &total[p * SplatChannels];
                     double w = double(t[6]) / SplatScale;
+                    double e_lum = 0.0, v_lum = 0.0;
                     for (int c = 0; c < 3; ++c) {
                         double lw = double(t[c]) / SplatScale, e = double(t[3 + c]) / SplatScale;
                         // The balance estimate of this pass, lw + e, plus the control variate
@@ -166,10 +167,16 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                         mf.lw[3 * p + c] += lw;
                         mf.e[3 * p + c] += e;
                         mf.balance[3 * p + c] += v;
+                        e_lum += e / 3.0;
+                        v_lum += v / 3.0;
                         fb.sum[3 * p + c] += v;
                         fb.sum_sq[3 * p + c] += v * v;
                     }
                     mf.w[p] += w;
+                    mf.e_sum[p] += e_lum;
+                    mf.e_sq[p] += e_lum * e_lum;
+                    mf.s_sum[p] += v_lum - e_lum;
+                    mf.s_sq[p] += (v_lum - e_lum) * (v_lum - e_lum);
                     mf.received[p] += uint64_t(t[7]);
                     mf.native[p] += mf.map[p];
                     ++fb.count[p];
@@ -195,8 +202,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                     in.width = f.crop_width;
                     in.height = f.crop_height;
                     in.passes = pass + 1;
-                    in.sum = m_films[slot].sum.data();
-                    in.sum_sq = m_films[slot].sum_sq.data();
+                    in.e_sum = m_mv_films[slot].e_sum.data();
+                    in.e_sq = m_mv_films[slot].e_sq.data();
+                    in.s_sum = m_mv_films[slot].s_sum.data();
+                    in.s_sq = m_mv_films[slot].s_sq.data();
                     in.native = m_mv_films[slot].native.data();
                     in.received = m_mv_films[slot].received.data();
                     adapt_native_map(in, cfg.adaptive_max, per_pixel * double(pixels[slot]), m_mv_films[slot].map);

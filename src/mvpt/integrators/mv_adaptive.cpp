@@ -38,34 +38,40 @@ void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::ve
         return;
     }
     const double k = in.passes;
-    std::vector<double> mean(n), var(n);
+    std::vector<double> mean(n), a(n), b(n), others(n);
     double view_mean = 0.0;
+    auto variance = [k](double sum, double sq) { return std::max(0.0, (sq - sum * sum / k) / (k - 1.0)); };
     for (size_t i = 0; i < n; ++i) {
-        double m = 0.0, v = 0.0;
-        for (int c = 0; c < 3; ++c) {
-            double mc = in.sum[3 * i + c] / k;
-            m += mc;
-            v += std::max(0.0, (in.sum_sq[3 * i + c] - k * mc * mc) / (k - 1.0));
-        }
-        mean[i] = m / 3.0;
-        var[i] = v / 3.0;
+        mean[i] = (in.e_sum[i] + in.s_sum[i]) / k;
         view_mean += mean[i];
+        double own = double(in.native[i]) / k, received = double(in.received[i]) / k;
+        // Var(E_pass) ~ a / n and Var(S_pass) ~ b / (n + r) at the mean counts of the passes so far.
+        a[i] = variance(in.e_sum[i], in.e_sq[i]) * own;
+        b[i] = variance(in.s_sum[i], in.s_sq[i]) * std::max(received, 1.0);
+        others[i] = std::max(0.0, received - own);
     }
     view_mean /= double(n);
     const double eps = std::max(0.01 * view_mean * view_mean, 1e-12); // (view mean / 10)^2
-    std::vector<double> unit(n), others(n);
     for (size_t i = 0; i < n; ++i) {
-        double rel = var[i] / (mean[i] * mean[i] + eps);
-        double received = double(in.received[i]) / k, own = double(in.native[i]) / k;
-        unit[i] = std::isfinite(rel) ? rel * std::max(received, 1.0) : 0.0;
-        others[i] = std::max(0.0, received - own);
+        double scale = 1.0 / (mean[i] * mean[i] + eps);
+        a[i] = std::isfinite(a[i] * scale) ? a[i] * scale : 0.0;
+        b[i] = std::isfinite(b[i] * scale) ? b[i] * scale : 0.0;
     }
-    unit = blur3(unit, in.width, in.height);
+    a = blur3(a, in.width, in.height);
+    b = blur3(b, in.width, in.height);
     others = blur3(others, in.width, in.height);
+    std::vector<double> unit(n);
+    for (size_t i = 0; i < n; ++i) unit[i] = a[i] + b[i]; // relative variance of one more native sample
 
+    // The n solving a/n + b/(n + r) = c: the positive root of c n^2 + (c r - a - b) n - a r = 0.
+    auto solve = [&](double c, size_t i) {
+        double r = others[i], q = c * r - a[i] - b[i];
+        double disc = q * q + 4.0 * c * a[i] * r;
+        return (-q + std::sqrt(std::max(0.0, disc))) / (2.0 * c);
+    };
     auto count = [&](double c, size_t i) {
-        double v = std::floor(unit[i] / c - others[i] + 0.5);
-        return std::clamp(v, 1.0, double(max_n));
+        double v = std::floor(solve(c, i) + 0.5);
+        return std::clamp(std::isfinite(v) ? v : double(max_n), 1.0, double(max_n));
     };
     auto total = [&](double c) {
         double s = 0.0;

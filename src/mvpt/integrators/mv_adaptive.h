@@ -7,22 +7,27 @@
 
 namespace mvpt {
 
-/// What the map of one view is computed from: per-pixel statistics over `passes` passes.
+/// What the map of one view is computed from: per-pixel statistics over `passes` passes of
+/// the two parts of a pass estimate (luminance): the native-only part E (emission seen
+/// directly, specular first vertices: only the pixel's own native samples estimate it) and
+/// the shared part S (everything that other views' samples also bring).
 struct AdaptiveInput {
     int width = 0, height = 0, passes = 0;
-    const double *sum = nullptr, *sum_sq = nullptr; ///< RGB sums of the pass estimates and of their squares
+    const double *e_sum = nullptr, *e_sq = nullptr; ///< sums over passes of E and E^2
+    const double *s_sum = nullptr, *s_sq = nullptr; ///< sums over passes of S and S^2
     const uint32_t *native = nullptr;               ///< native samples taken so far
     const uint64_t *received = nullptr;             ///< contributions received so far
 };
 
 /// Set the native counts of the next pass so that the expected relative variance of a pass
-/// estimate becomes even across the image. With u_i the variance of one contribution relative
-/// to the squared pixel value and r_i the contributions other views bring per pass, a pass
-/// has relative variance ~ u_i / (n_i + r_i); n_i = u_i / c - r_i, rounded and clamped to
-/// [1, max_n], with c chosen so that the map's total is at most `budget` (>= the pixel
-/// count). u and r are smoothed over 3x3 pixels; pixels darker than a tenth of the view's
-/// mean are judged by absolute error. Without statistics (fewer than 2 passes, a black
-/// image) the budget is spread evenly.
+/// estimate becomes even across the image. A pixel with n native samples and r contributions
+/// per pass from other views has pass variance a/n + b/(n + r), a and b the variances of one
+/// native-only and one shared contribution (estimated from the spread of E and S over the
+/// passes times the counts of the passes); n_i solves (a/n + b/(n + r)) / (m^2 + eps) = c,
+/// rounded and clamped to [1, max_n], with c chosen so that the map's total is at most
+/// `budget` (>= the pixel count). a, b and r are smoothed over 3x3 pixels; eps =
+/// (view mean / 10)^2 judges pixels much darker than the view by absolute error. Without
+/// statistics (fewer than 2 passes, a black image) the budget is spread evenly.
 void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::vector<uint16_t> &map);
 
 } // namespace mvpt

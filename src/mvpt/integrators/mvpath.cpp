@@ -10,7 +10,7 @@
 //     <string name="tv" value="peak"/>                        peak | montecarlo (§6)
 //     <boolean name="adaptive" value="true"/>                 native-sample maps (§8)
 //     <integer name="adaptive_warmup" value="4"/> <integer name="adaptive_max" value="16"/>
-//     <float name="adaptive_budget" value="2"/>              mean native samples per pixel and pass
+//     <float name="adaptive_budget" value="1.25"/>           mean native samples per pixel and pass
 //   </integrator>
 #include "mvpath.h"
 
@@ -49,7 +49,7 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     cfg.adaptive_max = int(props.get_int("adaptive_max", 16));
     if (cfg.adaptive_max < 1 || cfg.adaptive_max > 1024)
         props.fail("adaptive_max", "'adaptive_max' must be in [1, 1024]");
-    cfg.adaptive_budget = props.get_float("adaptive_budget", 2.f);
+    cfg.adaptive_budget = props.get_float("adaptive_budget", 1.25f);
     if (!(cfg.adaptive_budget >= 1.f && cfg.adaptive_budget <= float(cfg.adaptive_max)))
         props.fail("adaptive_budget", "'adaptive_budget' must lie in [1, adaptive_max]");
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);

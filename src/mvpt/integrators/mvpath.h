@@ -42,7 +42,7 @@ struct MvConfig {
     /// Upper bound of a pixel's native samples in one pass.
     int adaptive_max = 16;
     /// Mean native samples per pixel in an adaptive pass (the freedom the maps have: n >= 1).
-    float adaptive_budget = 2.f;
+    float adaptive_budget = 1.25f;
 };
 
 /// The `mvpath` integrator: path tracing whose first vertex is shared between views.

@@ -17,6 +17,15 @@ public:
         m_specular_reflectance = props.get_texture("specular_reflectance", 0.2f);
         m_diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5f);
         m_flags = BsdfGlossyReflection | BsdfDiffuseReflection;
+        // Constant parameters (the usual case) are evaluated once: pdf and eval are then a few
+        // flops and one pow (multi-view path tracing evaluates them for every pair of views).
+        m_constant = m_exponent->is_constant() && m_specular_reflectance->is_constant() &&
+                     m_diffuse_reflectance->is_constant();
+        if (m_constant) {
+            SurfaceInteraction si;
+            m_const_exponent = exponent_at(si);
+            m_const_p_spec = specular_probability_at(si);
+        }
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
@@ -62,14 +71,20 @@ public:
     float roughness(const SurfaceInteraction &si) const override { return std::sqrt(2.f / (exponent(si) + 2.f)); }
 
 private:
-    float exponent(const SurfaceInteraction &si) const { return std::max(m_exponent->eval_1(si.uv), 0.f); }
-    /// Lobe choice in proportion to the mean (over channels) specular and diffuse reflectances at `si`.
+    float exponent(const SurfaceInteraction &si) const { return m_constant ? m_const_exponent : exponent_at(si); }
     float specular_probability(const SurfaceInteraction &si) const {
+        return m_constant ? m_const_p_spec : specular_probability_at(si);
+    }
+    float exponent_at(const SurfaceInteraction &si) const { return std::max(m_exponent->eval_1(si.uv), 0.f); }
+    /// Lobe choice in proportion to the mean (over channels) specular and diffuse reflectances at `si`.
+    float specular_probability_at(const SurfaceInteraction &si) const {
         float ks = m_specular_reflectance->eval(si.uv).mean(), kd = m_diffuse_reflectance->eval(si.uv).mean();
         return ks + kd > 0.f ? ks / (ks + kd) : 0.5f;
     }
 
     std::shared_ptr<Texture> m_exponent, m_specular_reflectance, m_diffuse_reflectance;
+    bool m_constant = false;
+    float m_const_exponent = 0.f, m_const_p_spec = 0.f;
 };
 
 MVPT_REGISTER_PLUGIN("bsdf", "phong", [](const Properties &p, const LoadContext &) {

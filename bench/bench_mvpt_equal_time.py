@@ -1,0 +1,121 @@
+"""Multi-view path tracing against independent path tracing at equal wall-clock time.
+
+    python bench/bench_mvpt_equal_time.py                 # 9-view glossy Cornell box + 5x5 light field
+    python bench/bench_mvpt_equal_time.py --quick         # small smoke run
+    python bench/bench_mvpt_equal_time.py --scenes scenes/stereo.xml --time 20
+
+For each scene: a reference by independent path tracing (`--ref-spp` samples per pixel,
+rendered once and cached under --cache as .npz), then `--rounds` rounds that render the
+same views with `pt` and with `mvpt` for `--time` seconds each, interleaved (pt, mvpt,
+mvpt, pt, ...) with a new seed per round, so that load changes of a shared machine hit
+both methods alike. Per view and overall (pooled over views) the script prints the median
+relMSE over rounds (mean over pixels and channels of (x - r)^2 / (r^2 + 0.01), as
+`mvpt compare`), the ratio PT/MVPT, and the time MVPT needs to reach PT's relMSE at --time,
+T * relMSE_mvpt / relMSE_pt (both estimators are unbiased, so relMSE falls as 1/time once
+the reference's own error is negligible; the reference's share is printed). It also
+prints where MVPT's time goes: native samples/s, rays per native sample, mean sharing |S|.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import mvpt
+from mvpt import metrics
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SCENES = [ROOT / "scenes" / "cornell-glossy-9.xml", ROOT / "scenes" / "lightfield-5x5.xml"]
+
+
+def reference(scene_path: Path, defines: dict, spp: int, threads: int, cache: Path) -> tuple:
+    """Per-view reference images and the relMSE their own noise adds (from their variance)."""
+    key = hashlib.sha1(f"{scene_path.resolve()}|{sorted(defines.items())}|{spp}|"
+                       f"{scene_path.stat().st_mtime_ns}".encode()).hexdigest()[:12]
+    path = cache / f"ref_{scene_path.stem}_{key}.npz"
+    if path.exists():
+        data = np.load(path)
+    else:
+        print(f"  reference: {spp} spp of path tracing (cached in {path})", flush=True)
+        t0 = time.time()
+        scene = mvpt.load_file(scene_path, **defines)
+        r = mvpt.render(scene, spp=spp, seed=12345, threads=threads, method="pt")
+        data = {f"img:{v}": img for v, img in r.images.items()}
+        data.update({f"var:{v}": var for v, var in r.variance.items()})
+        cache.mkdir(parents=True, exist_ok=True)
+        np.savez(path, **data)
+        print(f"  reference done in {time.time() - t0:.0f} s", flush=True)
+        data = np.load(path)
+    images = {k[4:]: data[k] for k in data.files if k.startswith("img:")}
+    # Expected relMSE contributed by the reference's noise: mean of var / (r^2 + eps).
+    noise = {k[4:]: float(np.mean(data[k] / (images[k[4:]].astype(np.float64) ** 2 + metrics.RELMSE_EPS)))
+             for k in data.files if k.startswith("var:")}
+    return images, noise
+
+
+def pooled_relmse(images: dict, ref: dict) -> float:
+    num = sum(metrics.relative_squared_error(images[v], ref[v]).sum() for v in ref)
+    den = sum(np.asarray(ref[v]).size for v in ref)
+    return float(num / den)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenes", nargs="*", type=Path, default=DEFAULT_SCENES)
+    ap.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE")
+    ap.add_argument("--time", type=float, default=20.0, help="seconds per method and round")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--ref-spp", type=int, default=4096)
+    ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--cache", type=Path, default=ROOT / "out" / "bench-cache")
+    ap.add_argument("--quick", action="store_true", help="res 32, 2 s, 2 rounds, 512-spp reference")
+    args = ap.parse_args(argv)
+    defines = dict(d.split("=", 1) for d in args.define)
+    if args.quick:
+        defines.setdefault("res", "32")
+        args.time, args.rounds, args.ref_spp = 2.0, 2, 512
+
+    for scene_path in args.scenes:
+        print(f"\n## {scene_path.name} ({', '.join(f'{k}={v}' for k, v in defines.items()) or 'defaults'}), "
+              f"{args.time:g} s per method, {args.rounds} rounds", flush=True)
+        ref, ref_noise = reference(scene_path, defines, args.ref_spp, args.threads, args.cache)
+        scene = mvpt.load_file(scene_path, **defines)
+        views = list(ref)
+        err = {"pt": [], "mvpt": []}
+        stats = {"pt": [], "mvpt": []}
+        for rnd in range(args.rounds):
+            order = ("pt", "mvpt") if rnd % 2 == 0 else ("mvpt", "pt")
+            for method in order:
+                r = mvpt.render(scene, time=args.time, seed=1000 + rnd, threads=args.threads, method=method)
+                per_view = {v: metrics.relmse(r.images[v], ref[v]) for v in views}
+                per_view["overall"] = pooled_relmse(r.images, ref)
+                err[method].append(per_view)
+                stats[method].append(r.stats)
+                print(f"  round {rnd + 1} {method:4s}: {r.stats['seconds']:.1f} s, {r.stats['passes']} passes, "
+                      f"relMSE {per_view['overall']:.3e}", flush=True)
+
+        med = {m: {v: statistics.median(e[v] for e in err[m]) for v in views + ["overall"]} for m in err}
+        ref_all = float(np.mean(list(ref_noise.values())))
+        print(f"\n| view | relMSE pt | relMSE mvpt | pt / mvpt | mvpt time to pt's relMSE |")
+        print("|---|---|---|---|---|")
+        for v in views + ["overall"]:
+            ratio = med["pt"][v] / med["mvpt"][v]
+            print(f"| {v} | {med['pt'][v]:.3e} | {med['mvpt'][v]:.3e} | {ratio:.2f} | {args.time / ratio:.1f} s |")
+        mv = stats["mvpt"][-1]["multiview"]
+        pt_rate = statistics.median(s["samples_per_second"] for s in stats["pt"])
+        mv_rate = statistics.median(s["samples_per_second"] for s in stats["mvpt"])
+        print(f"\nreference noise adds {ref_all:.2e} to every relMSE ({100 * ref_all / med['mvpt']['overall']:.0f}% of "
+              f"mvpt's); pt {pt_rate / 1e6:.3f} M samples/s, mvpt {mv_rate / 1e6:.3f} M native samples/s "
+              f"(cost ratio {pt_rate / mv_rate:.2f}); mvpt mean |S| {mv['mean_sharing']:.2f}, "
+              f"{mv['rays_per_native_sample']:.1f} rays per native sample, rejected shifts "
+              f"{ {k: round(100 * n / max(1, mv['shifts_tried']), 1) for k, n in mv['rejected'].items()} } %")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
