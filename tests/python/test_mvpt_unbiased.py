@@ -75,9 +75,15 @@ def _compare(label, ids, a: dict, b: dict, mean_tol: float):
     return compare_estimates(label, [(i, v, a[v], b[v]) for i, v in enumerate(ids)], mean_tol=mean_tol)
 
 
-def test_balance_is_unbiased(case):
+# Selection variants: the defaults (Jacobian similarity s_J), and with the material
+# similarity s_M of §6 on (peak-ratio TV), which is off by default.
+SELECTION = {"default": "", "material": '<boolean name="select_material" value="true"/>'}
+
+
+@pytest.mark.parametrize("selection", sorted(SELECTION))
+def test_balance_is_unbiased(case, selection):
     name, ids, pt, mv_spp = case
-    runs = _seeds(_mvpath(name), mv_spp, "scene", 2000)
+    runs = _seeds(_mvpath(name, SELECTION[selection]), mv_spp, "scene", 2000)
     assert runs[0].stats["method"] == "mvpt" and runs[0].stats["estimator"] == "balance"
     # The test must see real sharing, or it would only compare path tracing with itself; views
     # that no other can share with by the time rule of §3 (an instant among open shutters of a
@@ -85,14 +91,15 @@ def test_balance_is_unbiased(case):
     for v in ids:
         sharing = runs[0].stats["views"][v]["multiview"]["mean_sharing"]
         assert sharing == 1.0 if v in ISOLATED.get(name, ()) else sharing > 1.3, (v, sharing)
-    res = _compare(f"{name} mvpt balance vs pt", ids, _estimates(runs, ids), pt, mean_tol=0.0)
+    res = _compare(f"{name} mvpt balance ({selection} selection) vs pt", ids, _estimates(runs, ids), pt, mean_tol=0.0)
     print(res.summary())
     assert res.passed, res.summary()
 
 
-def test_balance_weights_sum_to_one(case):
+@pytest.mark.parametrize("selection", sorted(SELECTION))
+def test_balance_weights_sum_to_one(case, selection):
     name, ids, _, mv_spp = case
-    runs = _seeds(_mvpath(name), mv_spp, "scene", 3000)
+    runs = _seeds(_mvpath(name, SELECTION[selection]), mv_spp, "scene", 3000)
     ones = {}
     for v in ids:
         shape = runs[0].weight_sum[v].shape + (3,)

@@ -36,7 +36,7 @@ float selection(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const Sur
                 size_t k) {
     if (j == k) return 1.f;
     float s = ctx.cfg.select_jacobian ? jacobian_similarity(sc.cand[j].geo.density, sc.cand[k].geo.density) : 1.f;
-    if (s > 0.f && ctx.cfg.select_material) s *= cached_similarity(ctx, sc, bsdf, si, j, k);
+    if (s > 0.f && sc.material) s *= cached_similarity(ctx, sc, bsdf, si, j, k);
     return s;
 }
 } // namespace
@@ -132,13 +132,14 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     sc.s_sel.assign(m, 1.f);
     sc.visible.assign(m, 1);
     sc.selected.assign(m, 1);
-    sc.sm.assign(m * m, -1.f);
     sc.alpha = bsdf.roughness(si);
+    sc.material = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy);
+    if (sc.material) sc.sm.assign(m * m, -1.f);
     for (size_t i = 0; i < m; ++i) {
         const ShiftCandidate &c = cand[i];
         sc.n[i] = float(ctx.native_map[c.slot][c.pixel]);
         Vec3f wi = i == 0 ? si.wi : si.to_local(normalize(c.geo.lens_point - si.p));
-        sc.lobe[i] = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy) ? view_lobe(bsdf, si, wi) : ViewLobe{wi, {}, 0.f};
+        sc.lobe[i] = sc.material ? view_lobe(bsdf, si, wi) : ViewLobe{wi, {}, 0.f};
     }
 
     // ---------------- Selection (§6) and visibility (§3 test 5) ----------------
@@ -191,7 +192,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     valid_set.clear();
     for (size_t j = 0; j < m; ++j)
         if (sc.visible[j]) valid_set.push_back(uint32_t(j));
-    const bool material = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy);
+    const bool material = sc.material;
     sc.d.assign(m, 0.f);
     for (int k : sharing) {
         const MvView &vk = ctx.views[cand[k].slot];

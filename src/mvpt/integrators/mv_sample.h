@@ -64,7 +64,8 @@ struct MvScratch {
     std::vector<Ray> rays;
     std::vector<uint32_t> ray_of, valid_set;
     std::vector<int> sharing;
-    float alpha = 1.f; ///< roughness at the current shared vertex
+    float alpha = 1.f;     ///< roughness at the current shared vertex
+    bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
     std::vector<Spectrum> contrib, weight;
 };

@@ -33,7 +33,10 @@ struct MvConfig {
     bool mis_selected_only = false;
     /// Selection terms of §6, each switchable off (then 1) for studies.
     bool select_jacobian = true;
-    bool select_material = true;
+    /// Off by default: it costs two BSDF densities per pair of views (O(V^2) per sample) and
+    /// on our scenes it lowered efficiency (README, "Multi-view path tracing": on the 5x5
+    /// light field 3.4x, on the glossy Cornell box 1.5x, with equal or higher error).
+    bool select_material = false;
     MvTotalVariation tv = MvTotalVariation::PeakRatio;
     /// Adaptive native-sample maps across passes (§8).
     bool adaptive = true;
