@@ -92,7 +92,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     }
     for (MvFilm &f : m_mv_films) m_mv.native_map.push_back(f.map.data());
     for (const MvView &a : m_mv.views)
-        for (const MvView &b : m_mv.views) m_mv.all_time_compatible &= time_compatible(a, b, m_mv.scene_moves);
+        for (const MvView &b : m_mv.views) {
+            m_mv.all_time_compatible &= time_compatible(a, b, m_mv.scene_moves);
+            m_mv.all_time_compatible_equal_dt &= a.dt == b.dt;
+        }
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one

@@ -44,6 +44,7 @@ struct MvContext {
     std::vector<uint32_t> seeds;               ///< sampler seed, by slot
     bool scene_moves = false;                  ///< some shape moves: shifts keep time (§3)
     bool all_time_compatible = true;           ///< every pair of views passes `time_compatible`
+    bool all_time_compatible_equal_dt = true;  ///< and all shutters have one length (time factors are 1)
 };
 
 /// Receives contributions: `lw` = W * L with W = 1/D_k (the part shared by MIS), `w` = W,
@@ -62,7 +63,8 @@ struct MvScratch {
     std::vector<float> n, s_sel, d, sm;
     std::vector<uint8_t> visible, selected, blocked;
     std::vector<Ray> rays;
-    std::vector<uint32_t> ray_of, valid_set;
+    std::vector<uint32_t> ray_of, valid_set, order, position;
+    std::vector<double> prefix, suffix;
     std::vector<int> sharing;
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex
