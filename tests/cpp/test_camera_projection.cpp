@@ -333,3 +333,41 @@ TEST(AnimatedSensor, ScaledKeyframeIsAnError) {
         EXPECT_NE(std::string(e.what()).find("rigid"), std::string::npos) << e.what();
     }
 }
+
+TEST(CameraProjection, ShiftGeometryAgreesWithProjectLensPointAndFilmDensity) {
+    // The one-pose-evaluation hot path of multi-view path tracing must equal the three
+    // separate calls, and a shifted film point's own camera ray must hit y (design doc §3).
+    auto s = load(CameraXml);
+    Rng rng(5);
+    for (const auto &cam : s->cameras()) {
+        int checked = 0;
+        for (int i = 0; i < 2000; ++i) {
+            Vec2f x(rng.next() * cam->film.width, rng.next() * cam->film.height);
+            Vec2f xi = warp::square_to_uniform_disk_concentric(rng.next_2d());
+            float t = rng.next();
+            Ray r = cam->generate_ray(x, xi, t);
+            auto h = Ball.hit(r);
+            if (!h) continue;
+            auto [y, n] = *h;
+            ShiftGeometry geo;
+            Vec2f film;
+            bool ok = cam->shift_geometry(y, n, t, xi, &geo);
+            ASSERT_EQ(ok, cam->project(y, t, xi, &film)) << cam->id;
+            if (!ok) continue;
+            EXPECT_NEAR(geo.film.x, film.x, 1e-3f) << cam->id;
+            EXPECT_NEAR(geo.film.y, film.y, 1e-3f) << cam->id;
+            EXPECT_LT(norm(geo.lens_point - cam->lens_point(t, xi)), 1e-5f) << cam->id;
+            float g = cam->film_density(y, n, t, xi);
+            EXPECT_NEAR(geo.density, g, 1e-4f * g) << cam->id;
+            // The ray through the shifted film point with the same lens point hits y.
+            Ray back = cam->generate_ray(geo.film, xi, t);
+            auto h2 = Ball.hit(back);
+            ASSERT_TRUE(h2.has_value()) << cam->id;
+            EXPECT_LT(norm(h2->first - y), 1e-3f * (1.f + norm(y - back.o))) << cam->id;
+            // visible_length reaches from y to the near clip plane of the ray.
+            EXPECT_NEAR(geo.visible_length, norm(y - back.o) - back.tmin, 1e-3f * norm(y - back.o)) << cam->id;
+            ++checked;
+        }
+        EXPECT_GT(checked, 100) << cam->id;
+    }
+}
