@@ -53,7 +53,8 @@ private:
 struct MvFilm {
     std::vector<double> lw, e;     ///< sums of W*L and of native-only radiance (3 per pixel)
     std::vector<double> w;         ///< sum of W
-    std::vector<double> balance;   ///< sum of the balance estimates of the passes (3 per pixel)
+    // (The sums of the balance estimates of the passes and of their squares live in the
+    // renderer's FilmBuffer, as for path tracing.)
     /// Per pixel, luminance of the passes' native-only part E and shared part S (balance
     /// estimate minus E): sums and sums of squares, for the adaptive maps.
     std::vector<double> e_sum, e_sq, s_sum, s_sq;
@@ -61,7 +62,7 @@ struct MvFilm {
     std::vector<uint64_t> received;///< contributions received
     std::vector<uint16_t> map;     ///< n_k(i) of the current pass
 
-    explicit MvFilm(size_t n = 0) : lw(3 * n, 0.0), e(3 * n, 0.0), w(n, 0.0), balance(3 * n, 0.0), e_sum(n, 0.0), e_sq(n, 0.0), s_sum(n, 0.0), s_sq(n, 0.0), native(n, 0), received(n, 0), map(n, 1) {}
+    explicit MvFilm(size_t n = 0) : lw(3 * n, 0.0), e(3 * n, 0.0), w(n, 0.0), e_sum(n, 0.0), e_sq(n, 0.0), s_sum(n, 0.0), s_sq(n, 0.0), native(n, 0), received(n, 0), map(n, 1) {}
 };
 
 } // namespace mvpt

@@ -169,7 +169,6 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                         double v = lw + e + beta * (1.0 - w);
                         mf.lw[3 * p + c] += lw;
                         mf.e[3 * p + c] += e;
-                        mf.balance[3 * p + c] += v;
                         e_lum += e / 3.0;
                         v_lum += v / 3.0;
                         fb.sum[3 * p + c] += v;
@@ -276,7 +275,7 @@ void Renderer::develop_multiview() {
                 else if (weighted) // MWIS: ratio of sums over all passes, plus the plain mean of native-only radiance
                     mean = mf.e[3 * p + c] / k + (mf.w[p] > 0.0 ? mf.lw[3 * p + c] / mf.w[p] : 0.0);
                 else
-                    mean = mf.balance[3 * p + c] / k;
+                    mean = fb.sum[3 * p + c] / k;
                 // Variance of the mean from the spread of the per-pass (balance) estimates.
                 double pm = k > 0 ? fb.sum[3 * p + c] / k : 0.0;
                 double var = k > 1 ? std::max(0.0, (fb.sum_sq[3 * p + c] - k * pm * pm) / (k * (k - 1))) : 0.0;
