@@ -142,6 +142,18 @@ struct BsdfProbe {
         return r;
     }
 
+    /// Bsdf::eval_pdf: (f (n, 3), pdf (n, 1)).
+    nb::tuple eval_pdf(float wx, float wy, float wz, Vec3Array wo) {
+        size_t n = wo.shape(0);
+        OutArray f = out_array(n, 3), p = out_array(n, 1);
+        for (size_t i = 0; i < n; ++i) {
+            auto [fi, pi] = bsdf->eval_pdf({}, si, Vec3f(wx, wy, wz), Vec3f(wo(i, 0), wo(i, 1), wo(i, 2)));
+            for (int c = 0; c < 3; ++c) f.data()[3 * i + c] = fi[c];
+            p.data()[i] = pi;
+        }
+        return nb::make_tuple(f, p);
+    }
+
     OutArray pdf(float wx, float wy, float wz, Vec3Array wo) {
         size_t n = wo.shape(0);
         OutArray r = out_array(n, 1);
@@ -161,6 +173,7 @@ void bind_probes(nb::module_ &m) {
         .def("roughness", &BsdfProbe::roughness, "wx"_a = 0.f, "wy"_a = 0.f, "wz"_a = 1.f)
         .def("eval", &BsdfProbe::eval, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
         .def("pdf", &BsdfProbe::pdf, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
+        .def("eval_pdf", &BsdfProbe::eval_pdf, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
         .def("mixture_sample", &BsdfProbe::mixture_sample, "wis"_a, "n"_a, "seed"_a = 0)
         .def("mixture_pdf", &BsdfProbe::mixture_pdf, "wis"_a, "wo"_a)
         .def("material_similarity", &BsdfProbe::material_similarity, "wi_a"_a, "wi_b"_a, "monte_carlo"_a = false)

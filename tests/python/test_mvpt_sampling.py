@@ -59,6 +59,19 @@ def test_lobe_mixture_picks_views_uniformly():
     assert np.all(np.abs(counts - expected) < 5 * np.sqrt(expected)), counts
 
 
+@pytest.mark.parametrize("bsdf", sorted(BSDFS))
+def test_eval_pdf_matches_eval_and_pdf(bsdf):
+    """The shading of a shared vertex uses Bsdf::eval_pdf (one evaluation for both)."""
+    pr = probe(BSDFS[bsdf])
+    rng = np.random.default_rng(4)
+    wo = rng.normal(size=(500, 3))
+    wo = np.ascontiguousarray(wo / np.linalg.norm(wo, axis=1, keepdims=True), dtype=np.float32)
+    for wi in VIEW_SETS["spread"]:
+        f, p = pr.eval_pdf(*wi, wo)
+        np.testing.assert_allclose(f, pr.eval(*wi, wo), rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(p, pr.pdf(*wi, wo), rtol=1e-5, atol=1e-7)
+
+
 @pytest.mark.parametrize("monte_carlo", [False, True])
 def test_material_similarity_properties(monte_carlo):
     diffuse = probe('<bsdf type="diffuse"/>')

@@ -264,18 +264,18 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             auto &f = sc.weight;
             f.assign(m, Spectrum(0.f));
             bool any = false;
+            float p_mix = 0.f; // the bounce's density: the lobe mixture (divided by |S| below)
             for (int k : sharing) {
-                f[k] = bsdf.eval(Ctx, si, sc.lobe[k].wi, wo);
-                any |= !f[k].is_black();
+                auto [fk, pk] = bsdf.eval_pdf(Ctx, si, sc.lobe[k].wi, wo);
+                f[k] = fk;
+                p_mix += pk;
+                any |= !fk.is_black();
             }
             if (any) {
                 Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
                 ++counters.shadow_rays;
                 if (!scene.occluded(shadow)) {
-                    // MIS against the bounce, whose density is the lobe mixture.
-                    float w = ls.delta ? 1.f
-                                       : mis_power(ls.pdf / float(lights.size()),
-                                                   lobe_mixture_pdf(bsdf, si, wis.data(), ns, wo));
+                    float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns));
                     for (int k : sharing) contrib[k] += f[k] * weight * w;
                 }
             }
@@ -284,7 +284,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
 
     // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
     sampler.set_dimension(DimBounceView);
-    MixtureSample mix = sample_lobe_mixture(bsdf, si, wis.data(), ns, sampler.next_1d(), u_lobe, u_dir);
+    auto &fs = sc.mixture_f;
+    fs.resize(ns);
+    MixtureSample mix = sample_lobe_mixture(bsdf, si, wis.data(), ns, sampler.next_1d(), u_lobe, u_dir, fs.data());
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     bool final_valid = valid_after;
@@ -294,7 +296,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
         if (mix.delta) // a delta lobe's direction serves only the view that sampled it
             wk[sharing[mix.view]] = mix.weight * float(ns);
         else
-            for (int k : sharing) wk[k] = bsdf.eval(Ctx, si, sc.lobe[k].wi, bs.wo) * (1.f / mix.pdf);
+            for (size_t i = 0; i < ns; ++i) wk[sharing[i]] = fs[i] * (1.f / mix.pdf);
         float t_max = 0.f;
         for (int k : sharing) t_max = std::max(t_max, wk[k].max_value());
         bool alive = t_max > 0.f;

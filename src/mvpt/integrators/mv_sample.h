@@ -69,7 +69,7 @@ struct MvScratch {
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
-    std::vector<Spectrum> contrib, weight;
+    std::vector<Spectrum> contrib, weight, mixture_f;
 };
 
 /// Take native sample `sample_index` of pixel (px, py) (full-film coordinates) of the view in

@@ -56,6 +56,11 @@ public:
     virtual Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const = 0;
     /// Solid-angle density with which `sample` produces `wo` (non-delta lobes).
     virtual float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const = 0;
+    /// `eval` and `pdf` at once (BSDFs that share work between them override it).
+    virtual std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
+                                                Vec3f wo) const {
+        return {eval(ctx, si, wi, wo), pdf(ctx, si, wi, wo)};
+    }
 
     uint32_t flags() const { return m_flags; }
     bool has_smooth() const { return (m_flags & BsdfSmooth) != 0; }

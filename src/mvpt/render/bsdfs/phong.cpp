@@ -67,6 +67,19 @@ public:
         return p_spec * pdf_spec + (1.f - p_spec) * warp::square_to_cosine_hemisphere_pdf(wo);
     }
 
+    /// One cos^e for both (multi-view path tracing evaluates every sharing view's lobe).
+    std::pair<Spectrum, float> eval_pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi,
+                                        Vec3f wo) const override {
+        float cos_i = Frame::cos_theta(wi), cos_o = Frame::cos_theta(wo);
+        if (cos_i <= 0.f || cos_o <= 0.f) return {Spectrum(0.f), 0.f};
+        float e = exponent(si), p_spec = specular_probability(si);
+        float cos_a = std::max(0.f, dot(wo, Vec3f(-wi.x, -wi.y, wi.z)));
+        float lobe = std::pow(cos_a, e) * InvTwoPi;
+        Spectrum f = (m_diffuse_reflectance->eval(si.uv) * InvPi + m_specular_reflectance->eval(si.uv) * ((e + 2.f) * lobe)) * cos_o;
+        float pdf = p_spec * (e + 1.f) * lobe + (1.f - p_spec) * warp::square_to_cosine_hemisphere_pdf(wo);
+        return {f, pdf};
+    }
+
     /// GGX-equivalent roughness of the lobe: alpha = sqrt(2 / (e + 2)).
     float roughness(const SurfaceInteraction &si) const override { return std::sqrt(2.f / (exponent(si) + 2.f)); }
 

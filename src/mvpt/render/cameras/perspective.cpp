@@ -88,7 +88,9 @@ public:
     }
 
     bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const override {
-        CameraPose pose = pose_at(time);
+        CameraPose animated;
+        if (m_animated) animated = pose_at(time);
+        const CameraPose &pose = m_animated ? animated : m_pose; // no copy for a static camera
         Point3f p = pose.to_camera(y);
         if (!(p.z >= m_near && p.z <= m_far)) return false;
         float inv_z = 1.f / p.z;
