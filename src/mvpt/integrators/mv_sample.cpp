@@ -40,7 +40,171 @@ float selection(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const Sur
     if (s > 0.f && sc.material) s *= cached_similarity(ctx, sc, bsdf, si, j, k);
     return s;
 }
+
+/// The candidates of §3 for the native sample of view `slot_l` with first hit `y`: cand[0] is l
+/// itself, then every view that passes the cheap tests, with its native count and lobe.
+void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvVertex &y, const Bsdf &bsdf,
+                   const SurfaceInteraction &si, MvScratch &sc, MvViewStats *st_l) {
+    const MvView &l = ctx.views[slot_l];
+    auto &cand = sc.cand;
+    cand.clear();
+    ShiftCandidate self;
+    self.slot = slot_l;
+    self.pixel = pixel_l;
+    self.time = y.time;
+    bool self_ok = l.camera->shift_geometry(y.p, y.n, y.time, y.lens, &self.geo) && self.geo.density > 0.f;
+    cand.push_back(self);
+    if (self_ok) {
+        for (int k = 0; k < int(ctx.views.size()); ++k) {
+            if (k == slot_l) continue;
+            if (st_l) ++st_l->tried;
+            ShiftCandidate c;
+            ShiftTest test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
+            if (test != ShiftTest::Count) {
+                if (st_l) ++st_l->rejected[int(test)];
+                continue;
+            }
+            cand.push_back(c);
+        }
+    }
+    const size_t m = cand.size();
+    sc.lobe.resize(m);
+    sc.n.resize(m);
+    sc.s_sel.assign(m, 1.f);
+    sc.visible.assign(m, 1);
+    sc.selected.assign(m, 1);
+    sc.alpha = bsdf.roughness(si);
+    sc.material = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy);
+    if (sc.material) sc.sm.assign(m * m, -1.f);
+    for (size_t i = 0; i < m; ++i) {
+        const ShiftCandidate &c = cand[i];
+        sc.n[i] = float(ctx.native_map[c.slot][c.pixel]);
+        Vec3f wi = i == 0 ? si.wi : si.to_local(normalize(c.geo.lens_point - si.p));
+        sc.lobe[i] = sc.material ? view_lobe(bsdf, si, wi) : ViewLobe{wi, {}, 0.f};
+    }
+}
+
+/// Visibility of y from every candidate's lens point (or only the selected ones), traced as
+/// packets; fills sc.visible.
+void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, float t, bool selected_only,
+                      RayCounters &counters, MvViewStats *st_l) {
+    auto &rays = sc.rays;
+    auto &ray_of = sc.ray_of;
+    rays.clear();
+    ray_of.clear();
+    for (size_t i = 1; i < sc.cand.size(); ++i) {
+        if (selected_only && !sc.selected[i]) {
+            if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
+            sc.visible[i] = 0;
+            continue;
+        }
+        const ShiftCandidate &c = sc.cand[i];
+        Point3f o = si.offset_p(c.geo.lens_point - si.p);
+        Vec3f d = c.geo.lens_point - o;
+        float dist = norm(d);
+        // Up to k's near clip plane: what is closer to the lens is invisible to its camera rays too.
+        float len = c.geo.visible_length - (norm(c.geo.lens_point - si.p) - dist);
+        if (!(len > 0.f)) continue; // y itself lies at the near plane: nothing can block
+        rays.push_back(Ray{o, d / dist, 0.f, len * (1.f - ShadowEpsilon), t});
+        ray_of.push_back(uint32_t(i));
+    }
+    auto &blocked = sc.blocked;
+    blocked.assign(rays.size(), 0);
+    if (!rays.empty()) ctx.scene->occluded(rays.data(), rays.size(), blocked.data());
+    counters.shadow_rays += rays.size();
+    for (size_t r = 0; r < rays.size(); ++r) {
+        uint32_t i = ray_of[r];
+        sc.visible[i] = !blocked[r];
+        if (!st_l) continue;
+        if (!sc.visible[i]) ++st_l->rejected[int(ShiftTest::Visibility)];
+        else if (!selected_only && !sc.selected[i]) ++st_l->rejected[int(ShiftTest::Selection)];
+    }
+}
+
+/// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d.
+void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si,
+                       const std::vector<int> &targets) {
+    const auto &cand = sc.cand;
+    const size_t m = cand.size();
+    //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
+    // over the strategies j whose shift to k is valid (visibility included).
+    auto &valid_set = sc.valid_set;
+    valid_set.clear();
+    for (size_t j = 0; j < m; ++j)
+        if (sc.visible[j]) valid_set.push_back(uint32_t(j));
+    const bool material = sc.material;
+    sc.d.assign(m, 0.f);
+    const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
+    if (!material && uniform_time && ctx.all_time_compatible) {
+        // No pairwise terms: with g = G and s = min(1, g_j/g_k) (or 1),
+        //   D_k = (1/g_k) sum_{g_j >= g_k} n_j g_j + (1/g_k^2) sum_{g_j < g_k} n_j g_j^2,
+        // from prefix sums over the views sorted by g: O(V log V) instead of O(V^2).
+        auto &order = sc.order;
+        order.assign(valid_set.begin(), valid_set.end());
+        std::sort(order.begin(), order.end(),
+                  [&](uint32_t a, uint32_t b) { return cand[a].geo.density < cand[b].geo.density; });
+        const size_t nv = order.size();
+        auto &below = sc.prefix, &above = sc.suffix; // sum of n g^2 before, of n g from position i on
+        below.assign(nv + 1, 0.0);
+        above.assign(nv + 1, 0.0);
+        for (size_t i = 0; i < nv; ++i) {
+            double g = cand[order[i]].geo.density;
+            below[i + 1] = below[i] + double(sc.n[order[i]]) * g * g;
+        }
+        for (size_t i = nv; i-- > 0;) above[i] = above[i + 1] + double(sc.n[order[i]]) * cand[order[i]].geo.density;
+        auto &pos = sc.position;
+        pos.assign(m, 0);
+        for (size_t i = 0; i < nv; ++i) pos[order[i]] = uint32_t(i);
+        for (int k : targets) {
+            double g = cand[k].geo.density;
+            size_t p = pos[k];
+            // Views tied with k in g sort on either side of it; for them both formulas agree.
+            sc.d[k] = ctx.cfg.select_jacobian ? float(above[p] / g + below[p] / (g * g)) : float(above[0] / g);
+        }
+    } else {
+        for (int k : targets) {
+            const MvView &vk = ctx.views[cand[k].slot];
+            const float inv_gk = 1.f / cand[k].geo.density;
+            double sum = sc.n[k];
+            for (uint32_t j : valid_set) {
+                if (int(j) == k) continue;
+                const MvView &vj = ctx.views[cand[j].slot];
+                // Validity of j -> k is that of l -> j and l -> k except for time, which is not transitive.
+                if (!ctx.all_time_compatible && !time_compatible(vj, vk, ctx.scene_moves)) continue;
+                float ratio = cand[j].geo.density * inv_gk; // |T'_{k->j}| = G_j / G_k
+                float s = ctx.cfg.select_jacobian ? std::min(1.f, ratio) : 1.f;
+                if (material && s > 0.f) s *= cached_similarity(ctx, sc, bsdf, si, j, size_t(k));
+                float tau = time_density_ratio(vk, vj, ctx.scene_moves);
+                sum += double(sc.n[j]) * double(tau * ratio * s);
+            }
+            sc.d[k] = float(sum);
+        }
+    }
+}
+
 } // namespace
+
+std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, int slot, const SurfaceInteraction &hit,
+                                                        Point3f lens_point, float time, Vec2f lens, MvScratch &sc) {
+    const FilmDesc &film = ctx.views[slot].camera->film;
+    SurfaceInteraction si = hit;
+    si.wi = si.to_local(normalize(lens_point - si.p));
+    ShiftGeometry geo;
+    std::vector<std::pair<int, float>> out;
+    if (!ctx.views[slot].camera->shift_geometry(si.p, si.n, time, lens, &geo) || !film.contains(geo.film)) return out;
+    uint32_t pixel = uint32_t(int(geo.film.y) - film.crop_y) * uint32_t(film.crop_width) + uint32_t(int(geo.film.x) - film.crop_x);
+    MvVertex y{si.p, si.n, time, lens, dot(si.n, lens_point - si.p)};
+    const Bsdf &bsdf = *si.shape->bsdf;
+    gather_shifts(ctx, slot, pixel, y, bsdf, si, sc, nullptr);
+    RayCounters counters;
+    trace_visibility(ctx, sc, si, time, false, counters, nullptr);
+    std::vector<int> targets;
+    for (size_t i = 0; i < sc.cand.size(); ++i)
+        if (sc.visible[i]) targets.push_back(int(i));
+    balance_densities(ctx, sc, bsdf, si, targets);
+    for (int i : targets) out.emplace_back(sc.cand[i].slot, sc.d[i]);
+    return out;
+}
 
 void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t sample_index, MvScratch &sc,
                       MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
@@ -107,140 +271,26 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     }
     si.wi = si.to_local(-ray.d);
 
-    // ---------------- Shifts to every other view: cheap tests (§3 tests 1-3) ----------------
+    // ---------------- Shifts (§3 tests 1-3), selection (§6), visibility (test 5) ----------------
     MvVertex y{si.p, si.n, t, xi, dot(si.n, ray.o - si.p)};
+    gather_shifts(ctx, slot_l, pixel_l, y, bsdf, si, sc, &st_l);
+    const size_t m = sc.cand.size();
     auto &cand = sc.cand;
-    cand.clear();
-    ShiftCandidate self;
-    self.slot = slot_l;
-    self.pixel = pixel_l;
-    self.time = t;
-    bool self_ok = cam.shift_geometry(y.p, y.n, t, xi, &self.geo) && self.geo.density > 0.f;
-    cand.push_back(self);
-    if (self_ok) {
-        for (int k = 0; k < int(ctx.views.size()); ++k) {
-            if (k == slot_l) continue;
-            ++st_l.tried;
-            ShiftCandidate c;
-            ShiftTest test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
-            if (test != ShiftTest::Count) { ++st_l.rejected[int(test)]; continue; }
-            cand.push_back(c);
-        }
-    }
-    const size_t m = cand.size();
-    sc.lobe.resize(m);
-    sc.n.resize(m);
-    sc.s_sel.assign(m, 1.f);
-    sc.visible.assign(m, 1);
-    sc.selected.assign(m, 1);
-    sc.alpha = bsdf.roughness(si);
-    sc.material = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy);
-    if (sc.material) sc.sm.assign(m * m, -1.f);
-    for (size_t i = 0; i < m; ++i) {
-        const ShiftCandidate &c = cand[i];
-        sc.n[i] = float(ctx.native_map[c.slot][c.pixel]);
-        Vec3f wi = i == 0 ? si.wi : si.to_local(normalize(c.geo.lens_point - si.p));
-        sc.lobe[i] = sc.material ? view_lobe(bsdf, si, wi) : ViewLobe{wi, {}, 0.f};
-    }
-
-    // ---------------- Selection (§6) and visibility (§3 test 5) ----------------
-    // The balance estimator needs the visibility of every candidate (it enters D); the
-    // published variant only that of the selected ones. The rays are traced as packets.
-    auto &rays = sc.rays;
-    auto &ray_of = sc.ray_of;
-    rays.clear();
-    ray_of.clear();
     for (size_t i = 1; i < m; ++i) {
         sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
         sampler.set_dimension(DimSelectBase + ctx.views[cand[i].slot].scene_index);
         sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
-        if (ctx.cfg.mis_selected_only && !sc.selected[i]) {
-            ++st_l.rejected[int(ShiftTest::Selection)];
-            sc.visible[i] = 0;
-            continue;
-        }
-        const ShiftCandidate &c = cand[i];
-        Point3f o = si.offset_p(c.geo.lens_point - si.p);
-        Vec3f d = c.geo.lens_point - o;
-        float dist = norm(d);
-        // Up to k's near clip plane: what is closer to the lens is invisible to its camera rays too.
-        float len = c.geo.visible_length - (norm(c.geo.lens_point - si.p) - dist);
-        if (!(len > 0.f)) continue; // y itself lies at the near plane: nothing can block
-        rays.push_back(Ray{o, d / dist, 0.f, len * (1.f - ShadowEpsilon), t});
-        ray_of.push_back(uint32_t(i));
     }
-    auto &blocked = sc.blocked;
-    blocked.assign(rays.size(), 0);
-    if (!rays.empty()) scene.occluded(rays.data(), rays.size(), blocked.data());
-    counters.shadow_rays += rays.size();
-    for (size_t r = 0; r < rays.size(); ++r) {
-        uint32_t i = ray_of[r];
-        sc.visible[i] = !blocked[r];
-        if (!sc.visible[i]) ++st_l.rejected[int(ShiftTest::Visibility)];
-        else if (!ctx.cfg.mis_selected_only && !sc.selected[i]) ++st_l.rejected[int(ShiftTest::Selection)];
-    }
+    // The balance estimator needs the visibility of every candidate (it enters D); the
+    // published variant only that of the selected ones.
+    trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
     auto &sharing = sc.sharing;
     sharing.clear();
     for (size_t i = 0; i < m; ++i)
         if (sc.visible[i] && sc.selected[i]) sharing.push_back(int(i));
     const size_t ns = sharing.size();
-
-    // ---------------- Balance-heuristic densities D_k (§5) ----------------
-    //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
-    // over the strategies j whose shift to k is valid (visibility included).
-    auto &valid_set = sc.valid_set;
-    valid_set.clear();
-    for (size_t j = 0; j < m; ++j)
-        if (sc.visible[j]) valid_set.push_back(uint32_t(j));
-    const bool material = sc.material;
-    sc.d.assign(m, 0.f);
-    const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
-    if (!material && uniform_time && ctx.all_time_compatible) {
-        // No pairwise terms: with g = G and s = min(1, g_j/g_k) (or 1),
-        //   D_k = (1/g_k) sum_{g_j >= g_k} n_j g_j + (1/g_k^2) sum_{g_j < g_k} n_j g_j^2,
-        // from prefix sums over the views sorted by g: O(V log V) instead of O(V^2).
-        auto &order = sc.order;
-        order.assign(valid_set.begin(), valid_set.end());
-        std::sort(order.begin(), order.end(),
-                  [&](uint32_t a, uint32_t b) { return cand[a].geo.density < cand[b].geo.density; });
-        const size_t nv = order.size();
-        auto &below = sc.prefix, &above = sc.suffix; // sum of n g^2 before, of n g from position i on
-        below.assign(nv + 1, 0.0);
-        above.assign(nv + 1, 0.0);
-        for (size_t i = 0; i < nv; ++i) {
-            double g = cand[order[i]].geo.density;
-            below[i + 1] = below[i] + double(sc.n[order[i]]) * g * g;
-        }
-        for (size_t i = nv; i-- > 0;) above[i] = above[i + 1] + double(sc.n[order[i]]) * cand[order[i]].geo.density;
-        auto &pos = sc.position;
-        pos.assign(m, 0);
-        for (size_t i = 0; i < nv; ++i) pos[order[i]] = uint32_t(i);
-        for (int k : sharing) {
-            double g = cand[k].geo.density;
-            size_t p = pos[k];
-            // Views tied with k in g sort on either side of it; for them both formulas agree.
-            sc.d[k] = ctx.cfg.select_jacobian ? float(above[p] / g + below[p] / (g * g)) : float(above[0] / g);
-        }
-    } else {
-        for (int k : sharing) {
-            const MvView &vk = ctx.views[cand[k].slot];
-            const float inv_gk = 1.f / cand[k].geo.density;
-            double sum = sc.n[k];
-            for (uint32_t j : valid_set) {
-                if (int(j) == k) continue;
-                const MvView &vj = ctx.views[cand[j].slot];
-                // Validity of j -> k is that of l -> j and l -> k except for time, which is not transitive.
-                if (!ctx.all_time_compatible && !time_compatible(vj, vk, ctx.scene_moves)) continue;
-                float ratio = cand[j].geo.density * inv_gk; // |T'_{k->j}| = G_j / G_k
-                float s = ctx.cfg.select_jacobian ? std::min(1.f, ratio) : 1.f;
-                if (material && s > 0.f) s *= cached_similarity(ctx, sc, bsdf, si, j, size_t(k));
-                float tau = time_density_ratio(vk, vj, ctx.scene_moves);
-                sum += double(sc.n[j]) * double(tau * ratio * s);
-            }
-            sc.d[k] = float(sum);
-        }
-    }
+    balance_densities(ctx, sc, bsdf, si, sharing);
 
     // ---------------- Shared next-event estimation (§7) ----------------
     sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0

@@ -72,6 +72,14 @@ struct MvScratch {
     std::vector<Spectrum> contrib, weight, mixture_f;
 };
 
+/// The densities D_k (§5) that a native sample of view `slot` whose camera ray (from
+/// `lens_point`, unit-disk point `lens`, at `time`) hits `hit` gives every view k that can share
+/// it, by slot, with the visibility of every candidate traced (no selection draws): as in
+/// mv_native_sample. For tests: the samples of all views that reach the same shifted sample
+/// must compute the same D_k, which makes their balance weights sum to one.
+std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, int slot, const SurfaceInteraction &hit,
+                                                        Point3f lens_point, float time, Vec2f lens, MvScratch &sc);
+
 /// Take native sample `sample_index` of pixel (px, py) (full-film coordinates) of the view in
 /// `slot`, whose native count this pass is `n_l`; splat every contribution it makes.
 void mv_native_sample(const MvContext &ctx, int slot, int px, int py, uint32_t sample_index, MvScratch &scratch,
