@@ -31,6 +31,12 @@ public:
     bool intersect(const Ray &ray, SurfaceInteraction &si) const;
     /// True if anything blocks `ray` within [tmin, tmax).
     bool occluded(const Ray &ray) const;
+    /// Closest hits of `n` rays, traced as 16-wide Embree packets (`coherent`: as one
+    /// coherent stream, for camera rays); `hit[i]` is false on a miss. Each result equals
+    /// what `intersect` computes from Embree's hit.
+    void intersect(const Ray *rays, size_t n, SurfaceInteraction *si, bool *hit, bool coherent = false) const;
+    /// Occlusion of `n` rays, traced as 16-wide Embree packets.
+    void occluded(const Ray *rays, size_t n, bool *blocked) const;
 
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
     const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
@@ -41,8 +47,14 @@ public:
     void set_integrator(std::shared_ptr<Integrator> i) { m_integrator = std::move(i); }
     const BoundingBox &bounds() const { return m_bounds; }
     RTCDevice device() const { return m_device; }
+    /// The committed Embree scene (for batched queries and benchmarks).
+    RTCScene embree_scene() const { return m_scene; }
 
 private:
+    /// Completes a hit reported by Embree (geometry ids, primitive, barycentrics).
+    void fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
+                  SurfaceInteraction &si) const;
+
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
     std::vector<std::shared_ptr<Shape>> m_shapes;
