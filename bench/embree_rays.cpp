@@ -56,6 +56,18 @@ int main(int argc, char **argv) {
     };
     bounce(cam_rays, sec_rays, &shadow_rays);
     bounce(sec_rays, ter_rays, &shadow_rays);
+    // Rays of each 256-batch reordered by direction octant (counting sort).
+    auto octant_sorted = [](const std::vector<Ray> &rays) {
+        std::vector<Ray> out;
+        for (size_t b = 0; b < rays.size(); b += 256) {
+            size_t e = std::min(rays.size(), b + 256);
+            for (int o = 0; o < 8; ++o)
+                for (size_t i = b; i < e; ++i)
+                    if (((rays[i].d.x < 0) | ((rays[i].d.y < 0) << 1) | ((rays[i].d.z < 0) << 2)) == o) out.push_back(rays[i]);
+        }
+        return out;
+    };
+    std::vector<Ray> sec_sorted = octant_sorted(sec_rays), ter_sorted = octant_sorted(ter_rays), shadow_sorted = octant_sorted(shadow_rays);
     std::printf("%zu camera, %zu secondary, %zu tertiary, %zu shadow rays\n", cam_rays.size(), sec_rays.size(), ter_rays.size(), shadow_rays.size());
     const int reps = 7;
     auto bench = [&](const char *name, const std::vector<Ray> &rays, auto fn) {
@@ -97,7 +109,7 @@ int main(int argc, char **argv) {
         for (size_t b = 0; b < rays.size(); b += 256) { size_t n = std::min<size_t>(256, rays.size() - b);
           for (size_t i = 0; i < n; ++i) fill(buf[i], rays[b + i]);
           rtcOccluded1M(sc, &ctx, (RTCRay *)buf.data(), n, sizeof(RTCRayHit)); for (size_t i = 0; i < n; ++i) h += buf[i].ray.tfar < 0; } return h; }; };
-    for (auto [nm, rs] : {std::pair<const char *, std::vector<Ray> *>{"camera", &cam_rays}, {"secondary", &sec_rays}, {"tertiary", &ter_rays}}) {
+    for (auto [nm, rs] : {std::pair<const char *, std::vector<Ray> *>{"camera", &cam_rays}, {"secondary", &sec_rays}, {"tertiary", &ter_rays}, {"secondary sorted", &sec_sorted}, {"tertiary sorted", &ter_sorted}}) {
         std::printf("%s\n", nm);
         bench("Scene::intersect", *rs, scene_one);
         bench("rtcIntersect1", *rs, one);
@@ -112,4 +124,5 @@ int main(int argc, char **argv) {
     bench("rtcOccluded16", shadow_rays, occ16);
     bench("rtcOccluded1M incoherent", shadow_rays, occM(RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT));
     bench("rtcOccluded1M coherent", shadow_rays, occM(RTC_INTERSECT_CONTEXT_FLAG_COHERENT));
+    bench("rtcOccluded16 sorted", shadow_sorted, occ16);
 }

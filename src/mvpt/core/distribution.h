@@ -27,10 +27,19 @@ public:
 
     /// Index with probability pmf(i); `u` is rescaled to [0, 1) for reuse.
     size_t sample(float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
-        auto it = std::upper_bound(m_cdf.begin() + 1, m_cdf.end() - 1, double(u));
-        size_t i = size_t(it - m_cdf.begin()) - 1;
+        // i = number of interior CDF entries <= u (upper_bound); a branch-free count for
+        // short tables (an emitter's few triangles), where a random comparison mispredicts.
+        size_t i;
+        if (m_cdf.size() <= 18) {
+            i = 0;
+            for (size_t j = 1; j + 1 < m_cdf.size(); ++j) i += m_cdf[j] <= double(u);
+        } else {
+            auto it = std::upper_bound(m_cdf.begin() + 1, m_cdf.end() - 1, double(u));
+            i = size_t(it - m_cdf.begin()) - 1;
+        }
         // Skip zero-probability items that upper_bound can land on at their boundary.
-        while (i + 1 < size() && m_cdf[i + 1] == m_cdf[i]) ++i;
+        // (The rarely true test first: it predicts well; m_cdf has size() + 1 entries.)
+        while (m_cdf[i + 1] == m_cdf[i] && i + 1 < size()) ++i;
         float p = pmf(i);
         if (pmf_out) *pmf_out = p;
         if (u_reuse) *u_reuse = p > 0 ? std::min(float((u - m_cdf[i]) / p), OneMinusEpsilon) : 0.f;

@@ -9,14 +9,11 @@ namespace mvpt::warp {
 inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
     float x = 2.f * u.x - 1.f, y = 2.f * u.y - 1.f;
     if (x == 0.f && y == 0.f) return {0.f, 0.f};
-    float r, phi;
-    if (std::abs(x) > std::abs(y)) {
-        r = x;
-        phi = (Pi / 4.f) * (y / x);
-    } else {
-        r = y;
-        phi = (Pi / 2.f) - (Pi / 4.f) * (x / y);
-    }
+    // Both branches evaluated and one selected (an unpredictable comparison); the
+    // discarded quotient may be infinite, never the selected one.
+    bool x_major = std::abs(x) > std::abs(y);
+    float phi_x = (Pi / 4.f) * (y / x), phi_y = (Pi / 2.f) - (Pi / 4.f) * (x / y);
+    float r = select(x_major, x, y), phi = select(x_major, phi_x, phi_y);
     return {r * std::cos(phi), r * std::sin(phi)};
 }
 
@@ -52,15 +49,12 @@ inline float square_to_uniform_cone_pdf(float cos_max) { return 1.f / (2.f * Pi 
 
 /// Uniform barycentrics (b1, b2) on a triangle [Heitz 2019 low-distortion map].
 inline Vec2f square_to_uniform_triangle(Vec2f u) {
-    float b0, b1;
-    if (u.x < u.y) {
-        b0 = u.x / 2.f;
-        b1 = u.y - b0;
-    } else {
-        b1 = u.y / 2.f;
-        b0 = u.x - b1;
-    }
-    return {b0, b1};
+    // Branch-free (the comparison of two random numbers is unpredictable): the halved
+    // coordinate is the smaller one's, the other is reduced by it.
+    bool x_smaller = u.x < u.y;
+    float half = std::min(u.x, u.y) / 2.f;
+    float rest = std::max(u.x, u.y) - half;
+    return {select(x_smaller, half, rest), select(x_smaller, rest, half)};
 }
 
 /// Standard normal via Box-Muller, first coordinate only.
