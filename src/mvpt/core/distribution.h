@@ -27,15 +27,22 @@ public:
 
     /// Index with probability pmf(i); `u` is rescaled to [0, 1) for reuse.
     size_t sample(float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
-        // i = number of interior CDF entries <= u (upper_bound); a branch-free count for
-        // short tables (an emitter's few triangles), where a random comparison mispredicts.
-        size_t i;
-        if (m_cdf.size() <= 18) {
-            i = 0;
-            for (size_t j = 1; j + 1 < m_cdf.size(); ++j) i += m_cdf[j] <= double(u);
+        // i = number of interior CDF entries <= u (std::upper_bound's answer), found without
+        // branches on the comparisons, which are coin flips for a random u: a count for
+        // short tables (an emitter's few triangles), else a binary search with selects.
+        const double *interior = m_cdf.data() + 1, du = double(u);
+        size_t count = m_cdf.size() - 2, i = 0;
+        if (count <= 16) {
+            for (size_t j = 0; j < count; ++j) i += interior[j] <= du;
         } else {
-            auto it = std::upper_bound(m_cdf.begin() + 1, m_cdf.end() - 1, double(u));
-            i = size_t(it - m_cdf.begin()) - 1;
+            while (count > 0) {
+                // Go right (skip half + 1 entries) when the middle entry is <= u; masks, not
+                // branches (the compiler turns a ?: into a jump here).
+                size_t half = count >> 1, step = half + 1;
+                size_t right = size_t(0) - size_t(interior[i + half] <= du);
+                i += step & right;
+                count = half + ((count - step - half) & right);
+            }
         }
         // Skip zero-probability items that upper_bound can land on at their boundary.
         // (The rarely true test first: it predicts well; m_cdf has size() + 1 entries.)
