@@ -1,3 +1,11 @@
+// Embree query cost per ray on a scene's own rays: one by one (rtcIntersect1), as 8/16-wide
+// packets, as streams (rtcIntersect1M, coherent or not), for camera rays (tile order, as the
+// renderer makes them), secondary and tertiary rays (cosine-distributed bounces) and shadow
+// rays to the first light. The measure behind the wavefront path tracer's choice of
+// queries (README, Performance). Process CPU time, best of 7.
+//
+//   python bench/profile_paths.py cbox-rgb --res 64 --write-xml /tmp/cbox.xml   # prints BASE
+//   build/prof/mvpt_embree_rays /tmp/cbox.xml BASE 4                           # 4 spp of camera rays
 #include "mvpt/renderer.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/render/bsdf.h"
@@ -25,6 +33,10 @@ template <int N, typename RH> static void fillN(RH &p, int i, const Ray &r) {
 }
 
 int main(int argc, char **argv) {
+    if (argc < 4) {
+        std::fprintf(stderr, "usage: %s scene.xml base_dir spp\n", argv[0]);
+        return 2;
+    }
     std::ifstream in(argv[1]); std::stringstream xml; xml << in.rdbuf();
     auto scene = load_scene_string(xml.str(), argv[2]);
     int spp = atoi(argv[3]);
