@@ -67,8 +67,8 @@ TEST(PathBatch, BatchedQueriesMatchSingleRays) {
             size_t ties = 0;
             std::vector<SurfaceInteraction> si(rays.size());
             std::vector<uint8_t> hit(rays.size()), blocked(rays.size());
-            scene->intersect(rays.data(), rays.size(), si.data(), reinterpret_cast<bool *>(hit.data()), coherent);
-            scene->occluded(rays.data(), rays.size(), reinterpret_cast<bool *>(blocked.data()));
+            scene->intersect(rays.data(), rays.size(), si.data(), hit.data(), coherent);
+            scene->occluded(rays.data(), rays.size(), blocked.data(), coherent);
             for (size_t i = 0; i < rays.size(); ++i) {
                 SurfaceInteraction ref;
                 bool h = scene->intersect(rays[i], ref);

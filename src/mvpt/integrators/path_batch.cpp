@@ -77,8 +77,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             buf.si[k] = SurfaceInteraction();
         }
         counters.rays += active;
-        static_assert(sizeof(bool) == sizeof(uint8_t));
-        scene.intersect(buf.rays.data(), active, buf.si.data(), reinterpret_cast<bool *>(buf.hit.data()), first);
+        scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first);
 
         size_t n_shadow = 0;
         for (size_t k = 0; k < active; ++k) {
@@ -156,7 +155,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
 
         // ---------------- Shadow rays of this vertex ----------------
         counters.shadow_rays += n_shadow;
-        scene.occluded(buf.shadow_rays.data(), n_shadow, reinterpret_cast<bool *>(buf.blocked.data()));
+        scene.occluded(buf.shadow_rays.data(), n_shadow, buf.blocked.data());
         for (size_t j = 0; j < n_shadow; ++j)
             if (!buf.blocked[j]) paths[buf.shadows[j].path].result += buf.shadows[j].contribution;
 

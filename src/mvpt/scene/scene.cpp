@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <type_traits>
 
 namespace mvpt {
 
@@ -158,7 +159,7 @@ bool Scene::occluded(const Ray &ray) const {
     return r.tfar < 0.f;
 }
 
-void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, bool *hit, bool coherent) const {
+void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     if (coherent) {
@@ -226,14 +227,25 @@ void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, bool *h
     }
 }
 
-void Scene::occluded(const Ray *rays, size_t n, bool *blocked) const {
+void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent) const {
+    if (coherent) {
+        occluded_packets<8>(rays, n, blocked, RTC_INTERSECT_CONTEXT_FLAG_COHERENT);
+    } else {
+        occluded_packets<16>(rays, n, blocked, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
+    }
+}
+
+template <int Width>
+void Scene::occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const {
+    using Packet = std::conditional_t<Width == 8, RTCRay8, RTCRay16>;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    for (size_t b = 0; b < n; b += 16) {
-        size_t m = std::min<size_t>(16, n - b);
-        alignas(64) RTCRay16 p;
-        alignas(64) int valid[16];
-        for (size_t i = 0; i < 16; ++i) {
+    ctx.flags = flags;
+    for (size_t b = 0; b < n; b += Width) {
+        size_t m = std::min<size_t>(Width, n - b);
+        alignas(64) Packet p;
+        alignas(64) int valid[Width];
+        for (size_t i = 0; i < Width; ++i) {
             const Ray &ray = rays[b + std::min(i, m - 1)];
             valid[i] = i < m && embree_can_trace(ray) ? -1 : 0;
             p.org_x[i] = ray.o.x; p.org_y[i] = ray.o.y; p.org_z[i] = ray.o.z;
@@ -244,7 +256,10 @@ void Scene::occluded(const Ray *rays, size_t n, bool *blocked) const {
             p.mask[i] = 0xffffffffu;
             p.flags[i] = 0;
         }
-        rtcOccluded16(valid, m_scene, &ctx, &p);
+        if constexpr (Width == 8)
+            rtcOccluded8(valid, m_scene, &ctx, &p);
+        else
+            rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
     }
 }

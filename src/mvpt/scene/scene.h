@@ -32,11 +32,13 @@ public:
     /// True if anything blocks `ray` within [tmin, tmax).
     bool occluded(const Ray &ray) const;
     /// Closest hits of `n` rays, traced as 16-wide Embree packets (`coherent`: as one
-    /// coherent stream, for camera rays); `hit[i]` is false on a miss. Each result equals
-    /// what `intersect` computes from Embree's hit.
-    void intersect(const Ray *rays, size_t n, SurfaceInteraction *si, bool *hit, bool coherent = false) const;
-    /// Occlusion of `n` rays, traced as 16-wide Embree packets.
-    void occluded(const Ray *rays, size_t n, bool *blocked) const;
+    /// coherent stream, for a tile's camera rays); `hit[i]` is 0 on a miss. Each result
+    /// equals what `intersect` computes from Embree's hit.
+    void intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent = false) const;
+    /// `occluded` for `n` rays at once, into `blocked`: 16-wide packets of unrelated rays, or
+    /// (`coherent`) 8-wide packets with Embree's coherent flag, for rays that leave one point
+    /// towards nearby targets.
+    void occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent = false) const;
 
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
     const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
@@ -54,6 +56,8 @@ private:
     /// Completes a hit reported by Embree (geometry ids, primitive, barycentrics).
     void fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
                   SurfaceInteraction &si) const;
+    template <int Width>
+    void occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const;
 
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
