@@ -20,6 +20,20 @@ public:
         m_sum = m_cdf.back();
         if (m_sum > 0)
             for (double &c : m_cdf) c /= m_sum;
+        // Guide table [Chen & Asau 1974, "On generating random variates from an empirical
+        // distribution"]: for u in [j/g, (j+1)/g), the search starts at guide[j], the number
+        // of interior CDF entries <= j/g, and scans a few entries (about 4 on average).
+        m_guide.clear();
+        size_t count = m_cdf.size() >= 2 ? m_cdf.size() - 2 : 0;
+        if (count > ShortTable) {
+            size_t g = count / 4 + 1, i = 0;
+            m_guide.resize(g);
+            for (size_t j = 0; j < g; ++j) {
+                double t = double(j) / double(g);
+                while (i < count && m_cdf[i + 1] <= t) ++i;
+                m_guide[j] = uint32_t(i);
+            }
+        }
     }
     size_t size() const { return m_cdf.empty() ? 0 : m_cdf.size() - 1; }
     double sum() const { return m_sum; }
@@ -27,16 +41,20 @@ public:
 
     /// Index with probability pmf(i); `u` is rescaled to [0, 1) for reuse.
     size_t sample(float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
-        // i = number of interior CDF entries <= u (std::upper_bound's answer); for short
-        // tables (an emitter's few triangles) a branch-free count, as each comparison is a
-        // coin flip for a random u. (On long tables, a branch-free binary search measured no
-        // faster: there the dependent cache misses dominate.)
+        // i = number of interior CDF entries <= u (std::upper_bound's answer). Short tables
+        // (an emitter's few triangles): a branch-free count, as each comparison is a coin
+        // flip for a random u. Long ones (envmap rows): the guide table, then a short scan;
+        // a binary search's chain of dependent cache misses cost more (matpreview's envmap).
         const double *interior = m_cdf.data() + 1, du = double(u);
         size_t count = m_cdf.size() - 2, i = 0;
-        if (count <= 16) {
+        if (count <= ShortTable) {
             for (size_t j = 0; j < count; ++j) i += interior[j] <= du;
         } else {
-            i = size_t(std::upper_bound(interior, interior + count, du) - interior);
+            size_t g = m_guide.size();
+            double x = du * double(g);
+            i = m_guide[x > 0.0 ? std::min(size_t(x), g - 1) : 0];
+            while (i > 0 && interior[i - 1] > du) --i; // only if j/g rounded above u
+            while (i < count && interior[i] <= du) ++i;
         }
         // Skip zero-probability items that upper_bound can land on at their boundary.
         // (The rarely true test first: it predicts well; m_cdf has size() + 1 entries.)
@@ -48,7 +66,11 @@ public:
     }
 
 private:
+    /// Tables up to this many interior CDF entries are searched by a plain count.
+    static constexpr size_t ShortTable = 16;
+
     std::vector<double> m_cdf;
+    std::vector<uint32_t> m_guide;
     double m_sum = 0;
 };
 
