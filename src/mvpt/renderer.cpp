@@ -15,6 +15,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <tuple>
+#include <vector>
 #include <unistd.h>
 
 namespace mvpt {
@@ -128,10 +129,18 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                     const Camera &cam = *cams[view];
                     const FilmDesc &film = cam.film;
                     FilmBuffer &fb = m_films[tile.view_slot];
-                    Sampler sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed);
-                    for (int y = tile.y0; y < tile.y1; ++y)
-                        for (int x = tile.x0; x < tile.x1; ++x) {
+                    // Camera rays of the whole tile, then their paths as one batch.
+                    thread_local std::vector<Sampler> samplers;
+                    thread_local std::vector<Ray> rays;
+                    thread_local std::vector<Spectrum> radiance;
+                    size_t n = size_t(tile.x1 - tile.x0) * size_t(tile.y1 - tile.y0);
+                    samplers.assign(n, Sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed));
+                    rays.resize(n);
+                    radiance.resize(n);
+                    for (int y = tile.y0, i = 0; y < tile.y1; ++y)
+                        for (int x = tile.x0; x < tile.x1; ++x, ++i) {
                             int px = x + film.crop_x, py = y + film.crop_y;
+                            Sampler &sampler = samplers[i];
                             sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
                             sampler.set_dimension(DimFilm);
                             Vec2f u_film = sampler.next_2d();
@@ -140,9 +149,14 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                             Vec2f offset = film.filter->sample(u_film);
                             Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
                             Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
-                            Ray ray = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
-                            ++rc.camera_rays;
-                            Spectrum L = integrator.li(m_scene, ray, sampler, rc);
+                            rays[i] = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
+                        }
+                    rc.camera_rays += n;
+                    integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
+                    for (int y = tile.y0, i = 0; y < tile.y1; ++y)
+                        for (int x = tile.x0; x < tile.x1; ++x, ++i) {
+                            int px = x + film.crop_x, py = y + film.crop_y;
+                            Spectrum L = radiance[i];
                             size_t pi = size_t(y) * film.crop_width + x;
                             if (!L.is_finite()) {
                                 // Never reaches the film: counted, and the first one kept for replay.

@@ -20,6 +20,20 @@ public:
         m_sum = m_cdf.back();
         if (m_sum > 0)
             for (double &c : m_cdf) c /= m_sum;
+        // Guide table [Chen & Asau 1974, "On generating random variates from an empirical
+        // distribution"]: for u in [j/g, (j+1)/g), the search starts at guide[j], the number
+        // of interior CDF entries <= j/g, and scans a few entries (about 4 on average).
+        m_guide.clear();
+        size_t count = m_cdf.size() >= 2 ? m_cdf.size() - 2 : 0;
+        if (count > ShortTable) {
+            size_t g = count / 4 + 1, i = 0;
+            m_guide.resize(g);
+            for (size_t j = 0; j < g; ++j) {
+                double t = double(j) / double(g);
+                while (i < count && m_cdf[i + 1] <= t) ++i;
+                m_guide[j] = uint32_t(i);
+            }
+        }
     }
     size_t size() const { return m_cdf.empty() ? 0 : m_cdf.size() - 1; }
     double sum() const { return m_sum; }
@@ -27,10 +41,24 @@ public:
 
     /// Index with probability pmf(i); `u` is rescaled to [0, 1) for reuse.
     size_t sample(float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
-        auto it = std::upper_bound(m_cdf.begin() + 1, m_cdf.end() - 1, double(u));
-        size_t i = size_t(it - m_cdf.begin()) - 1;
+        // i = number of interior CDF entries <= u (std::upper_bound's answer). Short tables
+        // (an emitter's few triangles): a branch-free count, as each comparison is a coin
+        // flip for a random u. Long ones (envmap rows): the guide table, then a short scan;
+        // a binary search's chain of dependent cache misses cost more (matpreview's envmap).
+        const double *interior = m_cdf.data() + 1, du = double(u);
+        size_t count = m_cdf.size() - 2, i = 0;
+        if (count <= ShortTable) {
+            for (size_t j = 0; j < count; ++j) i += interior[j] <= du;
+        } else {
+            size_t g = m_guide.size();
+            double x = du * double(g);
+            i = m_guide[x > 0.0 ? std::min(size_t(x), g - 1) : 0];
+            while (i > 0 && interior[i - 1] > du) --i; // only if j/g rounded above u
+            while (i < count && interior[i] <= du) ++i;
+        }
         // Skip zero-probability items that upper_bound can land on at their boundary.
-        while (i + 1 < size() && m_cdf[i + 1] == m_cdf[i]) ++i;
+        // (The rarely true test first: it predicts well; m_cdf has size() + 1 entries.)
+        while (m_cdf[i + 1] == m_cdf[i] && i + 1 < size()) ++i;
         float p = pmf(i);
         if (pmf_out) *pmf_out = p;
         if (u_reuse) *u_reuse = p > 0 ? std::min(float((u - m_cdf[i]) / p), OneMinusEpsilon) : 0.f;
@@ -38,7 +66,11 @@ public:
     }
 
 private:
+    /// Tables up to this many interior CDF entries are searched by a plain count.
+    static constexpr size_t ShortTable = 16;
+
     std::vector<double> m_cdf;
+    std::vector<uint32_t> m_guide;
     double m_sum = 0;
 };
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace mvpt {
@@ -17,6 +18,16 @@ inline constexpr float Infinity = std::numeric_limits<float>::infinity();
 inline constexpr float OneMinusEpsilon = 0x1.fffffep-1f;
 
 inline float sqr(float x) { return x * x; }
+/// `mask ? a : b` by bit masking: no branch to mispredict when `mask` depends on a random number.
+inline float select(bool mask, float a, float b) {
+    uint32_t m = 0u - uint32_t(mask), ia, ib;
+    std::memcpy(&ia, &a, 4);
+    std::memcpy(&ib, &b, 4);
+    uint32_t r = (ia & m) | (ib & ~m);
+    float out;
+    std::memcpy(&out, &r, 4);
+    return out;
+}
 inline float safe_sqrt(float x) { return std::sqrt(std::max(x, 0.f)); }
 inline float safe_acos(float x) { return std::acos(std::clamp(x, -1.f, 1.f)); }
 inline float lerp(float t, float a, float b) { return a + t * (b - a); }

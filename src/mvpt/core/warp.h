@@ -5,19 +5,26 @@
 
 namespace mvpt::warp {
 
+/// (sin a, cos a) for |a| <= pi/4 by Cephes' minimax polynomials (sinf.c, cosf.c; about
+/// 1 ulp): no range reduction, so no branch, unlike std::sin/std::cos.
+inline Vec2f sincos_quarter_turn(float a) {
+    float z = a * a;
+    float s = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * a + a;
+    float c = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.f;
+    return {s, c};
+}
+
 /// Concentric map to the unit disk [Shirley & Chiu 1997]; density 1/pi.
 inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
     float x = 2.f * u.x - 1.f, y = 2.f * u.y - 1.f;
     if (x == 0.f && y == 0.f) return {0.f, 0.f};
-    float r, phi;
-    if (std::abs(x) > std::abs(y)) {
-        r = x;
-        phi = (Pi / 4.f) * (y / x);
-    } else {
-        r = y;
-        phi = (Pi / 2.f) - (Pi / 4.f) * (x / y);
-    }
-    return {r * std::cos(phi), r * std::sin(phi)};
+    // phi = pi/4 (y/x) when |x| > |y|, else pi/2 - pi/4 (x/y) = pi/2 + a with
+    // a = -pi/4 (x/y), whose cosine is -sin a and sine cos a. Both quotients are computed
+    // and one selected (the comparison is unpredictable); the discarded one may be infinite.
+    bool x_major = std::abs(x) > std::abs(y);
+    float r = select(x_major, x, y);
+    Vec2f sc = sincos_quarter_turn((Pi / 4.f) * select(x_major, y / x, -(x / y)));
+    return {r * select(x_major, sc.y, -sc.x), r * select(x_major, sc.x, sc.y)};
 }
 
 /// Cosine-weighted hemisphere around +z; density cos(theta)/pi.
@@ -52,15 +59,12 @@ inline float square_to_uniform_cone_pdf(float cos_max) { return 1.f / (2.f * Pi 
 
 /// Uniform barycentrics (b1, b2) on a triangle [Heitz 2019 low-distortion map].
 inline Vec2f square_to_uniform_triangle(Vec2f u) {
-    float b0, b1;
-    if (u.x < u.y) {
-        b0 = u.x / 2.f;
-        b1 = u.y - b0;
-    } else {
-        b1 = u.y / 2.f;
-        b0 = u.x - b1;
-    }
-    return {b0, b1};
+    // Branch-free (the comparison of two random numbers is unpredictable): the halved
+    // coordinate is the smaller one's, the other is reduced by it.
+    bool x_smaller = u.x < u.y;
+    float half = std::min(u.x, u.y) / 2.f;
+    float rest = std::max(u.x, u.y) - half;
+    return {select(x_smaller, half, rest), select(x_smaller, rest, half)};
 }
 
 /// Standard normal via Box-Muller, first coordinate only.

@@ -24,6 +24,12 @@ inline constexpr uint32_t DimFilm = 0, DimLens = 1, DimTime = 2, DimCameraEnd = 
 class Integrator : public Object {
 public:
     virtual Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const = 0;
+    /// Radiance along `n` camera rays, ray i with its own started `samplers[i]`, into
+    /// `out[i]`; must equal `li` per ray. The default calls `li` for each.
+    virtual void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
+                          RayCounters &counters) const {
+        for (size_t i = 0; i < n; ++i) out[i] = li(scene, rays[i], samplers[i], counters);
+    }
     virtual std::string name() const = 0;
 };
 

@@ -110,7 +110,7 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     }
     auto &blocked = sc.blocked;
     blocked.assign(rays.size(), 0);
-    if (!rays.empty()) ctx.scene->occluded(rays.data(), rays.size(), blocked.data());
+    if (!rays.empty()) ctx.scene->occluded(rays.data(), rays.size(), blocked.data(), true); // one origin: coherent
     counters.shadow_rays += rays.size();
     for (size_t r = 0; r < rays.size(); ++r) {
         uint32_t i = ray_of[r];

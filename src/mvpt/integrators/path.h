@@ -47,6 +47,10 @@ public:
     /// `valid_out` receives the valid-path flag at the end (the result is zero when false).
     Spectrum trace(const Scene &scene, Ray ray, PathState state, Sampler &sampler, RayCounters &counters,
                    const SurfaceInteraction *first_hit = nullptr, bool *valid_out = nullptr) const;
+    /// The paths of many camera rays traced bounce by bounce (a wavefront), with Embree's
+    /// packet queries; each result is bit-identical to `li` given the same hits (path_batch.cpp).
+    void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
+                  RayCounters &counters) const override;
     std::string name() const override { return "path"; }
     const PathConfig &config() const { return m_cfg; }
 

@@ -49,6 +49,8 @@ public:
     virtual void set_shape(const Shape *) {}
     /// The shape an area light is attached to (nullptr for other lights).
     virtual const Shape *shape() const { return nullptr; }
+    /// True when an area light's radiance is the same all over its shape (uv unused).
+    virtual bool uniform_radiance() const { return false; }
 
     uint32_t flags() const { return m_flags; }
     bool is_delta() const { return (m_flags & (LightDeltaPosition | LightDeltaDirection)) != 0; }

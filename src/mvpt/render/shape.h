@@ -71,6 +71,9 @@ public:
 
     std::shared_ptr<Bsdf> bsdf;
     std::shared_ptr<Light> emitter;
+    /// Whether `sample_area` / `sample_solid_angle` must fill `ShapeSample::uv`; false for
+    /// an emitter whose radiance is uniform (it spares a sphere two inverse trig calls).
+    bool sample_uv = true;
     std::string id;
 };
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <type_traits>
 
 namespace mvpt {
 
@@ -125,18 +126,22 @@ bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(m_scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    si.time = ray.time;
-    if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
-        // Instances resolve the inner geometry and move the hit to world space.
-        m_geom_to_shape[rh.hit.instID[0]]->fill_instance_interaction(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.primID,
-                                                                     {rh.hit.u, rh.hit.v}, si);
-        return true;
-    }
-    const Shape *shape = m_geom_to_shape[rh.hit.geomID];
-    si.shape = shape;
-    si.prim = rh.hit.primID;
-    shape->fill_interaction(ray, rh.ray.tfar, rh.hit.primID, {rh.hit.u, rh.hit.v}, si);
+    fill_hit(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, {rh.hit.u, rh.hit.v}, si);
     return true;
+}
+
+void Scene::fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
+                     SurfaceInteraction &si) const {
+    si.time = ray.time;
+    if (inst != RTC_INVALID_GEOMETRY_ID) {
+        // Instances resolve the inner geometry and move the hit to world space.
+        m_geom_to_shape[inst]->fill_instance_interaction(ray, t, geom, prim, b, si);
+        return;
+    }
+    const Shape *shape = m_geom_to_shape[geom];
+    si.shape = shape;
+    si.prim = prim;
+    shape->fill_interaction(ray, t, prim, b, si);
 }
 
 bool Scene::occluded(const Ray &ray) const {
@@ -155,31 +160,108 @@ bool Scene::occluded(const Ray &ray) const {
     return r.tfar < 0.f;
 }
 
-void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
-    // Packets of up to 8 rays: the visibility rays of a shared vertex leave one point towards
-    // nearby lenses, coherent enough for Embree's packet traversal.
-    for (size_t first = 0; first < n; first += 8) {
-        size_t count = std::min<size_t>(8, n - first);
-        alignas(32) int valid[8];
-        RTCRay8 r;
-        for (size_t i = 0; i < 8; ++i) {
-            const Ray &ray = rays[first + std::min(i, count - 1)];
-            bool ok = i < count && embree_can_trace(ray);
-            valid[i] = ok ? -1 : 0;
-            r.org_x[i] = ray.o.x; r.org_y[i] = ray.o.y; r.org_z[i] = ray.o.z;
-            r.dir_x[i] = ray.d.x; r.dir_y[i] = ray.d.y; r.dir_z[i] = ray.d.z;
-            r.tnear[i] = ray.tmin;
-            r.tfar[i] = ray.tmax;
-            r.time[i] = m_animated ? m_motion.to_embree(ray.time) : 0.f;
-            r.mask[i] = 0xffffffffu;
-            r.flags[i] = 0;
-            r.id[i] = 0;
-        }
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
+void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    if (coherent) {
+        // One stream: Embree traces coherent rays (a tile's camera rays) as packets of its choice.
+        constexpr size_t Chunk = 256;
+        RTCRayHit rh[Chunk];
         ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        rtcOccluded8(valid, m_scene, &ctx, &r);
-        for (size_t i = 0; i < count; ++i) blocked[first + i] = valid[i] != 0 && r.tfar[i] < 0.f;
+        for (size_t b = 0; b < n; b += Chunk) {
+            size_t m = std::min(Chunk, n - b);
+            for (size_t i = 0; i < m; ++i) {
+                const Ray &ray = rays[b + i];
+                RTCRayHit &r = rh[i];
+                if (embree_can_trace(ray)) {
+                    r.ray.org_x = ray.o.x; r.ray.org_y = ray.o.y; r.ray.org_z = ray.o.z;
+                    r.ray.dir_x = ray.d.x; r.ray.dir_y = ray.d.y; r.ray.dir_z = ray.d.z;
+                    r.ray.tnear = ray.tmin;
+                    r.ray.tfar = ray.tmax;
+                } else { // inactive: tnear > tfar
+                    r.ray.org_x = r.ray.org_y = r.ray.org_z = 0.f;
+                    r.ray.dir_x = r.ray.dir_y = 0.f; r.ray.dir_z = 1.f;
+                    r.ray.tnear = 1.f;
+                    r.ray.tfar = 0.f;
+                }
+                r.ray.time = m_animated ? m_motion.to_embree(ray.time) : 0.f;
+                r.ray.mask = 0xffffffffu;
+                r.ray.flags = 0;
+                r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcIntersect1M(m_scene, &ctx, rh, unsigned(m), sizeof(RTCRayHit));
+            for (size_t i = 0; i < m; ++i) {
+                const RTCRayHit &r = rh[i];
+                hit[b + i] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+                if (hit[b + i])
+                    fill_hit(rays[b + i], r.ray.tfar, r.hit.geomID, r.hit.instID[0], r.hit.primID, {r.hit.u, r.hit.v},
+                             si[b + i]);
+            }
+        }
+        return;
+    }
+    for (size_t b = 0; b < n; b += 16) {
+        size_t m = std::min<size_t>(16, n - b);
+        alignas(64) RTCRayHit16 p;
+        alignas(64) int valid[16];
+        for (size_t i = 0; i < 16; ++i) {
+            const Ray &ray = rays[b + std::min(i, m - 1)];
+            valid[i] = i < m && embree_can_trace(ray) ? -1 : 0;
+            p.ray.org_x[i] = ray.o.x; p.ray.org_y[i] = ray.o.y; p.ray.org_z[i] = ray.o.z;
+            p.ray.dir_x[i] = ray.d.x; p.ray.dir_y[i] = ray.d.y; p.ray.dir_z[i] = ray.d.z;
+            p.ray.tnear[i] = ray.tmin;
+            p.ray.tfar[i] = ray.tmax;
+            p.ray.time[i] = m_animated ? m_motion.to_embree(ray.time) : 0.f;
+            p.ray.mask[i] = 0xffffffffu;
+            p.ray.flags[i] = 0;
+            p.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            p.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, m_scene, &ctx, &p);
+        for (size_t i = 0; i < m; ++i) {
+            hit[b + i] = valid[i] && p.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+            if (hit[b + i])
+                fill_hit(rays[b + i], p.ray.tfar[i], p.hit.geomID[i], p.hit.instID[0][i], p.hit.primID[i],
+                         {p.hit.u[i], p.hit.v[i]}, si[b + i]);
+        }
+    }
+}
+
+void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent) const {
+    if (coherent) {
+        occluded_packets<8>(rays, n, blocked, RTC_INTERSECT_CONTEXT_FLAG_COHERENT);
+    } else {
+        occluded_packets<16>(rays, n, blocked, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
+    }
+}
+
+template <int Width>
+void Scene::occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const {
+    using Packet = std::conditional_t<Width == 8, RTCRay8, RTCRay16>;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = flags;
+    for (size_t b = 0; b < n; b += Width) {
+        size_t m = std::min<size_t>(Width, n - b);
+        alignas(64) Packet p;
+        alignas(64) int valid[Width];
+        for (size_t i = 0; i < Width; ++i) {
+            const Ray &ray = rays[b + std::min(i, m - 1)];
+            valid[i] = i < m && embree_can_trace(ray) ? -1 : 0;
+            p.org_x[i] = ray.o.x; p.org_y[i] = ray.o.y; p.org_z[i] = ray.o.z;
+            p.dir_x[i] = ray.d.x; p.dir_y[i] = ray.d.y; p.dir_z[i] = ray.d.z;
+            p.tnear[i] = ray.tmin;
+            p.tfar[i] = ray.tmax;
+            p.time[i] = m_animated ? m_motion.to_embree(ray.time) : 0.f;
+            p.mask[i] = 0xffffffffu;
+            p.flags[i] = 0;
+        }
+        if constexpr (Width == 8)
+            rtcOccluded8(valid, m_scene, &ctx, &p);
+        else
+            rtcOccluded16(valid, m_scene, &ctx, &p);
+        for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
     }
 }
 

@@ -31,8 +31,14 @@ public:
     bool intersect(const Ray &ray, SurfaceInteraction &si) const;
     /// True if anything blocks `ray` within [tmin, tmax).
     bool occluded(const Ray &ray) const;
-    /// `occluded` for `n` rays at once (traced as packets); results in `blocked`.
-    void occluded(const Ray *rays, size_t n, uint8_t *blocked) const;
+    /// Closest hits of `n` rays, traced as 16-wide Embree packets (`coherent`: as one
+    /// coherent stream, for a tile's camera rays); `hit[i]` is 0 on a miss. Each result
+    /// equals what `intersect` computes from Embree's hit.
+    void intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent = false) const;
+    /// `occluded` for `n` rays at once, into `blocked`: 16-wide packets of unrelated rays, or
+    /// (`coherent`) 8-wide packets with Embree's coherent flag, for rays that leave one point
+    /// towards nearby targets.
+    void occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent = false) const;
 
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
     const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
@@ -45,8 +51,16 @@ public:
     /// True when some shape moves (animated transforms): then time matters to every ray.
     bool is_animated() const { return m_animated; }
     RTCDevice device() const { return m_device; }
+    /// The committed Embree scene (for batched queries and benchmarks).
+    RTCScene embree_scene() const { return m_scene; }
 
 private:
+    /// Completes a hit reported by Embree (geometry ids, primitive, barycentrics).
+    void fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
+                  SurfaceInteraction &si) const;
+    template <int Width>
+    void occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const;
+
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
     std::vector<std::shared_ptr<Shape>> m_shapes;

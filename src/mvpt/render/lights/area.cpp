@@ -21,6 +21,7 @@ public:
 
     void set_shape(const Shape *s) override { m_shape = s; }
     const Shape *shape() const override { return m_shape; }
+    bool uniform_radiance() const override { return m_radiance->is_constant(); }
 
     // Mitsuba samples a spatially varying radiance texture by the texture's own
     // density mapped onto the shape; here the shape's solid-angle sampling is

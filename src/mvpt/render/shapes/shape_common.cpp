@@ -24,6 +24,7 @@ void attach_shape_children(Shape &shape, const Properties &props) {
             throw SceneError(e->loc, "an area emitter can be attached to one shape only");
         light->set_shape(&shape);
         shape.emitter = light;
+        shape.sample_uv = !light->uniform_radiance();
     }
 }
 

@@ -67,7 +67,7 @@ public:
         ShapeSample s;
         s.p = m_center + n * float(m_radius);
         s.n = m_flip_normals ? -n : n;
-        s.uv = uv_of(s.p);
+        if (sample_uv) s.uv = uv_of(s.p);
         s.pdf_a = m_inv_area;
         return s;
     }
@@ -104,7 +104,7 @@ public:
             pdf = cos_t > 0.f ? m_inv_area * dist2 / cos_t : 0.f;
         }
         if (m_flip_normals) s.n = -s.n;
-        s.uv = uv_of(s.p);
+        if (sample_uv) s.uv = uv_of(s.p);
         s.pdf_a = m_inv_area;
         return {s, pdf};
     }
