@@ -163,7 +163,8 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         }
         if "multiview" in r:
             views[r["id"]]["multiview"] = dict(r["multiview"], contributions_per_pixel=float(
-                r["contributions"].sum(dtype=np.float64)) / pixels)
+                r["contributions"].sum(dtype=np.float64)) / pixels,
+                native_samples_per_second=rate(r["multiview"]["native_samples"]))
     settings = dict(settings, views=list(views), integrator=scene.integrator)
     first = raw.get("first_nonfinite")
     if first is not None:

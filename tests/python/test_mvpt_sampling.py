@@ -109,3 +109,11 @@ def test_mvpt_is_bit_identical_for_any_thread_count():
         assert np.array_equal(a.sample_count[v], b.sample_count[v]), v   # adaptive maps included
         assert np.array_equal(a.contributions[v], b.contributions[v]), v
     assert a.stats["multiview"] == b.stats["multiview"]
+    # The statistics of design §9, per view and overall.
+    total = a.stats["multiview"]
+    assert total["native_samples"] == sum(a.sample_count[v].sum() for v in a.images)
+    assert total["contributions"] == sum(a.contributions[v].sum() for v in a.images)
+    for v, s in a.stats["views"].items():
+        m = s["multiview"]
+        assert m["native_samples"] == a.sample_count[v].sum() and m["native_samples_per_second"] > 0
+        assert 1.0 <= m["mean_sharing"] <= len(a.images) and m["rays_per_native_sample"] >= 1.0
