@@ -237,6 +237,9 @@ def test_ctrl_c_during_render(slow):
     import os
     import signal
 
+    # A process started in the background by a non-interactive shell inherits SIGINT ignored
+    # (and Python then installs no KeyboardInterrupt handler): install it for this test.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
     t0 = time.monotonic()
     timer.start()
@@ -245,6 +248,7 @@ def test_ctrl_c_during_render(slow):
         r = mvpt.render(slow, spp=1_000_000)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert r.stats["cancelled"] is True and r.stats["passes"] >= 1
     assert time.monotonic() - t0 < 10
     for count in r.sample_count.values():

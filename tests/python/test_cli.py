@@ -146,8 +146,11 @@ def test_ctrl_c_writes_finished_passes(tmp_path, sig):
     path = tmp_path / "slow.xml"
     path.write_text(slow_scene(4, res=64))
     out = tmp_path / "out"
+    # The child must see SIGINT at its default even when this process was started in the
+    # background (which ignores SIGINT, and the ignore is inherited).
     proc = subprocess.Popen(CLI + ["render", str(path), "--spp", "100000", "--aovs", "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         first = proc.stdout.readline()
         assert first.startswith("rendering 4 views"), first + proc.stderr.read()
