@@ -20,15 +20,6 @@
 
 namespace mvpt {
 
-namespace {
-constexpr int TileSize = 16;
-
-struct Tile {
-    int view_slot;
-    int x0, y0, x1, y1; // crop-window pixel range
-};
-} // namespace
-
 Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_opts(std::move(opts)) {
     const auto &cams = scene.cameras();
     if (m_opts.views.empty())
@@ -93,13 +84,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         max_target = std::max(max_target, t);
     }
 
-    std::vector<Tile> all_tiles;
-    for (size_t i = 0; i < m_views.size(); ++i) {
-        const FilmDesc &f = cams[m_views[i]]->film;
-        for (int y = 0; y < f.crop_height; y += TileSize)
-            for (int x = 0; x < f.crop_width; x += TileSize)
-                all_tiles.push_back({int(i), x, y, std::min(x + TileSize, f.crop_width), std::min(y + TileSize, f.crop_height)});
-    }
+    const std::vector<Tile> all_tiles = make_tiles();
 
     tbb::enumerable_thread_specific<RayCounters> counters;
     std::mutex nonfinite_mutex;
@@ -182,22 +167,40 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             });
         });
         last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
-        m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
-        m_stats.passes = pass + 1;
-        m_stats.samples += pass_samples; // one sample per pixel of every tile in the pass
-        if (progress) {
-            RenderProgress p;
-            p.pass = pass + 1;
-            p.elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
-            p.samples = m_stats.samples;
-            p.fraction = double(pass + 1) / double(max_target);
-            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
-            progress(p);
-        }
+        // One sample per pixel of every tile in the pass.
+        finish_pass(pass, pass_samples, last_pass, std::chrono::duration<double>(clock::now() - t_start).count(),
+                    double(pass + 1) / double(max_target), progress);
     }
     m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     for (const RayCounters &c : counters) m_stats.counters += c;
     develop();
+}
+
+std::vector<Renderer::Tile> Renderer::make_tiles() const {
+    constexpr int TileSize = 16;
+    std::vector<Tile> tiles;
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        const FilmDesc &f = m_scene.cameras()[m_views[i]]->film;
+        for (int y = 0; y < f.crop_height; y += TileSize)
+            for (int x = 0; x < f.crop_width; x += TileSize)
+                tiles.push_back({int(i), x, y, std::min(x + TileSize, f.crop_width), std::min(y + TileSize, f.crop_height)});
+    }
+    return tiles;
+}
+
+void Renderer::finish_pass(int pass, uint64_t pass_samples, double pass_seconds, double elapsed, double fraction,
+                           const std::function<void(const RenderProgress &)> &progress) {
+    m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, pass_seconds);
+    m_stats.passes = pass + 1;
+    m_stats.samples += pass_samples;
+    if (!progress) return;
+    RenderProgress p;
+    p.pass = pass + 1;
+    p.elapsed = elapsed;
+    p.samples = m_stats.samples;
+    p.fraction = fraction;
+    if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
+    progress(p);
 }
 
 void Renderer::develop() {

@@ -94,6 +94,16 @@ private:
         std::vector<uint32_t> count;
         std::unique_ptr<std::atomic<uint64_t>> nonfinite = std::make_unique<std::atomic<uint64_t>>(0);
     };
+    /// 16x16 tiles of every rendered view's crop window (view_slot indexes m_views).
+    struct Tile {
+        int view_slot;
+        int x0, y0, x1, y1; // crop-window pixel range
+    };
+    std::vector<Tile> make_tiles() const;
+    /// Book-keeping after a pass: timings, sample count, and the progress callback with
+    /// `fraction` (of the sample target) raised to the share of the time budget used.
+    void finish_pass(int pass, uint64_t pass_samples, double pass_seconds, double elapsed, double fraction,
+                     const std::function<void(const RenderProgress &)> &progress);
     void develop();
     void render_multiview(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress);
     void develop_multiview();

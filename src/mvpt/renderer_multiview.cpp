@@ -11,20 +11,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <cfloat>
 #include <chrono>
 #include <stdexcept>
 
 namespace mvpt {
 
 namespace {
-constexpr int TileSize = 16;
-
-struct MvTile {
-    int slot;
-    int x0, y0, x1, y1; // crop-window pixel range
-};
-
 /// Sends contributions to a thread's splat buffer, counting those that cannot be stored.
 class BufferSink final : public MvSplatSink {
 public:
@@ -105,13 +97,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
     double native_done = 0.0; // mean native samples per pixel so far
 
-    std::vector<MvTile> tiles;
-    for (size_t i = 0; i < m_views.size(); ++i) {
-        const FilmDesc &f = cams[m_views[i]]->film;
-        for (int y = 0; y < f.crop_height; y += TileSize)
-            for (int x = 0; x < f.crop_width; x += TileSize)
-                tiles.push_back({int(i), x, y, std::min(x + TileSize, f.crop_width), std::min(y + TileSize, f.crop_height)});
-    }
+    const std::vector<Tile> tiles = make_tiles();
 
     // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
     const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
@@ -129,14 +115,14 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                 MvThreadState &ts = state.local();
                 BufferSink sink(ts.buffer, ts.dropped);
                 for (size_t ti = r.begin(); ti != r.end(); ++ti) {
-                    const MvTile &tile = tiles[ti];
-                    const FilmDesc &film = m_mv.views[tile.slot].camera->film;
-                    const MvFilm &mf = m_mv_films[tile.slot];
+                    const Tile &tile = tiles[ti];
+                    const FilmDesc &film = m_mv.views[tile.view_slot].camera->film;
+                    const MvFilm &mf = m_mv_films[tile.view_slot];
                     for (int y = tile.y0; y < tile.y1; ++y)
                         for (int x = tile.x0; x < tile.x1; ++x) {
                             size_t p = size_t(y) * film.crop_width + x;
                             for (uint32_t j = 0; j < mf.map[p]; ++j)
-                                mv_native_sample(m_mv, tile.slot, x + film.crop_x, y + film.crop_y, mf.native[p] + j,
+                                mv_native_sample(m_mv, tile.view_slot, x + film.crop_x, y + film.crop_y, mf.native[p] + j,
                                                  ts.scratch, sink, ts.counters, ts.stats.data());
                         }
                 }
@@ -217,18 +203,8 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         }
 
         last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
-        m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
-        m_stats.passes = pass + 1;
-        m_stats.samples += pass_samples;
-        if (progress) {
-            RenderProgress p;
-            p.pass = pass + 1;
-            p.elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
-            p.samples = m_stats.samples;
-            p.fraction = unbounded ? 0.0 : std::min(1.0, double(native_done) / double(spp_target));
-            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
-            progress(p);
-        }
+        finish_pass(pass, pass_samples, last_pass, std::chrono::duration<double>(clock::now() - t_start).count(),
+                    unbounded ? 0.0 : std::min(1.0, native_done / double(spp_target)), progress);
     }
     m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     std::vector<MvViewStats> per_view(m_views.size());
@@ -248,42 +224,28 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
 }
 
 void Renderer::develop_multiview() {
+    // The balance estimate and its variance are the mean and spread of the per-pass estimates
+    // in the FilmBuffers, as for path tracing; then the multi-view AOVs and, for the weighted
+    // estimator, its ratio of sums over all passes plus the plain mean of native-only radiance.
+    develop();
     const bool weighted = m_mv.cfg.estimator == MvEstimator::Weighted;
-    m_results.clear();
     for (size_t slot = 0; slot < m_views.size(); ++slot) {
-        const Camera &cam = *m_mv.views[slot].camera;
         const FilmBuffer &fb = m_films[slot];
         const MvFilm &mf = m_mv_films[slot];
-        ViewResult r;
-        r.id = cam.id;
-        r.width = cam.film.crop_width;
-        r.height = cam.film.crop_height;
-        size_t n = size_t(r.width) * r.height;
-        r.rgb.resize(3 * n);
-        r.variance.resize(3 * n);
+        ViewResult &r = m_results[slot];
+        const size_t n = mf.native.size();
         r.sample_count = mf.native;
         r.contributions.assign(mf.received.begin(), mf.received.end());
         r.weight_sum.resize(n);
-        r.nonfinite = fb.nonfinite->load();
+        r.samples = 0;
         for (size_t p = 0; p < n; ++p) {
             double k = fb.count[p]; // passes
             r.samples += mf.native[p];
             r.weight_sum[p] = k > 0 ? float(mf.w[p] / k) : 0.f;
-            for (int c = 0; c < 3; ++c) {
-                double mean;
-                if (k == 0) mean = 0.0;
-                else if (weighted) // MWIS: ratio of sums over all passes, plus the plain mean of native-only radiance
-                    mean = mf.e[3 * p + c] / k + (mf.w[p] > 0.0 ? mf.lw[3 * p + c] / mf.w[p] : 0.0);
-                else
-                    mean = fb.sum[3 * p + c] / k;
-                // Variance of the mean from the spread of the per-pass (balance) estimates.
-                double pm = k > 0 ? fb.sum[3 * p + c] / k : 0.0;
-                double var = k > 1 ? std::max(0.0, (fb.sum_sq[3 * p + c] - k * pm * pm) / (k * (k - 1))) : 0.0;
-                r.rgb[3 * p + c] = float(mean);
-                r.variance[3 * p + c] = float(std::min(var, double(FLT_MAX)));
-            }
+            if (weighted && k > 0)
+                for (int c = 0; c < 3; ++c)
+                    r.rgb[3 * p + c] = float(mf.e[3 * p + c] / k + (mf.w[p] > 0.0 ? mf.lw[3 * p + c] / mf.w[p] : 0.0));
         }
-        m_results.push_back(std::move(r));
     }
 }
 
