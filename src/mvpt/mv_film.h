@@ -9,6 +9,7 @@
 
 #include "core/math.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -21,32 +22,46 @@ inline constexpr double SplatScale = 0x1p30;
 /// Largest magnitude a single contribution may have (larger ones are dropped and counted).
 inline constexpr double SplatMax = 0x1p32;
 
-/// One thread's splat buffer: per view, SplatChannels int64 per pixel, allocated on first use.
+/// One pixel of a splat buffer: one cache line.
+struct alignas(64) SplatPixel {
+    int64_t c[SplatChannels] = {};
+};
+
+/// A value rounded to the fixed-point grid (to nearest, in the default rounding mode).
+inline int64_t to_fixed(double x) { return std::llrint(x * SplatScale); }
+
+/// One thread's splat buffer: per view, one SplatPixel per pixel, allocated on first use.
 class SplatBuffer {
 public:
     explicit SplatBuffer(const std::vector<size_t> &pixels_per_view) : m_pixels(pixels_per_view), m_data(pixels_per_view.size()) {}
 
     /// Add one contribution; false (nothing added) when a value is not finite or too large.
-    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
-        double v[7] = {lw[0], lw[1], lw[2], e[0], e[1], e[2], w};
-        for (double x : v)
-            if (!(std::abs(x) < SplatMax)) return false;
-        std::vector<int64_t> &buf = m_data[slot];
-        if (buf.empty()) buf.assign(m_pixels[slot] * SplatChannels, 0);
-        int64_t *p = &buf[size_t(pixel) * SplatChannels];
-        for (int c = 0; c < 7; ++c) { // round to nearest (an inlined conversion, unlike llround)
-            double x = v[c] * SplatScale;
-            p[c] += int64_t(x + (x >= 0.0 ? 0.5 : -0.5));
+    /// E is nonzero only in the native view's own pixel, so it is added only when `has_e`.
+    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e, bool has_e) {
+        float big = std::max({std::abs(lw[0]), std::abs(lw[1]), std::abs(lw[2]), std::abs(w), std::abs(e[0]),
+                              std::abs(e[1]), std::abs(e[2])});
+        if (!(double(big) < SplatMax)) return false; // also catches NaN
+        std::vector<SplatPixel> &buf = m_data[slot];
+        if (buf.empty()) buf.resize(m_pixels[slot]);
+        int64_t *p = buf[pixel].c;
+        p[0] += to_fixed(lw[0]);
+        p[1] += to_fixed(lw[1]);
+        p[2] += to_fixed(lw[2]);
+        if (has_e) {
+            p[3] += to_fixed(e[0]);
+            p[4] += to_fixed(e[1]);
+            p[5] += to_fixed(e[2]);
         }
+        p[6] += to_fixed(w);
         p[7] += 1;
         return true;
     }
     /// The buffer of view `slot` (empty if nothing was splatted there).
-    std::vector<int64_t> &view(int slot) { return m_data[slot]; }
+    std::vector<SplatPixel> &view(int slot) { return m_data[slot]; }
 
 private:
     std::vector<size_t> m_pixels;
-    std::vector<std::vector<int64_t>> m_data;
+    std::vector<std::vector<SplatPixel>> m_data;
 };
 
 /// Accumulators of one view over all passes.

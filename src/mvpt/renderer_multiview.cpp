@@ -21,8 +21,11 @@ namespace {
 class BufferSink final : public MvSplatSink {
 public:
     BufferSink(SplatBuffer &buf, std::vector<uint64_t> &dropped) : m_buf(buf), m_dropped(dropped) {}
-    void splat(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) override {
-        if (!m_buf.add(slot, pixel, lw, w, e)) ++m_dropped[slot];
+    void splat(const MvSplat *splats, size_t n) override {
+        for (size_t i = 0; i < n; ++i) {
+            const MvSplat &s = splats[i];
+            if (!m_buf.add(s.slot, s.pixel, s.lw, s.w, s.e, s.has_e)) ++m_dropped[s.slot];
+        }
     }
 
 private:
@@ -83,11 +86,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                                     "(the sensor's rfilter applies to independent path tracing only)");
     }
     for (MvFilm &f : m_mv_films) m_mv.native_map.push_back(f.map.data());
-    for (const MvView &a : m_mv.views)
-        for (const MvView &b : m_mv.views) {
-            m_mv.all_time_compatible &= time_compatible(a, b, m_mv.scene_moves);
-            m_mv.all_time_compatible_equal_dt &= a.dt == b.dt;
-        }
+    m_mv.prepare();
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
@@ -133,15 +132,16 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                 MvFilm &mf = m_mv_films[slot];
                 FilmBuffer &fb = m_films[slot];
                 const size_t n = pixels[slot];
-                std::vector<int64_t> total(n * SplatChannels, 0);
+                std::vector<SplatPixel> total(n);
                 for (MvThreadState &ts : state) {
-                    std::vector<int64_t> &buf = ts.buffer.view(int(slot));
+                    std::vector<SplatPixel> &buf = ts.buffer.view(int(slot));
                     if (buf.empty()) continue;
-                    for (size_t i = 0; i < total.size(); ++i) total[i] += buf[i];
-                    std::fill(buf.begin(), buf.end(), 0);
+                    for (size_t p = 0; p < n; ++p)
+                        for (int c = 0; c < SplatChannels; ++c) total[p].c[c] += buf[p].c[c];
+                    std::fill(buf.begin(), buf.end(), SplatPixel{});
                 }
                 for (size_t p = 0; p < n; ++p) {
-                    const int64_t *t = &total[p * SplatChannels];
+                    const int64_t *t = total[p].c;
                     double w = double(t[6]) / SplatScale;
                     double e_lum = 0.0, v_lum = 0.0;
                     for (int c = 0; c < 3; ++c) {

@@ -76,11 +76,7 @@ struct Fixture {
             for (uint16_t &n : maps.back()) n = uint16_t(1 + rng() % 4); // uneven native counts
         }
         for (auto &m : maps) ctx.native_map.push_back(m.data());
-        for (const MvView &a : ctx.views)
-            for (const MvView &b : ctx.views) {
-                ctx.all_time_compatible &= time_compatible(a, b, false);
-                ctx.all_time_compatible_equal_dt &= a.dt == b.dt;
-            }
+        ctx.prepare();
     }
 };
 

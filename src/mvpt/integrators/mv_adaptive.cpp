@@ -86,10 +86,12 @@ void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::ve
         adapt_native_map(none, max_n, budget, map);
         return;
     }
-    // total(c) decreases in c: bisect on log c for the smallest c with total(c) <= budget.
+    // total(c) decreases in c: bisect on log c for the smallest c with total(c) <= budget, to
+    // 0.1% (finer changes a count only where its rounding is a coin toss; each step costs a
+    // pass over the pixels).
     double lo_c = hi * 1e-12, hi_c = hi * 2.0; // total(hi_c) = n (every pixel at 1)
     if (total(lo_c) <= budget) hi_c = lo_c;
-    for (int it = 0; it < 60 && hi_c > lo_c * (1.0 + 1e-9); ++it) {
+    for (int it = 0; it < 60 && hi_c > lo_c * (1.0 + 1e-3); ++it) {
         double mid = std::sqrt(lo_c * hi_c);
         if (total(mid) <= budget) hi_c = mid;
         else lo_c = mid;

@@ -19,6 +19,22 @@ MvViewStats &MvViewStats::operator+=(const MvViewStats &o) {
     return *this;
 }
 
+void MvContext::prepare() {
+    all_time_compatible = all_time_compatible_equal_dt = true;
+    for (const MvView &a : views)
+        for (const MvView &b : views) {
+            all_time_compatible &= time_compatible(a, b, scene_moves);
+            all_time_compatible_equal_dt &= a.dt == b.dt;
+        }
+    projections.clear();
+    static_shift = !scene_moves && all_time_compatible;
+    for (const MvView &v : views) {
+        const CameraProjection *p = v.camera->static_projection();
+        static_shift &= p != nullptr;
+        projections.push_back(p ? *p : CameraProjection{});
+    }
+}
+
 namespace {
 const BsdfContext Ctx;
 
@@ -55,11 +71,21 @@ void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvV
     bool self_ok = l.camera->shift_geometry(y.p, y.n, y.time, y.lens, &self.geo) && self.geo.density > 0.f;
     cand.push_back(self);
     if (self_ok) {
-        for (int k = 0; k < int(ctx.views.size()); ++k) {
+        const int nv = int(ctx.views.size());
+        if (st_l) st_l->tried += uint64_t(nv - 1);
+        ShiftCandidate c;
+        for (int k = 0; k < nv; ++k) {
             if (k == slot_l) continue;
-            if (st_l) ++st_l->tried;
-            ShiftCandidate c;
-            ShiftTest test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
+            ShiftTest test;
+            if (ctx.static_shift) { // the same tests, without a virtual call per view
+                float t_k = 0.f;
+                shift_time(l, ctx.views[k], y.time, false, &t_k);
+                ShiftGeometry geo;
+                bool ok = shift_geometry(ctx.projections[k], y.p, y.n, y.lens, &geo);
+                test = accept_shift(ctx.views[k], k, y, t_k, ok, geo, &c);
+            } else {
+                test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
+            }
             if (test != ShiftTest::Count) {
                 if (st_l) ++st_l->rejected[int(test)];
                 continue;
@@ -136,30 +162,35 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
     sc.d.assign(m, 0.f);
     const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
     if (!material && uniform_time && ctx.all_time_compatible) {
-        // No pairwise terms: with g = G and s = min(1, g_j/g_k) (or 1),
-        //   D_k = (1/g_k) sum_{g_j >= g_k} n_j g_j + (1/g_k^2) sum_{g_j < g_k} n_j g_j^2,
-        // from prefix sums over the views sorted by g: O(V log V) instead of O(V^2).
-        auto &order = sc.order;
-        order.assign(valid_set.begin(), valid_set.end());
-        std::sort(order.begin(), order.end(),
-                  [&](uint32_t a, uint32_t b) { return cand[a].geo.density < cand[b].geo.density; });
-        const size_t nv = order.size();
-        auto &below = sc.prefix, &above = sc.suffix; // sum of n g^2 before, of n g from position i on
-        below.assign(nv + 1, 0.0);
-        above.assign(nv + 1, 0.0);
+        // No pairwise terms: with r_j = G_j / G_k and s_{j->k} = min(1, r_j) (or 1),
+        //   D_k = sum_j n_j r_j s_{j->k}   (j = k gives n_k),
+        // summed in Lanes independent partial sums (vectorised; a fixed order, so deterministic).
+        constexpr size_t Lanes = 8;
+        const size_t nv = valid_set.size(), padded = (nv + Lanes - 1) / Lanes * Lanes;
+        auto &g = sc.g_valid, &nn = sc.n_valid;
+        g.assign(padded, 0.f); // padding: n = 0 adds nothing
+        nn.assign(padded, 0.f);
         for (size_t i = 0; i < nv; ++i) {
-            double g = cand[order[i]].geo.density;
-            below[i + 1] = below[i] + double(sc.n[order[i]]) * g * g;
+            g[i] = cand[valid_set[i]].geo.density;
+            nn[i] = sc.n[valid_set[i]];
         }
-        for (size_t i = nv; i-- > 0;) above[i] = above[i + 1] + double(sc.n[order[i]]) * cand[order[i]].geo.density;
-        auto &pos = sc.position;
-        pos.assign(m, 0);
-        for (size_t i = 0; i < nv; ++i) pos[order[i]] = uint32_t(i);
+        const float *gp = g.data(), *np = nn.data();
+        const bool jacobian = ctx.cfg.select_jacobian;
         for (int k : targets) {
-            double g = cand[k].geo.density;
-            size_t p = pos[k];
-            // Views tied with k in g sort on either side of it; for them both formulas agree.
-            sc.d[k] = ctx.cfg.select_jacobian ? float(above[p] / g + below[p] / (g * g)) : float(above[0] / g);
+            const float inv_gk = 1.f / cand[k].geo.density;
+            float acc[Lanes] = {};
+            if (jacobian) // r min(1, r) = min(r, r^2)
+                for (size_t j0 = 0; j0 < padded; j0 += Lanes)
+                    for (size_t q = 0; q < Lanes; ++q) {
+                        float r = gp[j0 + q] * inv_gk;
+                        acc[q] += np[j0 + q] * std::min(r, r * r);
+                    }
+            else
+                for (size_t j0 = 0; j0 < padded; j0 += Lanes)
+                    for (size_t q = 0; q < Lanes; ++q) acc[q] += np[j0 + q] * (gp[j0 + q] * inv_gk);
+            float sum = 0.f;
+            for (float a : acc) sum += a;
+            sc.d[k] = sum;
         }
     } else {
         for (int k : targets) {
@@ -240,7 +271,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
     // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
     auto native_only = [&](const Spectrum &L) {
-        sink.splat(slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
+        MvSplat own{slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l), true};
+        sink.splat(&own, 1);
         ++st_l.received;
         ++st_l.sharing;
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
@@ -278,6 +310,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     auto &cand = sc.cand;
     for (size_t i = 1; i < m; ++i) {
         sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
+        if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)
         sampler.set_dimension(DimSelectBase + ctx.views[cand[i].slot].scene_index);
         sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
     }
@@ -372,14 +405,22 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     }
 
     // ---------------- Splat: L_k / D_k into each sharing view's pixel ----------------
-    for (int k : sharing) {
+    auto &splats = sc.splats;
+    splats.resize(ns);
+    for (size_t i = 0; i < ns; ++i) {
+        int k = sharing[i];
         const ShiftCandidate &ck = cand[k];
         float w = 1.f / sc.d[k];
-        Spectrum lw = final_valid ? contrib[k] * w : Spectrum(0.f);
-        Spectrum e = k == 0 ? le_y * (1.f / n_l) : Spectrum(0.f);
-        sink.splat(ck.slot, ck.pixel, lw, w, e);
+        MvSplat &s = splats[i];
+        s.slot = ck.slot;
+        s.pixel = ck.pixel;
+        s.lw = final_valid ? contrib[k] * w : Spectrum(0.f);
+        s.w = w;
+        s.has_e = k == 0;
+        s.e = s.has_e ? le_y * (1.f / n_l) : Spectrum(0.f);
         ++stats[ck.slot].received;
     }
+    sink.splat(splats.data(), ns);
     st_l.sharing += ns;
     st_l.rays += counters.rays + counters.shadow_rays - rays_before;
 }

@@ -8,6 +8,8 @@
 #include "mv_shift.h"
 #include "mvpath.h"
 
+#include "../render/camera_projection.h"
+
 #include <cstdint>
 #include <vector>
 
@@ -45,14 +47,32 @@ struct MvContext {
     bool scene_moves = false;                  ///< some shape moves: shifts keep time (§3)
     bool all_time_compatible = true;           ///< every pair of views passes `time_compatible`
     bool all_time_compatible_equal_dt = true;  ///< and all shutters have one length (time factors are 1)
+    /// Every view is a static camera with a CameraProjection and nothing moves: shifts loop
+    /// over `projections` (by slot) instead of calling each camera.
+    bool static_shift = false;
+    std::vector<CameraProjection> projections;
+
+    /// Sets the derived members above from `views` and `scene_moves`.
+    void prepare();
 };
 
-/// Receives contributions: `lw` = W * L with W = 1/D_k (the part shared by MIS), `w` = W,
-/// and `e` = radiance that only the native strategy produces (emission seen directly,
-/// paths through purely specular first vertices), already divided by n_l.
+/// One contribution of a native sample to a view's pixel: `lw` = W * L with W = 1/D_k (the part
+/// shared by MIS), `w` = W, and `e` = radiance that only the native strategy produces (emission
+/// seen directly, paths through purely specular first vertices), already divided by n_l, nonzero
+/// only when `has_e`.
+struct MvSplat {
+    int slot = 0;
+    uint32_t pixel = 0;
+    Spectrum lw{0.f};
+    float w = 0.f;
+    Spectrum e{0.f};
+    bool has_e = false;
+};
+
+/// Receives the contributions of one native sample at once.
 class MvSplatSink {
 public:
-    virtual void splat(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) = 0;
+    virtual void splat(const MvSplat *splats, size_t n) = 0;
     virtual ~MvSplatSink() = default;
 };
 
@@ -63,13 +83,14 @@ struct MvScratch {
     std::vector<float> n, s_sel, d, sm;
     std::vector<uint8_t> visible, selected, blocked;
     std::vector<Ray> rays;
-    std::vector<uint32_t> ray_of, valid_set, order, position;
-    std::vector<double> prefix, suffix;
+    std::vector<uint32_t> ray_of, valid_set;
+    std::vector<float> g_valid, n_valid; ///< G and n of the valid strategies (padded), for D
     std::vector<int> sharing;
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
     std::vector<Spectrum> contrib, weight, mixture_f;
+    std::vector<MvSplat> splats;
 };
 
 /// The densities D_k (§5) that a native sample of view `slot` whose camera ray (from

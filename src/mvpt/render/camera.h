@@ -22,6 +22,8 @@
 
 namespace mvpt {
 
+struct CameraProjection;
+
 /// The `hdrfilm` of a sensor: full film size, the crop window that is rendered, the filter.
 struct FilmDesc {
     int width = 768, height = 576;
@@ -75,6 +77,10 @@ public:
     /// `project`, `lens_point` and `film_density` in one pose evaluation (the hot path of
     /// multi-view path tracing). False when `project` is.
     virtual bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const = 0;
+
+    /// The camera as plain projection data when `shift_geometry` does not depend on time
+    /// (a static perspective or thin-lens camera), else null (camera_projection.h).
+    virtual const CameraProjection *static_projection() const { return nullptr; }
 
     /// Lens radius (0 for a pinhole).
     virtual float lens_radius() const { return 0.f; }

@@ -25,6 +25,11 @@ public:
             SurfaceInteraction si;
             m_const_exponent = exponent_at(si);
             m_const_p_spec = specular_probability_at(si);
+            m_const_kd = m_diffuse_reflectance->eval(si.uv);
+            m_const_ks = m_specular_reflectance->eval(si.uv);
+            // Small integer exponents (the usual choice) take a few multiplications instead of pow.
+            if (m_const_exponent == std::floor(m_const_exponent) && m_const_exponent <= 64.f)
+                m_int_exponent = int(m_const_exponent);
         }
     }
 
@@ -54,8 +59,8 @@ public:
         if (cos_i <= 0.f || cos_o <= 0.f) return {};
         float e = exponent(si);
         float cos_a = std::max(0.f, dot(wo, Vec3f(-wi.x, -wi.y, wi.z)));
-        float spec = (e + 2.f) * InvTwoPi * std::pow(cos_a, e);
-        return (m_diffuse_reflectance->eval(si.uv) * InvPi + m_specular_reflectance->eval(si.uv) * spec) * cos_o;
+        float spec = (e + 2.f) * InvTwoPi * lobe_power(cos_a, e);
+        return (diffuse(si) * InvPi + specular(si) * spec) * cos_o;
     }
 
     /// Mixture of the lobe densities; zero below the surface, where `sample` returns no weight.
@@ -63,7 +68,7 @@ public:
         if (Frame::cos_theta(wi) <= 0.f || Frame::cos_theta(wo) <= 0.f) return 0.f;
         float p_spec = specular_probability(si), e = exponent(si);
         float cos_a = std::max(0.f, dot(wo, Vec3f(-wi.x, -wi.y, wi.z)));
-        float pdf_spec = (e + 1.f) * InvTwoPi * std::pow(cos_a, e);
+        float pdf_spec = (e + 1.f) * InvTwoPi * lobe_power(cos_a, e);
         return p_spec * pdf_spec + (1.f - p_spec) * warp::square_to_cosine_hemisphere_pdf(wo);
     }
 
@@ -74,8 +79,8 @@ public:
         if (cos_i <= 0.f || cos_o <= 0.f) return {Spectrum(0.f), 0.f};
         float e = exponent(si), p_spec = specular_probability(si);
         float cos_a = std::max(0.f, dot(wo, Vec3f(-wi.x, -wi.y, wi.z)));
-        float lobe = std::pow(cos_a, e) * InvTwoPi;
-        Spectrum f = (m_diffuse_reflectance->eval(si.uv) * InvPi + m_specular_reflectance->eval(si.uv) * ((e + 2.f) * lobe)) * cos_o;
+        float lobe = lobe_power(cos_a, e) * InvTwoPi;
+        Spectrum f = (diffuse(si) * InvPi + specular(si) * ((e + 2.f) * lobe)) * cos_o;
         float pdf = p_spec * (e + 1.f) * lobe + (1.f - p_spec) * warp::square_to_cosine_hemisphere_pdf(wo);
         return {f, pdf};
     }
@@ -84,6 +89,16 @@ public:
     float roughness(const SurfaceInteraction &si) const override { return std::sqrt(2.f / (exponent(si) + 2.f)); }
 
 private:
+    /// cos^e by repeated squaring when e is a constant integer, else pow.
+    float lobe_power(float c, float e) const {
+        if (m_int_exponent < 0) return std::pow(c, e);
+        float r = 1.f;
+        for (int k = m_int_exponent; k > 0; k >>= 1, c *= c)
+            if (k & 1) r *= c;
+        return r;
+    }
+    Spectrum diffuse(const SurfaceInteraction &si) const { return m_constant ? m_const_kd : m_diffuse_reflectance->eval(si.uv); }
+    Spectrum specular(const SurfaceInteraction &si) const { return m_constant ? m_const_ks : m_specular_reflectance->eval(si.uv); }
     float exponent(const SurfaceInteraction &si) const { return m_constant ? m_const_exponent : exponent_at(si); }
     float specular_probability(const SurfaceInteraction &si) const {
         return m_constant ? m_const_p_spec : specular_probability_at(si);
@@ -98,6 +113,8 @@ private:
     std::shared_ptr<Texture> m_exponent, m_specular_reflectance, m_diffuse_reflectance;
     bool m_constant = false;
     float m_const_exponent = 0.f, m_const_p_spec = 0.f;
+    Spectrum m_const_kd{0.f}, m_const_ks{0.f};
+    int m_int_exponent = -1; ///< the exponent when it is a constant integer <= 64, else -1
 };
 
 MVPT_REGISTER_PLUGIN("bsdf", "phong", [](const Properties &p, const LoadContext &) {

@@ -3,6 +3,7 @@
 // keyframed (<animation>): the pose is then evaluated at each ray's time.
 #include "../../scene/plugin.h"
 #include "../camera.h"
+#include "../camera_projection.h"
 #include "camera_pose.h"
 #include "field_of_view.h"
 #include "sensor_common.h"
@@ -45,6 +46,18 @@ public:
         m_ppo_y = props.get_float("principal_point_offset_y", 0.f);
         // Pixels are square for every fov_axis (tan_x / W == tan_y / H), so one film distance serves.
         m_film_distance = 0.5f * float(film.width) / m_tan_x;
+        m_proj.pose = m_pose;
+        m_proj.near_clip = m_near;
+        m_proj.far_clip = m_far;
+        m_proj.aperture_radius = m_aperture_radius;
+        m_proj.inv_focus_distance = 1.f / m_focus_distance;
+        m_proj.tan_x = m_tan_x;
+        m_proj.tan_y = m_tan_y;
+        m_proj.ppo_x = m_ppo_x;
+        m_proj.ppo_y = m_ppo_y;
+        m_proj.width = float(film.width);
+        m_proj.height = float(film.height);
+        m_proj.film_distance = m_film_distance;
     }
 
     Ray generate_ray(Vec2f film_pos, Vec2f lens, float time) const override {
@@ -88,32 +101,13 @@ public:
     }
 
     bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const override {
-        CameraPose animated;
-        if (m_animated) animated = pose_at(time);
-        const CameraPose &pose = m_animated ? animated : m_pose; // no copy for a static camera
-        Point3f p = pose.to_camera(y);
-        if (!(p.z >= m_near && p.z <= m_far)) return false;
-        float inv_z = 1.f / p.z;
-        float qx = p.x * inv_z, qy = p.y * inv_z;
-        Vec3f u_cam(0.f, 0.f, 0.f);
-        if (m_aperture_radius > 0.f) {
-            float k = m_aperture_radius * (1.f / m_focus_distance - inv_z);
-            qx += lens.x * k;
-            qy += lens.y * k;
-            u_cam = Vec3f(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f);
-        }
-        out->film = film_from_plane(qx, qy);
-        out->lens_point = m_aperture_radius > 0.f ? pose.to_world(u_cam) : pose.origin;
-        // As in `film_density`, with the camera-space vector from the lens point.
-        Vec3f w_cam = p - u_cam;
-        float d2 = squared_norm(w_cam), d = std::sqrt(d2);
-        float cos_theta = w_cam.z / d;
-        Vec3f w = y - out->lens_point;
-        float cos_phi = absdot(n_y, w) / (norm(n_y) * norm(w));
-        out->density = sqr(m_film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
-        out->visible_length = d - m_near / cos_theta;
-        return true;
+        if (!m_animated) return mvpt::shift_geometry(m_proj, y, n_y, lens, out);
+        CameraProjection posed = m_proj;
+        posed.pose = pose_at(time);
+        return mvpt::shift_geometry(posed, y, n_y, lens, out);
     }
+
+    const CameraProjection *static_projection() const override { return m_animated ? nullptr : &m_proj; }
 
     float lens_radius() const override { return m_aperture_radius; }
     bool is_animated() const override { return m_animated; }
@@ -138,10 +132,7 @@ private:
         return {-(2.f * u - 1.f) * m_tan_x, -(2.f * v - 1.f) * m_tan_y, 1.f};
     }
     /// Inverse of `plane_from_film`.
-    Vec2f film_from_plane(float qx, float qy) const {
-        return {(0.5f * (1.f - qx / m_tan_x) - m_ppo_x) * float(film.width),
-                (0.5f * (1.f - qy / m_tan_y) - m_ppo_y) * float(film.height)};
-    }
+    Vec2f film_from_plane(float qx, float qy) const { return m_proj.film_from_plane(qx, qy); }
 
     Point3f lens_point_in_pose(const CameraPose &pose, Vec2f lens) const {
         if (m_aperture_radius > 0.f)
@@ -176,6 +167,7 @@ private:
     float m_tan_x = 1.f, m_tan_y = 1.f;
     float m_ppo_x = 0.f, m_ppo_y = 0.f; ///< principal point offset (fractions of the film size)
     float m_film_distance = 1.f; ///< f = (W/2) / tan(fov_x/2), in pixels
+    CameraProjection m_proj;     ///< all of the above in the static pose, for shift_geometry
 };
 
 MVPT_REGISTER_PLUGIN("sensor", "perspective", [](const Properties &p, const LoadContext &) {
