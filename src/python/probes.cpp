@@ -154,6 +154,24 @@ struct BsdfProbe {
         return nb::make_tuple(f, p);
     }
 
+    /// Bsdf::eval_pdf_views for the viewers `wis` (m, 3) at each wo: (f (n, m, 3), pdf (n, m)).
+    nb::tuple eval_pdf_views(Vec3Array wis, Vec3Array wo) {
+        size_t n = wo.shape(0), m = wis.shape(0);
+        std::vector<Vec3f> wi(m);
+        for (size_t c = 0; c < m; ++c) wi[c] = Vec3f(wis(c, 0), wis(c, 1), wis(c, 2));
+        OutArray f = out_array(n, m * 3), p = out_array(n, m);
+        std::vector<Spectrum> fc(m);
+        std::vector<float> pc(m);
+        for (size_t i = 0; i < n; ++i) {
+            bsdf->eval_pdf_views({}, si, wi.data(), m, Vec3f(wo(i, 0), wo(i, 1), wo(i, 2)), fc.data(), pc.data());
+            for (size_t c = 0; c < m; ++c) {
+                for (int k = 0; k < 3; ++k) f.data()[(i * m + c) * 3 + k] = fc[c][k];
+                p.data()[i * m + c] = pc[c];
+            }
+        }
+        return nb::make_tuple(f, p);
+    }
+
     OutArray pdf(float wx, float wy, float wz, Vec3Array wo) {
         size_t n = wo.shape(0);
         OutArray r = out_array(n, 1);
@@ -174,6 +192,7 @@ void bind_probes(nb::module_ &m) {
         .def("eval", &BsdfProbe::eval, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
         .def("pdf", &BsdfProbe::pdf, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
         .def("eval_pdf", &BsdfProbe::eval_pdf, "wx"_a, "wy"_a, "wz"_a, "wo"_a)
+        .def("eval_pdf_views", &BsdfProbe::eval_pdf_views, "wis"_a, "wo"_a)
         .def("mixture_sample", &BsdfProbe::mixture_sample, "wis"_a, "n"_a, "seed"_a = 0)
         .def("mixture_pdf", &BsdfProbe::mixture_pdf, "wis"_a, "wo"_a)
         .def("material_similarity", &BsdfProbe::material_similarity, "wi_a"_a, "wi_b"_a, "monte_carlo"_a = false)

@@ -5,6 +5,7 @@
 // lens radius; two of them move during the shutter.
 #include "mvpt/core/warp.h"
 #include "mvpt/render/camera.h"
+#include "mvpt/render/camera_projection.h"
 #include "mvpt/scene/scene.h"
 
 #include <gtest/gtest.h>
@@ -370,4 +371,46 @@ TEST(CameraProjection, ShiftGeometryAgreesWithProjectLensPointAndFilmDensity) {
         }
         EXPECT_GT(checked, 100) << cam->id;
     }
+}
+
+TEST(CameraProjection, BatchOverStaticCamerasEqualsEachCamera) {
+    // Multi-view path tracing shifts a sample to all static views at once from a structure of
+    // arrays (shift_geometry_batch); it must give each camera's own shift_geometry, including
+    // the depth test, for pinholes and thin lenses alike.
+    auto s = load(CameraXml);
+    std::vector<const Camera *> cams;
+    std::vector<CameraProjection> proj;
+    for (const auto &cam : s->cameras())
+        if (const CameraProjection *p = cam->static_projection()) {
+            cams.push_back(cam.get());
+            proj.push_back(*p);
+        }
+    ASSERT_GE(cams.size(), 3u);
+    ProjectionTable table(proj);
+    ShiftBatch batch;
+    Rng rng(9);
+    int in_range = 0, out_of_range = 0;
+    for (int i = 0; i < 2000; ++i) {
+        // Points in front of, beside and behind the cameras.
+        Point3f y(8.f * rng.next() - 4.f, 8.f * rng.next() - 4.f, 20.f * rng.next() - 8.f);
+        Normal3f n = normalize(Vec3f(rng.next() - 0.5f, rng.next() - 0.5f, rng.next() - 0.5f));
+        Vec2f xi = warp::square_to_uniform_disk_concentric(rng.next_2d());
+        shift_geometry_batch(table, y, n, xi, batch);
+        for (size_t k = 0; k < cams.size(); ++k) {
+            ShiftGeometry geo;
+            bool ok = cams[k]->shift_geometry(y, n, 0.f, xi, &geo);
+            ASSERT_EQ(bool(batch.ok[k]), ok);
+            (ok ? in_range : out_of_range)++;
+            if (!ok) continue;
+            EXPECT_FLOAT_EQ(batch.film_x[k], geo.film.x);
+            EXPECT_FLOAT_EQ(batch.film_y[k], geo.film.y);
+            EXPECT_FLOAT_EQ(batch.lens_x[k], geo.lens_point.x);
+            EXPECT_FLOAT_EQ(batch.lens_y[k], geo.lens_point.y);
+            EXPECT_FLOAT_EQ(batch.lens_z[k], geo.lens_point.z);
+            EXPECT_FLOAT_EQ(batch.density[k], geo.density);
+            EXPECT_FLOAT_EQ(batch.visible_length[k], geo.visible_length);
+        }
+    }
+    EXPECT_GT(in_range, 1000);
+    EXPECT_GT(out_of_range, 1000);
 }

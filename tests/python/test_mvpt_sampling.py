@@ -72,6 +72,22 @@ def test_eval_pdf_matches_eval_and_pdf(bsdf):
         np.testing.assert_allclose(p, pr.pdf(*wi, wo), rtol=1e-5, atol=1e-7)
 
 
+@pytest.mark.parametrize("bsdf", sorted(BSDFS) + ["diffuse"])
+def test_eval_pdf_views_matches_eval_and_pdf(bsdf):
+    """The shared next-event estimate and the bounce evaluate every sharing view's lobe at one
+    direction with Bsdf::eval_pdf_views; viewers below the surface included."""
+    pr = probe(BSDFS.get(bsdf, '<bsdf type="diffuse"/>'))
+    rng = np.random.default_rng(5)
+    wo = rng.normal(size=(400, 3))
+    wo = np.ascontiguousarray(wo / np.linalg.norm(wo, axis=1, keepdims=True), dtype=np.float32)
+    wis = np.ascontiguousarray(VIEW_SETS["spread"] + [direction(120, 30)], dtype=np.float32)
+    f, p = pr.eval_pdf_views(wis, wo)
+    assert np.count_nonzero(p) > 0.3 * p.size  # not vacuous: most pairs lie above the surface
+    for c, wi in enumerate(wis):
+        np.testing.assert_allclose(f[:, 3 * c:3 * c + 3], pr.eval(*wi, wo), rtol=1e-5, atol=1e-7)
+        np.testing.assert_allclose(p[:, c], np.ravel(pr.pdf(*wi, wo)), rtol=1e-5, atol=1e-7)
+
+
 @pytest.mark.parametrize("monte_carlo", [False, True])
 def test_material_similarity_properties(monte_carlo):
     diffuse = probe('<bsdf type="diffuse"/>')

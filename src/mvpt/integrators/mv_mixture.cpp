@@ -12,7 +12,7 @@ float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec
 }
 
 MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
-                                  float u_view, float u_lobe, Vec2f u_dir, Spectrum *f) {
+                                  float u_view, float u_lobe, Vec2f u_dir, Spectrum *f, float *pdf_buf) {
     MixtureSample ms;
     if (n == 0) return ms;
     ms.view = std::min(size_t(u_view * float(n)), n - 1);
@@ -23,13 +23,10 @@ MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si
     ms.delta = (bs.sampled_type & BsdfDelta) != 0;
     if (ms.delta) {
         ms.pdf = bs.pdf / float(n);
-    } else if (f) {
+    } else if (f && pdf_buf) {
+        bsdf.eval_pdf_views(BsdfContext{}, si, wi, n, bs.wo, f, pdf_buf);
         float p = 0.f;
-        for (size_t c = 0; c < n; ++c) {
-            auto [fc, pc] = bsdf.eval_pdf(BsdfContext{}, si, wi[c], bs.wo);
-            f[c] = fc;
-            p += pc;
-        }
+        for (size_t c = 0; c < n; ++c) p += pdf_buf[c];
         ms.pdf = p / float(n);
     } else {
         ms.pdf = lobe_mixture_pdf(bsdf, si, wi, n, bs.wo);

@@ -23,9 +23,10 @@ struct MixtureSample {
 float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo);
 
 /// Pick a view with `u_view`, sample its lobe with (u_lobe, u_dir). Zero weight: no direction.
-/// With `f` (n entries), a smooth direction also gets every view's f(wi[c], wo)|cos| there,
-/// from the same BSDF evaluations as the mixture density.
+/// With `f` and `pdf_buf` (n entries each), a smooth direction also gets every view's
+/// f(wi[c], wo)|cos| and lobe density there, from the same BSDF evaluations as the mixture density.
 MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
-                                  float u_view, float u_lobe, Vec2f u_dir, Spectrum *f = nullptr);
+                                  float u_view, float u_lobe, Vec2f u_dir, Spectrum *f = nullptr,
+                                  float *pdf_buf = nullptr);
 
 } // namespace mvpt

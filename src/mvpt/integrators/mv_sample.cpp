@@ -26,13 +26,14 @@ void MvContext::prepare() {
             all_time_compatible &= time_compatible(a, b, scene_moves);
             all_time_compatible_equal_dt &= a.dt == b.dt;
         }
-    projections.clear();
+    std::vector<CameraProjection> proj;
     static_shift = !scene_moves && all_time_compatible;
     for (const MvView &v : views) {
         const CameraProjection *p = v.camera->static_projection();
         static_shift &= p != nullptr;
-        projections.push_back(p ? *p : CameraProjection{});
+        proj.push_back(p ? *p : CameraProjection{});
     }
+    projections = ProjectionTable(proj);
 }
 
 namespace {
@@ -68,7 +69,20 @@ void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvV
     self.slot = slot_l;
     self.pixel = pixel_l;
     self.time = y.time;
-    bool self_ok = l.camera->shift_geometry(y.p, y.n, y.time, y.lens, &self.geo) && self.geo.density > 0.f;
+    const ShiftBatch &b = sc.batch;
+    auto batch_geometry = [&](int k) {
+        return ShiftGeometry{{b.film_x[k], b.film_y[k]}, {b.lens_x[k], b.lens_y[k], b.lens_z[k]}, b.density[k],
+                             b.visible_length[k]};
+    };
+    bool self_ok;
+    if (ctx.static_shift) { // every view's geometry at once (vectorised), no virtual call per view
+        shift_geometry_batch(ctx.projections, y.p, y.n, y.lens, sc.batch);
+        self.geo = batch_geometry(slot_l);
+        self_ok = b.ok[slot_l];
+    } else {
+        self_ok = l.camera->shift_geometry(y.p, y.n, y.time, y.lens, &self.geo);
+    }
+    self_ok = self_ok && self.geo.density > 0.f;
     cand.push_back(self);
     if (self_ok) {
         const int nv = int(ctx.views.size());
@@ -77,12 +91,10 @@ void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvV
         for (int k = 0; k < nv; ++k) {
             if (k == slot_l) continue;
             ShiftTest test;
-            if (ctx.static_shift) { // the same tests, without a virtual call per view
+            if (ctx.static_shift) {
                 float t_k = 0.f;
                 shift_time(l, ctx.views[k], y.time, false, &t_k);
-                ShiftGeometry geo;
-                bool ok = shift_geometry(ctx.projections[k], y.p, y.n, y.lens, &geo);
-                test = accept_shift(ctx.views[k], k, y, t_k, ok, geo, &c);
+                test = accept_shift(ctx.views[k], k, y, t_k, b.ok[k], batch_geometry(k), &c);
             } else {
                 test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
             }
@@ -118,6 +130,9 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     auto &ray_of = sc.ray_of;
     rays.clear();
     ray_of.clear();
+    // Every candidate's lens point is on the native lens point's side of the surface (§3
+    // orientation test), so all visibility rays leave from one offset origin.
+    const Point3f o = si.offset_p(sc.cand[0].geo.lens_point - si.p);
     for (size_t i = 1; i < sc.cand.size(); ++i) {
         if (selected_only && !sc.selected[i]) {
             if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
@@ -125,7 +140,6 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
             continue;
         }
         const ShiftCandidate &c = sc.cand[i];
-        Point3f o = si.offset_p(c.geo.lens_point - si.p);
         Vec3f d = c.geo.lens_point - o;
         float dist = norm(d);
         // Up to k's near clip plane: what is closer to the lens is invisible to its camera rays too.
@@ -344,22 +358,23 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
         if (!weight.is_black()) {
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
-            auto &f = sc.weight;
-            f.assign(m, Spectrum(0.f));
+            auto &f = sc.nee_f;
+            auto &pdf = sc.view_pdf;
+            f.resize(ns);
+            pdf.resize(ns);
+            bsdf.eval_pdf_views(Ctx, si, wis.data(), ns, wo, f.data(), pdf.data());
             bool any = false;
             float p_mix = 0.f; // the bounce's density: the lobe mixture (divided by |S| below)
-            for (int k : sharing) {
-                auto [fk, pk] = bsdf.eval_pdf(Ctx, si, sc.lobe[k].wi, wo);
-                f[k] = fk;
-                p_mix += pk;
-                any |= !fk.is_black();
+            for (size_t i = 0; i < ns; ++i) {
+                p_mix += pdf[i];
+                any |= !f[i].is_black();
             }
             if (any) {
                 Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
                 ++counters.shadow_rays;
                 if (!scene.occluded(shadow)) {
                     float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns));
-                    for (int k : sharing) contrib[k] += f[k] * weight * w;
+                    for (size_t i = 0; i < ns; ++i) contrib[sharing[i]] += f[i] * weight * w;
                 }
             }
         }
@@ -369,7 +384,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     sampler.set_dimension(DimBounceView);
     auto &fs = sc.mixture_f;
     fs.resize(ns);
-    MixtureSample mix = sample_lobe_mixture(bsdf, si, wis.data(), ns, sampler.next_1d(), u_lobe, u_dir, fs.data());
+    sc.view_pdf.resize(ns);
+    MixtureSample mix =
+        sample_lobe_mixture(bsdf, si, wis.data(), ns, sampler.next_1d(), u_lobe, u_dir, fs.data(), sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     bool final_valid = valid_after;

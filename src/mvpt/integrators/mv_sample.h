@@ -47,10 +47,10 @@ struct MvContext {
     bool scene_moves = false;                  ///< some shape moves: shifts keep time (§3)
     bool all_time_compatible = true;           ///< every pair of views passes `time_compatible`
     bool all_time_compatible_equal_dt = true;  ///< and all shutters have one length (time factors are 1)
-    /// Every view is a static camera with a CameraProjection and nothing moves: shifts loop
-    /// over `projections` (by slot) instead of calling each camera.
+    /// Every view is a static camera with a CameraProjection and nothing moves: shifts are
+    /// computed for all views at once from `projections` (by slot) instead of calling each camera.
     bool static_shift = false;
-    std::vector<CameraProjection> projections;
+    ProjectionTable projections;
 
     /// Sets the derived members above from `views` and `scene_moves`.
     void prepare();
@@ -79,6 +79,7 @@ public:
 /// Per-thread scratch space (kept between samples to avoid allocations).
 struct MvScratch {
     std::vector<ShiftCandidate> cand;
+    ShiftBatch batch; ///< the shift geometry of every view (static views)
     std::vector<ViewLobe> lobe;
     std::vector<float> n, s_sel, d, sm;
     std::vector<uint8_t> visible, selected, blocked;
@@ -89,7 +90,8 @@ struct MvScratch {
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
-    std::vector<Spectrum> contrib, weight, mixture_f;
+    std::vector<Spectrum> contrib, weight, mixture_f, nee_f;
+    std::vector<float> view_pdf;
     std::vector<MvSplat> splats;
 };
 

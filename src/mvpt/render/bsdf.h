@@ -3,6 +3,8 @@
 // (Mitsuba's convention). `eval` includes the cosine foreshortening |cos wo|.
 #pragma once
 
+#include <tuple>
+
 #include "../core/math.h"
 #include "../scene/properties.h"
 #include "interaction.h"
@@ -60,6 +62,12 @@ public:
     virtual std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
                                                 Vec3f wo) const {
         return {eval(ctx, si, wi, wo), pdf(ctx, si, wi, wo)};
+    }
+    /// `eval_pdf` for the incident directions wi[0..n) and one `wo`, into f[c] and pdf[c]
+    /// (multi-view path tracing evaluates every sharing view's lobe at one direction).
+    virtual void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
+                                Vec3f wo, Spectrum *f, float *pdf) const {
+        for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = eval_pdf(ctx, si, wi[c], wo);
     }
 
     uint32_t flags() const { return m_flags; }

@@ -8,6 +8,10 @@
 #include "camera.h"
 #include "cameras/camera_pose.h"
 
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
 namespace mvpt {
 
 /// Pose and intrinsics of a perspective (pinhole) or thin-lens camera at one instant.
@@ -28,36 +32,122 @@ struct CameraProjection {
     }
 };
 
+/// Number of scalars in a CameraProjection.
+inline constexpr size_t ProjectionFields = 32;
+
+/// The scalars of `c` in a fixed order (the inverse of `make_projection`).
+inline void flatten(const CameraProjection &c, float out[ProjectionFields]) {
+    const CameraPose &p = c.pose;
+    const float v[ProjectionFields] = {p.origin.x,  p.origin.y,  p.origin.z,  p.axis[0].x, p.axis[0].y, p.axis[0].z,
+                                       p.axis[1].x, p.axis[1].y, p.axis[1].z, p.axis[2].x, p.axis[2].y, p.axis[2].z,
+                                       p.inv_row[0].x, p.inv_row[0].y, p.inv_row[0].z, p.inv_row[1].x, p.inv_row[1].y,
+                                       p.inv_row[1].z, p.inv_row[2].x, p.inv_row[2].y, p.inv_row[2].z, c.near_clip,
+                                       c.far_clip, c.aperture_radius, c.inv_focus_distance, c.tan_x, c.tan_y, c.ppo_x,
+                                       c.ppo_y, c.width, c.height, c.film_distance};
+    std::copy(v, v + ProjectionFields, out);
+}
+
+/// The CameraProjection whose scalars (in the order of `flatten`) are d[0], d[stride],
+/// d[2 stride], ... (a column of a ProjectionTable).
+[[gnu::always_inline]] inline CameraProjection make_projection(const float *d, size_t stride) {
+    CameraProjection c;
+    CameraPose &p = c.pose;
+    p.origin = {d[0], d[stride], d[2 * stride]};
+    p.axis[0] = {d[3 * stride], d[4 * stride], d[5 * stride]};
+    p.axis[1] = {d[6 * stride], d[7 * stride], d[8 * stride]};
+    p.axis[2] = {d[9 * stride], d[10 * stride], d[11 * stride]};
+    p.inv_row[0] = {d[12 * stride], d[13 * stride], d[14 * stride]};
+    p.inv_row[1] = {d[15 * stride], d[16 * stride], d[17 * stride]};
+    p.inv_row[2] = {d[18 * stride], d[19 * stride], d[20 * stride]};
+    c.near_clip = d[21 * stride], c.far_clip = d[22 * stride];
+    c.aperture_radius = d[23 * stride], c.inv_focus_distance = d[24 * stride];
+    c.tan_x = d[25 * stride], c.tan_y = d[26 * stride], c.ppo_x = d[27 * stride], c.ppo_y = d[28 * stride];
+    c.width = d[29 * stride], c.height = d[30 * stride], c.film_distance = d[31 * stride];
+    return c;
+}
+
 /// Camera::shift_geometry for camera `c` (design doc §3 projection through the focus plane,
 /// §4 film density G = f^2 cos(phi) / (cos^3(theta) d^2)). False when y's camera-space depth
-/// lies outside [near, far].
-inline bool shift_geometry(const CameraProjection &c, Point3f y, Normal3f n_y, Vec2f lens, ShiftGeometry *out) {
+/// lies outside [near, far]; `out` then holds meaningless values. Branch-free (a pinhole is a
+/// lens of radius 0), so that shift_geometry_batch vectorises over cameras.
+[[gnu::always_inline]] inline bool shift_geometry(const CameraProjection &c, Point3f y, Normal3f n_y, Vec2f lens, ShiftGeometry *out) {
     Point3f p = c.pose.to_camera(y);
-    if (!(p.z >= c.near_clip && p.z <= c.far_clip)) return false;
     // Thin lens: the ray u -> p meets the focus plane z = f_d at P = u + (p - u) f_d / p.z, and
     // q = P / f_d = u (1/f_d - 1/p.z) + p / p.z; a pinhole (u = 0) gives q = p / p.z.
     float inv_z = 1.f / p.z;
-    float qx = p.x * inv_z, qy = p.y * inv_z;
-    Vec3f u_cam(0.f, 0.f, 0.f);
-    if (c.aperture_radius > 0.f) {
-        float k = c.aperture_radius * (c.inv_focus_distance - inv_z);
-        qx += lens.x * k;
-        qy += lens.y * k;
-        u_cam = Vec3f(lens.x * c.aperture_radius, lens.y * c.aperture_radius, 0.f);
-        out->lens_point = c.pose.to_world(u_cam);
-    } else {
-        out->lens_point = c.pose.origin;
-    }
+    float k = c.aperture_radius * (c.inv_focus_distance - inv_z);
+    float qx = p.x * inv_z + lens.x * k, qy = p.y * inv_z + lens.y * k;
+    float ux = lens.x * c.aperture_radius, uy = lens.y * c.aperture_radius;
+    out->lens_point = c.pose.origin + c.pose.axis[0] * ux + c.pose.axis[1] * uy;
     out->film = c.film_from_plane(qx, qy);
     // theta from the camera-space vector lens point -> y; phi between n_y and y -> u.
-    Vec3f w_cam = p - u_cam;
+    Vec3f w_cam(p.x - ux, p.y - uy, p.z);
     float d2 = squared_norm(w_cam), d = std::sqrt(d2);
     float cos_theta = w_cam.z / d;
     Vec3f w = y - out->lens_point;
     float cos_phi = absdot(n_y, w) / (norm(n_y) * norm(w));
     out->density = sqr(c.film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
     out->visible_length = d - c.near_clip / cos_theta;
-    return true;
+    return (p.z >= c.near_clip) & (p.z <= c.far_clip);
+}
+
+/// Many static cameras' projections as a structure of arrays (field-major), for
+/// shift_geometry_batch.
+class ProjectionTable {
+public:
+    ProjectionTable() = default;
+    explicit ProjectionTable(const std::vector<CameraProjection> &cams) : m_size(cams.size()), m_data(ProjectionFields * m_size) {
+        for (size_t k = 0; k < m_size; ++k) {
+            float v[ProjectionFields];
+            flatten(cams[k], v);
+            for (size_t f = 0; f < ProjectionFields; ++f) m_data[f * m_size + k] = v[f];
+        }
+    }
+    size_t size() const { return m_size; }
+    const float *data() const { return m_data.data(); }
+    /// Camera k of a table of `size` cameras whose arrays are `data`.
+    [[gnu::always_inline]] static CameraProjection at(const float *data, size_t size, size_t k) {
+        return make_projection(data + k, size);
+    }
+
+private:
+    size_t m_size = 0;
+    std::vector<float> m_data;
+};
+
+/// shift_geometry of y for every camera of a table, as arrays by camera (`ok`: 1 when y's
+/// depth is in the camera's clip range).
+struct ShiftBatch {
+    std::vector<float> film_x, film_y, lens_x, lens_y, lens_z, density, visible_length;
+    std::vector<uint8_t> ok;
+};
+
+/// The loop of shift_geometry_batch over raw arrays (restrict-qualified, so that it vectorises).
+inline void shift_geometry_kernel(const float *__restrict in, size_t n, Point3f y, Normal3f n_y, Vec2f lens,
+                                  float *__restrict fx, float *__restrict fy, float *__restrict lx,
+                                  float *__restrict ly, float *__restrict lz, float *__restrict dens,
+                                  float *__restrict vis, uint8_t *__restrict ok) {
+    for (size_t k = 0; k < n; ++k) {
+        ShiftGeometry g;
+        ok[k] = shift_geometry(ProjectionTable::at(in, n, k), y, n_y, lens, &g);
+        fx[k] = g.film.x;
+        fy[k] = g.film.y;
+        lx[k] = g.lens_point.x;
+        ly[k] = g.lens_point.y;
+        lz[k] = g.lens_point.z;
+        dens[k] = g.density;
+        vis[k] = g.visible_length;
+    }
+}
+
+inline void shift_geometry_batch(const ProjectionTable &table, Point3f y, Normal3f n_y, Vec2f lens, ShiftBatch &out) {
+    const size_t n = table.size();
+    for (auto *v : {&out.film_x, &out.film_y, &out.lens_x, &out.lens_y, &out.lens_z, &out.density, &out.visible_length})
+        v->resize(n);
+    out.ok.resize(n);
+    shift_geometry_kernel(table.data(), n, y, n_y, lens, out.film_x.data(), out.film_y.data(), out.lens_x.data(),
+                          out.lens_y.data(), out.lens_z.data(), out.density.data(), out.visible_length.data(),
+                          out.ok.data());
 }
 
 } // namespace mvpt

@@ -34,6 +34,18 @@ public:
         return warp::square_to_cosine_hemisphere_pdf(wo);
     }
 
+    void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        float cos_o = Frame::cos_theta(wo);
+        Spectrum fo = cos_o > 0.f ? m_reflectance->eval(si.uv) * (InvPi * cos_o) : Spectrum(0.f);
+        float po = warp::square_to_cosine_hemisphere_pdf(wo);
+        for (size_t c = 0; c < n; ++c) {
+            bool front = Frame::cos_theta(wi[c]) > 0.f;
+            f[c] = front ? fo : Spectrum(0.f);
+            pdf[c] = front ? po : 0.f;
+        }
+    }
+
 private:
     std::shared_ptr<Texture> m_reflectance;
 };

@@ -4,6 +4,8 @@
 // Willems 1994, "Using the modified Phong reflectance model for physically
 // based rendering"]. One-sided.
 #include "../../scene/plugin.h"
+
+#include <algorithm>
 #include "../../core/warp.h"
 #include "../bsdf.h"
 #include "../texture.h"
@@ -83,6 +85,32 @@ public:
         Spectrum f = (diffuse(si) * InvPi + specular(si) * ((e + 2.f) * lobe)) * cos_o;
         float pdf = p_spec * (e + 1.f) * lobe + (1.f - p_spec) * warp::square_to_cosine_hemisphere_pdf(wo);
         return {f, pdf};
+    }
+
+    /// The lobes of many viewers at one `wo`: the parameters and cos(wo) once, then per viewer
+    /// one cos^e.
+    void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        float cos_o = Frame::cos_theta(wo);
+        if (cos_o <= 0.f) {
+            std::fill(f, f + n, Spectrum(0.f));
+            std::fill(pdf, pdf + n, 0.f);
+            return;
+        }
+        const float e = exponent(si), p_spec = specular_probability(si);
+        const Spectrum kd = diffuse(si) * (InvPi * cos_o), ks = specular(si) * ((e + 2.f) * InvTwoPi * cos_o);
+        const float spec_pdf = p_spec * (e + 1.f) * InvTwoPi, diffuse_pdf = (1.f - p_spec) * InvPi * cos_o;
+        for (size_t c = 0; c < n; ++c) {
+            if (Frame::cos_theta(wi[c]) <= 0.f) {
+                f[c] = Spectrum(0.f);
+                pdf[c] = 0.f;
+                continue;
+            }
+            float cos_a = std::max(0.f, dot(wo, Vec3f(-wi[c].x, -wi[c].y, wi[c].z)));
+            float lobe = lobe_power(cos_a, e);
+            f[c] = kd + ks * lobe;
+            pdf[c] = spec_pdf * lobe + diffuse_pdf;
+        }
     }
 
     /// GGX-equivalent roughness of the lobe: alpha = sqrt(2 / (e + 2)).
