@@ -87,11 +87,17 @@ void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::ve
         return;
     }
     // total(c) decreases in c: bisect on log c for the smallest c with total(c) <= budget, to
-    // 0.1% (finer changes a count only where its rounding is a coin toss; each step costs a
-    // pass over the pixels).
-    double lo_c = hi * 1e-12, hi_c = hi * 2.0; // total(hi_c) = n (every pixel at 1)
+    // 1% (finer changes a count only where its rounding is a coin toss; each step costs a pass
+    // over the pixels). The bracket starts around the c of a/n = c with every n free, widened
+    // until it holds the answer.
+    double sum_unit = 0.0;
+    for (double u : unit) sum_unit += u;
+    const double guess = std::clamp(sum_unit / budget, hi * 1e-12, hi * 2.0);
+    double lo_c = guess / 16.0, hi_c = guess * 16.0;
+    while (lo_c > hi * 1e-12 && total(lo_c) <= budget) lo_c = std::max(lo_c / 256.0, hi * 1e-12);
+    while (hi_c < hi * 2.0 && total(hi_c) > budget) hi_c = std::min(hi_c * 256.0, hi * 2.0); // total(2 hi) = n
     if (total(lo_c) <= budget) hi_c = lo_c;
-    for (int it = 0; it < 60 && hi_c > lo_c * (1.0 + 1e-3); ++it) {
+    for (int it = 0; it < 60 && hi_c > lo_c * (1.0 + 1e-2); ++it) {
         double mid = std::sqrt(lo_c * hi_c);
         if (total(mid) <= budget) hi_c = mid;
         else lo_c = mid;
