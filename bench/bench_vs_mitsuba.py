@@ -25,10 +25,14 @@ and mvpt's from its own per-pixel variance averaged over rounds.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
 from pathlib import Path
+
+# NumPy's BLAS threads spin after each call and would take CPU from the renders being timed.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np
 
