@@ -80,14 +80,14 @@ inline void flatten(const CameraProjection &c, float out[ProjectionFields]) {
     float ux = lens.x * c.aperture_radius, uy = lens.y * c.aperture_radius;
     out->lens_point = c.pose.origin + c.pose.axis[0] * ux + c.pose.axis[1] * uy;
     out->film = c.film_from_plane(qx, qy);
-    // theta from the camera-space vector lens point -> y; phi between n_y and y -> u.
-    Vec3f w_cam(p.x - ux, p.y - uy, p.z);
-    float d2 = squared_norm(w_cam), d = std::sqrt(d2);
-    float cos_theta = w_cam.z / d;
+    // With w = y - u (|w| = d, camera-space depth p.z as the lens is in the plane z = 0),
+    // cos(theta) = p.z / d and cos(phi) = |n.w| / (|n| d), so G = f^2 |n.w| / (|n| p.z^3).
     Vec3f w = y - out->lens_point;
-    float cos_phi = absdot(n_y, w) / (norm(n_y) * norm(w));
-    out->density = sqr(c.film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
-    out->visible_length = d - c.near_clip / cos_theta;
+    float d = std::sqrt(sqr(p.x - ux) + sqr(p.y - uy) + sqr(p.z));
+    const float inv_n = 1.f / norm(n_y); // the same for every camera (hoisted out of batch loops)
+    out->density = sqr(c.film_distance) * absdot(n_y, w) * inv_n * (inv_z * inv_z * inv_z);
+    // Up to the near plane: d - near / cos(theta).
+    out->visible_length = d * (1.f - c.near_clip * inv_z);
     return (p.z >= c.near_clip) & (p.z <= c.far_clip);
 }
 
