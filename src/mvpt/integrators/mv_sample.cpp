@@ -346,39 +346,40 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     float u_lobe = sampler.next_1d();
     Vec2f u_dir = sampler.next_2d();
     float u_rr = sampler.next_1d();
-    auto &contrib = sc.contrib;
-    contrib.assign(m, Spectrum(0.f));
+    // Per sharing view i (candidate sharing[i]) the radiance is
+    //   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included),
+    // and the contribution L_i / D_i.
     auto &wis = sc.sharing_wi;
-    wis.clear();
-    for (int k : sharing) wis.push_back(sc.lobe[k].wi);
+    wis.resize(ns);
+    for (size_t i = 0; i < ns; ++i) wis[i] = sc.lobe[sharing[i]].wi;
     const auto &lights = scene.lights();
+    auto &f_nee = sc.nee_f;
+    f_nee.resize(ns);
+    Spectrum nee_weight(0.f); // light weight times MIS weight, zero when the light is not seen
     if (!lights.empty()) {
         size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
         auto [ls, weight] = lights[idx]->sample_li(si.p, u_light, si.time);
         if (!weight.is_black()) {
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
-            auto &f = sc.nee_f;
             auto &pdf = sc.view_pdf;
-            f.resize(ns);
             pdf.resize(ns);
-            bsdf.eval_pdf_views(Ctx, si, wis.data(), ns, wo, f.data(), pdf.data());
+            bsdf.eval_pdf_views(Ctx, si, wis.data(), ns, wo, f_nee.data(), pdf.data());
             bool any = false;
             float p_mix = 0.f; // the bounce's density: the lobe mixture (divided by |S| below)
             for (size_t i = 0; i < ns; ++i) {
                 p_mix += pdf[i];
-                any |= !f[i].is_black();
+                any |= !f_nee[i].is_black();
             }
             if (any) {
                 Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
                 ++counters.shadow_rays;
-                if (!scene.occluded(shadow)) {
-                    float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns));
-                    for (size_t i = 0; i < ns; ++i) contrib[sharing[i]] += f[i] * weight * w;
-                }
+                if (!scene.occluded(shadow))
+                    nee_weight = weight * (ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns)));
             }
         }
     }
+    const bool nee = !nee_weight.is_black();
 
     // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
     sampler.set_dimension(DimBounceView);
@@ -390,21 +391,23 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     bool final_valid = valid_after;
+    Spectrum suffix(0.f);
+    float b_scale = 0.f; // b_i = fs[i] * b_scale (smooth), or mix.weight |S| b_scale for the delta view only
     if (!mix.weight.is_black() && mix.pdf > 0.f) {
-        auto &wk = sc.weight;
-        wk.assign(m, Spectrum(0.f));
-        if (mix.delta) // a delta lobe's direction serves only the view that sampled it
-            wk[sharing[mix.view]] = mix.weight * float(ns);
-        else
-            for (size_t i = 0; i < ns; ++i) wk[sharing[i]] = fs[i] * (1.f / mix.pdf);
+        // A delta lobe's direction serves only the view that sampled it.
         float t_max = 0.f;
-        for (int k : sharing) t_max = std::max(t_max, wk[k].max_value());
+        if (mix.delta) {
+            t_max = mix.weight.max_value() * float(ns);
+        } else {
+            for (size_t i = 0; i < ns; ++i) t_max = std::max(t_max, fs[i].max_value());
+            t_max /= mix.pdf;
+        }
+        b_scale = mix.delta ? 1.f : 1.f / mix.pdf;
         bool alive = t_max > 0.f;
         if (alive && 1 >= pc.rr_depth) { // Russian roulette at y, as the path tracer does at depth 0
             float q = std::min(t_max * bs.eta * bs.eta, 0.95f);
             if (u_rr >= q) alive = false;
-            else
-                for (int k : sharing) wk[k] *= 1.f / q;
+            else b_scale /= q;
         }
         if (alive) {
             PathState state;
@@ -415,23 +418,26 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             state.prev_bsdf_delta = mix.delta;
             state.valid = valid_after;
             Ray next = si.spawn_ray(si.to_world(bs.wo));
-            Spectrum ls = ctx.path->trace(scene, next, state, sampler, counters, nullptr, &final_valid);
-            if (!ls.is_black())
-                for (int k : sharing) contrib[k] += wk[k] * ls;
+            suffix = ctx.path->trace(scene, next, state, sampler, counters, nullptr, &final_valid);
         }
     }
+    const bool bounce = !suffix.is_black();
+    if (mix.delta) b_scale *= float(ns);
 
-    // ---------------- Splat: L_k / D_k into each sharing view's pixel ----------------
+    // ---------------- Splat: L_i / D_i into each sharing view's pixel ----------------
     auto &splats = sc.splats;
     splats.resize(ns);
     for (size_t i = 0; i < ns; ++i) {
         int k = sharing[i];
         const ShiftCandidate &ck = cand[k];
+        Spectrum L(0.f);
+        if (nee) L = f_nee[i] * nee_weight;
+        if (bounce && (!mix.delta || i == mix.view)) L += (mix.delta ? mix.weight : fs[i]) * b_scale * suffix;
         float w = 1.f / sc.d[k];
         MvSplat &s = splats[i];
         s.slot = ck.slot;
         s.pixel = ck.pixel;
-        s.lw = final_valid ? contrib[k] * w : Spectrum(0.f);
+        s.lw = final_valid ? L * w : Spectrum(0.f);
         s.w = w;
         s.has_e = k == 0;
         s.e = s.has_e ? le_y * (1.f / n_l) : Spectrum(0.f);

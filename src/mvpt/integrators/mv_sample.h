@@ -90,7 +90,7 @@ struct MvScratch {
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
-    std::vector<Spectrum> contrib, weight, mixture_f, nee_f;
+    std::vector<Spectrum> mixture_f, nee_f;
     std::vector<float> view_pdf;
     std::vector<MvSplat> splats;
 };
