@@ -29,6 +29,8 @@ private:
     const Normal3f &face_normal(uint32_t prim) const { return m_face_normals[prim]; }
     /// Shading normal at barycentrics (b0, b.x, b.y) before flip_normals, falling back to `n`.
     Normal3f shading_normal(uint32_t prim, uint32_t i0, uint32_t i1, uint32_t i2, float b0, Vec2f b, Normal3f n) const;
+    /// Shading frame around the (flipped) shading normal `ns`, aligned with dp/du when the mesh has uvs.
+    Frame shading_frame(uint32_t i0, uint32_t i1, uint32_t i2, Normal3f ns) const;
 
     MeshData m_data;
     bool m_flip_normals = false;
@@ -38,6 +40,10 @@ private:
     /// Per triangle: its three vertex normals are identical and non-zero, so
     /// interpolation and renormalisation reduce to that normal.
     std::vector<uint8_t> m_flat_vertex_normals;
+    /// When every triangle's shading frame is constant over it (face normals, or flat vertex
+    /// normals): that frame per triangle, flip_normals applied, so that hits and emitter
+    /// samples skip the normal interpolation and frame construction; empty otherwise.
+    std::vector<Frame> m_const_frames;
     DiscreteDistribution m_area_distr;
     BoundingBox m_bounds;
 };
