@@ -31,6 +31,19 @@ struct WavePath {
     uint32_t slot = 0;
 };
 
+/// A path that scatters at its current vertex: the vertex's random numbers (drawn in li's
+/// order) and its emitter sample, carried between the shading loops.
+struct ScatterVertex {
+    /// Index of the path among the active ones.
+    uint32_t path;
+    float u_light_select, u_lobe, u_rr;
+    Vec2f u_light, u_dir;
+    /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
+    bool nee = false;
+    LightSample ls;
+    Spectrum light_weight;
+};
+
 /// Next-event estimate waiting for its shadow ray: added to `path`'s result if unblocked.
 struct PendingShadow {
     uint32_t path;
@@ -43,6 +56,7 @@ struct WaveBuffers {
     std::vector<Ray> rays, shadow_rays;
     std::vector<SurfaceInteraction> si;
     std::vector<uint8_t> hit, blocked, alive;
+    std::vector<ScatterVertex> scatter;
     std::vector<PendingShadow> shadows;
 };
 } // namespace
@@ -68,8 +82,12 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     buf.alive.resize(n);
     buf.shadow_rays.resize(n);
     buf.blocked.resize(n);
+    buf.scatter.resize(n);
     buf.shadows.resize(n);
 
+    // Each vertex runs as a few loops over all paths, one step of li's loop body each, so
+    // that the paths' long dependency chains (square roots, divisions, virtual calls)
+    // overlap; every path still sees li's operations in li's order.
     size_t active = n;
     for (bool first = true; active > 0; first = false) {
         for (size_t k = 0; k < active; ++k) {
@@ -79,7 +97,8 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         counters.rays += active;
         scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first);
 
-        size_t n_shadow = 0;
+        // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
+        size_t n_scatter = 0;
         for (size_t k = 0; k < active; ++k) {
             WavePath &p = paths[k];
             Sampler &sampler = samplers[p.slot];
@@ -89,7 +108,6 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             buf.alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
 
-            // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
             if (emitter && !(p.depth == 0 && m_cfg.hide_emitters)) {
@@ -104,32 +122,57 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             if (!hit || p.depth + 1 >= max_depth) continue;
 
             SurfaceInteraction &si = buf.si[k];
-            const Bsdf &bsdf = *si.shape->bsdf;
             si.wi = si.to_local(-ray.d);
+            // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
+            ScatterVertex &v = buf.scatter[n_scatter++];
+            v.path = uint32_t(k);
+            v.u_light_select = sampler.next_1d();
+            v.u_light = sampler.next_2d();
+            v.u_lobe = sampler.next_1d();
+            v.u_dir = sampler.next_2d();
+            v.u_rr = sampler.next_1d();
+        }
 
-            // ---------------- Next-event estimation (shadow ray traced below) ----------------
-            float u_light_select = sampler.next_1d();
-            Vec2f u_light = sampler.next_2d();
-            if (bsdf.has_smooth() && !lights.empty()) {
-                size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
-                const Light &light = *lights[idx];
-                auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
-                if (!weight.is_black()) {
-                    weight *= float(lights.size());
-                    Vec3f wo = si.to_local(ls.d);
-                    Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
-                    if (!f.is_black()) {
-                        buf.shadow_rays[n_shadow] = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
-                        float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
-                        buf.shadows[n_shadow++] = {uint32_t(k), p.throughput * f * weight * w};
-                    }
-                }
+        // ---------------- Next-event estimation: emitter samples ----------------
+        for (size_t j = 0; j < n_scatter; ++j) {
+            ScatterVertex &v = buf.scatter[j];
+            const SurfaceInteraction &si = buf.si[v.path];
+            v.nee = si.shape->bsdf->has_smooth() && !lights.empty();
+            if (!v.nee) continue;
+            size_t idx = std::min(size_t(v.u_light_select * float(lights.size())), lights.size() - 1);
+            const Light &light = *lights[idx];
+            auto [ls, weight] = light.sample_li(si.p, v.u_light, si.time);
+            v.ls = ls;
+            v.light_weight = weight;
+        }
+
+        // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
+        size_t n_shadow = 0;
+        for (size_t j = 0; j < n_scatter; ++j) {
+            ScatterVertex &v = buf.scatter[j];
+            if (!v.nee || v.light_weight.is_black()) continue;
+            const SurfaceInteraction &si = buf.si[v.path];
+            const Bsdf &bsdf = *si.shape->bsdf;
+            const LightSample &ls = v.ls;
+            Spectrum weight = v.light_weight;
+            weight *= float(lights.size());
+            Vec3f wo = si.to_local(ls.d);
+            Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
+            if (!f.is_black()) {
+                buf.shadow_rays[n_shadow] = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
+                buf.shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
             }
+        }
 
-            // ---------------- BSDF sampling ----------------
-            float u_lobe = sampler.next_1d();
-            Vec2f u_dir = sampler.next_2d();
-            auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, u_dir);
+        // ---------------- BSDF sampling and Russian roulette ----------------
+        for (size_t j = 0; j < n_scatter; ++j) {
+            const ScatterVertex &v = buf.scatter[j];
+            const size_t k = v.path;
+            WavePath &p = paths[k];
+            const SurfaceInteraction &si = buf.si[k];
+            const Bsdf &bsdf = *si.shape->bsdf;
+            auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, v.u_lobe, v.u_dir);
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
             Vec3f wo_world = si.to_world(bs.wo);
@@ -140,13 +183,11 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             p.prev_bsdf_pdf = bs.pdf;
             p.prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
 
-            // ---------------- Russian roulette ----------------
             float t_max = p.throughput.max_value();
-            float u_rr = sampler.next_1d();
             if (!(t_max > 0.f)) continue;
             if (p.depth + 1 >= uint32_t(m_cfg.rr_depth)) {
                 float q = std::min(t_max * p.eta * p.eta, 0.95f);
-                if (u_rr >= q) continue;
+                if (v.u_rr >= q) continue;
                 p.throughput *= 1.f / q;
             }
             ++p.depth;
