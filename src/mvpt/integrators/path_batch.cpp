@@ -12,6 +12,8 @@
 #include "../scene/scene.h"
 
 #include <climits>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace mvpt {
@@ -40,8 +42,7 @@ struct ScatterVertex {
     Vec2f u_light, u_dir;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
-    LightSample ls;
-    Spectrum light_weight;
+    std::pair<LightSample, Spectrum> emitter_sample;
 };
 
 /// Next-event estimate waiting for its shadow ray: added to `path`'s result if unblocked.
@@ -141,20 +142,20 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             if (!v.nee) continue;
             size_t idx = std::min(size_t(v.u_light_select * float(lights.size())), lights.size() - 1);
             const Light &light = *lights[idx];
-            auto [ls, weight] = light.sample_li(si.p, v.u_light, si.time);
-            v.ls = ls;
-            v.light_weight = weight;
+            // Constructed in place (guaranteed copy elision): copying the returned pair with wide
+            // loads right after the callee's narrow stores would stall on store forwarding.
+            ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, v.u_light, si.time));
         }
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
         size_t n_shadow = 0;
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
-            if (!v.nee || v.light_weight.is_black()) continue;
+            if (!v.nee || v.emitter_sample.second.is_black()) continue;
             const SurfaceInteraction &si = buf.si[v.path];
             const Bsdf &bsdf = *si.shape->bsdf;
-            const LightSample &ls = v.ls;
-            Spectrum weight = v.light_weight;
+            const LightSample &ls = v.emitter_sample.first;
+            Spectrum weight = v.emitter_sample.second;
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
             Spectrum f = bsdf.eval(ctx, si, si.wi, wo);

@@ -52,12 +52,14 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
             m_flat_vertex_normals[i] = n0 == n1 && n1 == n2 && squared_norm(n0) > 0.f;
         }
     }
-    bool all_flat = true;
-    for (size_t i = 0; i < m_face_normals.size() && all_flat; ++i)
-        all_flat = m_data.normals.empty() || m_flat_vertex_normals[i];
-    if (all_flat) {
+    size_t n_flat = 0;
+    for (size_t i = 0; i < m_face_normals.size(); ++i) n_flat += m_data.normals.empty() || m_flat_vertex_normals[i];
+    if (n_flat > 0 && 2 * n_flat >= m_face_normals.size()) {
         m_const_frames.resize(m_face_normals.size());
+        m_has_const_frame.assign(m_face_normals.size(), 0);
         for (size_t i = 0; i < m_const_frames.size(); ++i) {
+            if (!m_data.normals.empty() && !m_flat_vertex_normals[i]) continue;
+            m_has_const_frame[i] = 1;
             const uint32_t *idx = &m_data.indices[3 * i];
             Normal3f ns = m_data.normals.empty() ? m_face_normals[i] : m_data.normals[idx[0]];
             m_const_frames[i] = shading_frame(idx[0], idx[1], idx[2], m_flip_normals ? -ns : ns);
@@ -128,7 +130,7 @@ void TriangleMesh::fill_interaction(const Ray &, float t, uint32_t prim, Vec2f b
     Normal3f n = m_face_normals[prim];
     si.n = m_flip_normals ? -n : n;
     si.uv = m_data.uvs.empty() ? b : m_data.uvs[i0] * b0 + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
-    if (!m_const_frames.empty()) {
+    if (!m_const_frames.empty() && m_has_const_frame[prim]) {
         si.sh_frame = m_const_frames[prim];
         return;
     }
@@ -160,16 +162,29 @@ Frame TriangleMesh::shading_frame(uint32_t i0, uint32_t i1, uint32_t i2, Normal3
 }
 
 ShapeSample TriangleMesh::sample_area(Vec2f u) const {
+    ShapeSample s;
+    sample_point(u, s);
+    return s;
+}
+
+std::pair<ShapeSample, float> TriangleMesh::sample_solid_angle(Point3f ref, Vec2f u) const {
+    std::pair<ShapeSample, float> result;
+    ShapeSample &s = result.first;
+    sample_point(u, s);
+    result.second = area_to_solid_angle(s.pdf_a, ref, s.p, s.n);
+    return result;
+}
+
+void TriangleMesh::sample_point(Vec2f u, ShapeSample &s) const {
     float pmf, ux;
     size_t tri = m_area_distr.sample(u.x, &pmf, &ux);
     Vec2f b = warp::square_to_uniform_triangle({ux, u.y});
     uint32_t i0 = m_data.indices[3 * tri], i1 = m_data.indices[3 * tri + 1], i2 = m_data.indices[3 * tri + 2];
     const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
     float b0 = 1.f - b.x - b.y;
-    ShapeSample s;
     s.p = p0 * b0 + p1 * b.x + p2 * b.y;
     // Smooth meshes: the interpolated normal, as Mitsuba uses for emitter sampling.
-    if (!m_const_frames.empty()) {
+    if (!m_const_frames.empty() && m_has_const_frame[tri]) {
         s.n = m_const_frames[tri].n;
     } else {
         Normal3f n = shading_normal(uint32_t(tri), i0, i1, i2, b0, b, m_face_normals[tri]);
@@ -180,7 +195,6 @@ ShapeSample TriangleMesh::sample_area(Vec2f u) const {
     else
         s.uv = b;
     s.pdf_a = m_inv_area;
-    return s;
 }
 
 } // namespace mvpt
