@@ -6,6 +6,7 @@
 // (tests/cpp/test_path_batch.cpp checks this).
 #include "path.h"
 
+#include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
 #include "../render/light.h"
 #include "../render/shape.h"
@@ -33,13 +34,11 @@ struct WavePath {
     uint32_t slot = 0;
 };
 
-/// A path that scatters at its current vertex: the vertex's random numbers (drawn in li's
-/// order) and its emitter sample, carried between the shading loops.
+/// A path that scatters at its current vertex: its emitter sample, carried between the
+/// shading loops (the vertex's random numbers are in WaveBuffers::u).
 struct ScatterVertex {
     /// Index of the path among the active ones.
     uint32_t path;
-    float u_light_select, u_lobe, u_rr;
-    Vec2f u_light, u_dir;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
     std::pair<LightSample, Spectrum> emitter_sample;
@@ -59,6 +58,12 @@ struct WaveBuffers {
     std::vector<uint8_t> hit, blocked, alive;
     std::vector<ScatterVertex> scatter;
     std::vector<PendingShadow> shadows;
+    /// Per scattering vertex, its random numbers in li's order (u_light_select, u_light.x,
+    /// u_light.y, u_lobe, u_dir.x, u_dir.y, u_rr) and, for independent samplers, the sample
+    /// hash and first dimension they are drawn from.
+    std::vector<float> u[7];
+    std::vector<uint64_t> u_hash;
+    std::vector<uint32_t> u_dim;
 };
 } // namespace
 
@@ -72,10 +77,12 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     thread_local WaveBuffers buf;
     auto &paths = buf.paths;
     paths.assign(n, WavePath{});
+    bool independent = true; // then the vertices' numbers are drawn in one batched loop
     for (size_t i = 0; i < n; ++i) {
         paths[i].ray = camera_rays[i];
         paths[i].valid = valid0;
         paths[i].slot = uint32_t(i);
+        independent &= samplers[i].kind() == SamplerKind::Independent;
     }
     buf.rays.resize(n);
     buf.si.resize(n);
@@ -85,6 +92,11 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     buf.blocked.resize(n);
     buf.scatter.resize(n);
     buf.shadows.resize(n);
+    for (auto &u : buf.u) u.resize(n);
+    buf.u_hash.resize(n);
+    buf.u_dim.resize(n);
+    float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
+                         buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
 
     // Each vertex runs as a few loops over all paths, one step of li's loop body each, so
     // that the paths' long dependency chains (square roots, divisions, virtual calls)
@@ -125,14 +137,23 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             SurfaceInteraction &si = buf.si[k];
             si.wi = si.to_local(-ray.d);
             // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
-            ScatterVertex &v = buf.scatter[n_scatter++];
-            v.path = uint32_t(k);
-            v.u_light_select = sampler.next_1d();
-            v.u_light = sampler.next_2d();
-            v.u_lobe = sampler.next_1d();
-            v.u_dir = sampler.next_2d();
-            v.u_rr = sampler.next_1d();
+            const size_t j = n_scatter++;
+            buf.scatter[j].path = uint32_t(k);
+            if (independent) {
+                buf.u_hash[j] = sampler.sample_hash();
+                buf.u_dim[j] = sampler.dimension();
+                sampler.set_dimension(sampler.dimension() + DimsPerVertex);
+            } else {
+                u[0][j] = sampler.next_1d();
+                Vec2f u_light = sampler.next_2d();
+                u[1][j] = u_light.x, u[2][j] = u_light.y;
+                u[3][j] = sampler.next_1d();
+                Vec2f u_dir = sampler.next_2d();
+                u[4][j] = u_dir.x, u[5][j] = u_dir.y;
+                u[6][j] = sampler.next_1d();
+            }
         }
+        if (independent) independent_vertex_draws(buf.u_hash.data(), buf.u_dim.data(), n_scatter, u);
 
         // ---------------- Next-event estimation: emitter samples ----------------
         for (size_t j = 0; j < n_scatter; ++j) {
@@ -140,11 +161,11 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             const SurfaceInteraction &si = buf.si[v.path];
             v.nee = si.shape->bsdf->has_smooth() && !lights.empty();
             if (!v.nee) continue;
-            size_t idx = std::min(size_t(v.u_light_select * float(lights.size())), lights.size() - 1);
+            size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
             const Light &light = *lights[idx];
             // Constructed in place (guaranteed copy elision): copying the returned pair with wide
             // loads right after the callee's narrow stores would stall on store forwarding.
-            ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, v.u_light, si.time));
+            ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, {u[1][j], u[2][j]}, si.time));
         }
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
@@ -173,7 +194,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             WavePath &p = paths[k];
             const SurfaceInteraction &si = buf.si[k];
             const Bsdf &bsdf = *si.shape->bsdf;
-            auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, v.u_lobe, v.u_dir);
+            auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
             Vec3f wo_world = si.to_world(bs.wo);
@@ -188,7 +209,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             if (!(t_max > 0.f)) continue;
             if (p.depth + 1 >= uint32_t(m_cfg.rr_depth)) {
                 float q = std::min(t_max * p.eta * p.eta, 0.95f);
-                if (v.u_rr >= q) continue;
+                if (u[6][j] >= q) continue;
                 p.throughput *= 1.f / q;
             }
             ++p.depth;
