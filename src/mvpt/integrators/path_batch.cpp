@@ -20,11 +20,10 @@
 namespace mvpt {
 
 namespace {
-/// One path between two vertices: li's loop variables.
+/// One path between two vertices: li's loop variables (its ray is in WaveBuffers::rays).
 struct WavePath {
     Spectrum result{0.f}, throughput{1.f};
     float eta = 1.f;
-    Ray ray;
     Point3f prev_p;
     float prev_bsdf_pdf = 1.f;
     bool prev_bsdf_delta = true;
@@ -53,7 +52,9 @@ struct PendingShadow {
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
     std::vector<WavePath> paths;
-    std::vector<Ray> rays, shadow_rays;
+    /// The active paths' rays, in the order of `paths`.
+    std::vector<Ray> rays;
+    std::vector<Ray> shadow_rays;
     std::vector<SurfaceInteraction> si;
     std::vector<uint8_t> hit, blocked, alive;
     std::vector<ScatterVertex> scatter;
@@ -76,15 +77,15 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
 
     thread_local WaveBuffers buf;
     auto &paths = buf.paths;
-    paths.assign(n, WavePath{});
+    paths.resize(n);
+    buf.rays.assign(camera_rays, camera_rays + n);
     bool independent = true; // then the vertices' numbers are drawn in one batched loop
     for (size_t i = 0; i < n; ++i) {
-        paths[i].ray = camera_rays[i];
+        paths[i] = WavePath{};
         paths[i].valid = valid0;
         paths[i].slot = uint32_t(i);
         independent &= samplers[i].kind() == SamplerKind::Independent;
     }
-    buf.rays.resize(n);
     buf.si.resize(n);
     buf.hit.resize(n);
     buf.alive.resize(n);
@@ -103,10 +104,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     // overlap; every path still sees li's operations in li's order.
     size_t active = n;
     for (bool first = true; active > 0; first = false) {
-        for (size_t k = 0; k < active; ++k) {
-            buf.rays[k] = paths[k].ray;
-            buf.si[k] = SurfaceInteraction();
-        }
+        for (size_t k = 0; k < active; ++k) buf.si[k] = SurfaceInteraction();
         counters.rays += active;
         scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first);
 
@@ -117,7 +115,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             Sampler &sampler = samplers[p.slot];
             const SurfaceInteraction &si_hit = buf.si[k];
             const bool hit = buf.hit[k] != 0;
-            const Ray &ray = p.ray;
+            const Ray &ray = buf.rays[k];
             buf.alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
 
@@ -198,7 +196,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
             Vec3f wo_world = si.to_world(bs.wo);
-            p.ray = si.spawn_ray(wo_world);
+            buf.rays[k] = si.spawn_ray(wo_world);
             p.throughput *= bsdf_weight;
             p.eta *= bs.eta;
             p.prev_p = si.p;
@@ -226,7 +224,10 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         size_t next = 0;
         for (size_t k = 0; k < active; ++k) {
             if (buf.alive[k]) {
-                if (next != k) paths[next] = paths[k];
+                if (next != k) {
+                    paths[next] = paths[k];
+                    buf.rays[next] = buf.rays[k];
+                }
                 ++next;
             } else {
                 out[paths[k].slot] = paths[k].valid ? paths[k].result : Spectrum(0.f);
