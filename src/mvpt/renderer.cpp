@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cfloat>
 #include <chrono>
 #include <memory>
@@ -91,85 +92,103 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     auto t_start = clock::now();
     double last_pass = 0.0;
 
-    for (int pass = 0; pass < max_target; ++pass) {
+    // One sample per pixel of every tile: called for each tile and pass of a chunk.
+    auto render_tile_pass = [&](const Tile &tile, int pass, RayCounters &rc) {
+        int view = m_views[tile.view_slot];
+        const Camera &cam = *cams[view];
+        const FilmDesc &film = cam.film;
+        FilmBuffer &fb = m_films[tile.view_slot];
+        // Camera rays of the whole tile, then their paths as one batch.
+        thread_local std::vector<Sampler> samplers;
+        thread_local std::vector<Ray> rays;
+        thread_local std::vector<Spectrum> radiance;
+        size_t n = size_t(tile.x1 - tile.x0) * size_t(tile.y1 - tile.y0);
+        samplers.assign(n, Sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed));
+        rays.resize(n);
+        radiance.resize(n);
+        for (int y = tile.y0, i = 0; y < tile.y1; ++y)
+            for (int x = tile.x0; x < tile.x1; ++x, ++i) {
+                int px = x + film.crop_x, py = y + film.crop_y;
+                Sampler &sampler = samplers[i];
+                sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
+                sampler.set_dimension(DimFilm);
+                Vec2f u_film = sampler.next_2d();
+                Vec2f u_lens = sampler.next_2d();
+                float u_time = sampler.next_1d();
+                Vec2f offset = film.filter->sample(u_film);
+                Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
+                Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
+                rays[i] = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
+            }
+        rc.camera_rays += n;
+        integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
+        for (int y = tile.y0, i = 0; y < tile.y1; ++y)
+            for (int x = tile.x0; x < tile.x1; ++x, ++i) {
+                int px = x + film.crop_x, py = y + film.crop_y;
+                Spectrum L = radiance[i];
+                size_t pi = size_t(y) * film.crop_width + x;
+                if (!L.is_finite()) {
+                    // Never reaches the film: counted, and the first one kept for replay.
+                    ++rc.nonfinite;
+                    ++*fb.nonfinite;
+                    std::lock_guard<std::mutex> lock(nonfinite_mutex);
+                    auto key = std::make_tuple(int64_t(pass), int64_t(view), int64_t(py), int64_t(px));
+                    if (m_stats.nonfinite_view < 0 ||
+                        key < std::make_tuple(m_stats.nonfinite_sample, m_stats.nonfinite_view,
+                                              m_stats.nonfinite_y, m_stats.nonfinite_x)) {
+                        m_stats.nonfinite_view = view; m_stats.nonfinite_x = px;
+                        m_stats.nonfinite_y = py; m_stats.nonfinite_sample = pass;
+                    }
+                    L = Spectrum(0.f);
+                }
+                for (int c = 0; c < 3; ++c) {
+                    fb.sum[3 * pi + c] += L[c];
+                    fb.sum_sq[3 * pi + c] += double(L[c]) * L[c];
+                }
+                ++fb.count[pi];
+            }
+    };
+
+    // Passes run in chunks: each task renders one tile for all passes of the chunk, in pass
+    // order, so every pixel accumulates its samples in the same order as pass by pass (the
+    // images are identical) while the threads meet once per chunk instead of once per pass
+    // (on a loaded machine a descheduled thread holds up every pass boundary). Without a
+    // time budget a chunk grows to about a quarter of a second (the cancellation latency);
+    // with one, chunks stay single passes so that the budget is checked after each.
+    constexpr double ChunkSeconds = 0.25;
+    constexpr int MaxChunk = 16;
+    int chunk = 1;
+    for (int pass = 0; pass < max_target;) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
         if (pass > 0 && m_opts.time_budget > 0.0 && elapsed + last_pass > m_opts.time_budget) break;
-        auto t_pass = clock::now();
+        const int pass_end = std::min(max_target, pass + chunk);
+        auto t_chunk = clock::now();
 
         std::vector<const Tile *> tiles;
-        uint64_t pass_samples = 0;
         for (const Tile &t : all_tiles)
-            if (pass < target[t.view_slot]) {
-                tiles.push_back(&t);
-                pass_samples += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
-            }
+            if (pass < target[t.view_slot]) tiles.push_back(&t);
 
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
                 RayCounters &rc = counters.local();
                 for (size_t ti = r.begin(); ti != r.end(); ++ti) {
                     const Tile &tile = *tiles[ti];
-                    int view = m_views[tile.view_slot];
-                    const Camera &cam = *cams[view];
-                    const FilmDesc &film = cam.film;
-                    FilmBuffer &fb = m_films[tile.view_slot];
-                    // Camera rays of the whole tile, then their paths as one batch.
-                    thread_local std::vector<Sampler> samplers;
-                    thread_local std::vector<Ray> rays;
-                    thread_local std::vector<Spectrum> radiance;
-                    size_t n = size_t(tile.x1 - tile.x0) * size_t(tile.y1 - tile.y0);
-                    samplers.assign(n, Sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed));
-                    rays.resize(n);
-                    radiance.resize(n);
-                    for (int y = tile.y0, i = 0; y < tile.y1; ++y)
-                        for (int x = tile.x0; x < tile.x1; ++x, ++i) {
-                            int px = x + film.crop_x, py = y + film.crop_y;
-                            Sampler &sampler = samplers[i];
-                            sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
-                            sampler.set_dimension(DimFilm);
-                            Vec2f u_film = sampler.next_2d();
-                            Vec2f u_lens = sampler.next_2d();
-                            float u_time = sampler.next_1d();
-                            Vec2f offset = film.filter->sample(u_film);
-                            Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
-                            Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
-                            rays[i] = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
-                        }
-                    rc.camera_rays += n;
-                    integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
-                    for (int y = tile.y0, i = 0; y < tile.y1; ++y)
-                        for (int x = tile.x0; x < tile.x1; ++x, ++i) {
-                            int px = x + film.crop_x, py = y + film.crop_y;
-                            Spectrum L = radiance[i];
-                            size_t pi = size_t(y) * film.crop_width + x;
-                            if (!L.is_finite()) {
-                                // Never reaches the film: counted, and the first one kept for replay.
-                                ++rc.nonfinite;
-                                ++*fb.nonfinite;
-                                std::lock_guard<std::mutex> lock(nonfinite_mutex);
-                                auto key = std::make_tuple(int64_t(pass), int64_t(view), int64_t(py), int64_t(px));
-                                if (m_stats.nonfinite_view < 0 ||
-                                    key < std::make_tuple(m_stats.nonfinite_sample, m_stats.nonfinite_view,
-                                                          m_stats.nonfinite_y, m_stats.nonfinite_x)) {
-                                    m_stats.nonfinite_view = view; m_stats.nonfinite_x = px;
-                                    m_stats.nonfinite_y = py; m_stats.nonfinite_sample = pass;
-                                }
-                                L = Spectrum(0.f);
-                            }
-                            for (int c = 0; c < 3; ++c) {
-                                fb.sum[3 * pi + c] += L[c];
-                                fb.sum_sq[3 * pi + c] += double(L[c]) * L[c];
-                            }
-                            ++fb.count[pi];
-                        }
+                    for (int q = pass; q < pass_end && q < target[tile.view_slot]; ++q) render_tile_pass(tile, q, rc);
                 }
             });
         });
-        last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
-        // One sample per pixel of every tile in the pass.
-        finish_pass(pass, pass_samples, last_pass, std::chrono::duration<double>(clock::now() - t_start).count(),
-                    double(pass + 1) / double(max_target), progress);
+        last_pass = std::chrono::duration<double>(clock::now() - t_chunk).count() / double(pass_end - pass);
+        for (int q = pass; q < pass_end; ++q) {
+            uint64_t pass_samples = 0;
+            for (const Tile &t : all_tiles)
+                if (q < target[t.view_slot]) pass_samples += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
+            finish_pass(q, pass_samples, last_pass, std::chrono::duration<double>(clock::now() - t_start).count(),
+                        double(q + 1) / double(max_target), progress);
+        }
+        pass = pass_end;
+        if (m_opts.time_budget == 0.0 && last_pass > 0.0)
+            chunk = int(std::clamp(ChunkSeconds / last_pass, 1.0, double(MaxChunk)));
     }
     m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     for (const RayCounters &c : counters) m_stats.counters += c;

@@ -55,7 +55,9 @@ struct ViewResult {
 
 struct RenderStats {
     double seconds = 0.0;
-    double max_pass_seconds = 0.0; ///< longest pass, to judge how closely a time budget can be met
+    /// Longest pass, to judge how closely a time budget can be met (path tracing without a
+    /// time budget runs passes in chunks: there, the longest chunk's mean pass).
+    double max_pass_seconds = 0.0;
     int passes = 0;
     bool cancelled = false;
     uint64_t samples = 0;

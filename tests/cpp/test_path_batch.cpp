@@ -30,12 +30,14 @@ std::vector<std::filesystem::path> feature_scenes() {
 bool same_bits(const Spectrum &a, const Spectrum &b) { return std::memcmp(&a, &b, sizeof(Spectrum)) == 0; }
 
 /// Camera rays of a `res`² pixel grid over view 0's film, `spp` samples each, with their samplers.
-void camera_rays(const Scene &scene, int res, int spp, std::vector<Ray> &rays, std::vector<Sampler> &samplers) {
+/// `sobol` replaces the sensor's sampler by the Sobol sampler.
+void camera_rays(const Scene &scene, int res, int spp, std::vector<Ray> &rays, std::vector<Sampler> &samplers,
+                 bool sobol = false) {
     const Camera &cam = *scene.cameras()[0];
     for (int s = 0; s < spp; ++s)
         for (int y = 0; y < res; ++y)
             for (int x = 0; x < res; ++x) {
-                Sampler sampler(cam.sampler_kind, 7);
+                Sampler sampler(sobol ? SamplerKind::Sobol : cam.sampler_kind, 7);
                 sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(s));
                 sampler.set_dimension(DimFilm);
                 Vec2f u_film = sampler.next_2d(), u_lens = sampler.next_2d();
@@ -99,8 +101,10 @@ TEST(PathBatch, RadianceBitIdenticalToLi) {
     for (const auto &path : feature_scenes()) {
         SCOPED_TRACE(path.string());
         auto scene = load_scene_file(path);
-        for (int variant = 0; variant < 3; ++variant) {
-            // The scene's own integrator, then short paths with emitters hidden, then long ones.
+        for (int variant = 0; variant < 4; ++variant) {
+            // The scene's own integrator, then short paths with emitters hidden, then long ones,
+            // then the scene's integrator with Sobol samplers (li_batch draws the independent
+            // sampler's numbers in a batched loop, the others through the sampler).
             PathConfig cfg;
             if (auto *p = dynamic_cast<const PathIntegrator *>(&scene->integrator())) cfg = p->config();
             if (variant == 1) { cfg.max_depth = 2; cfg.hide_emitters = true; }
@@ -108,7 +112,7 @@ TEST(PathBatch, RadianceBitIdenticalToLi) {
             PathIntegrator integrator(cfg);
             std::vector<Ray> rays;
             std::vector<Sampler> samplers;
-            camera_rays(*scene, 16, 2, rays, samplers);
+            camera_rays(*scene, 16, 2, rays, samplers, variant == 3);
             std::vector<Sampler> batch_samplers = samplers;
             std::vector<Spectrum> batch(rays.size());
             integrator.li_batch(*scene, rays.data(), batch_samplers.data(), batch.data(), rays.size(), counters);

@@ -70,6 +70,13 @@ public:
     uint32_t dimension() const { return m_dim; }
     SamplerKind kind() const { return m_kind; }
     uint32_t seed() const { return m_seed; }
+    /// Hash of (seed, view, pixel, sample index): with `independent_bits(hash, dim)` it gives
+    /// the independent sampler's numbers without the sampler (batched draws, sampler_batch.h).
+    uint64_t sample_hash() const { return m_sample_hash; }
+    /// 64 random bits of the independent sampler for dimension `dim` of the sample `hash`.
+    static uint64_t independent_bits(uint64_t hash, uint32_t dim) {
+        return mix_bits(hash + 0x9e3779b97f4a7c15ULL * (uint64_t(dim) + 1));
+    }
 
     float next_1d() {
         if (m_kind == SamplerKind::Independent) return bits_to_unit_float(uint32_t(independent_bits()));
@@ -98,7 +105,7 @@ private:
     }
 
     /// 64 random bits of (sample, dimension) for the independent sampler: one mix per draw.
-    uint64_t independent_bits() { return mix_bits(m_sample_hash + 0x9e3779b97f4a7c15ULL * (uint64_t(m_dim++) + 1)); }
+    uint64_t independent_bits() { return independent_bits(m_sample_hash, m_dim++); }
     /// Per (pixel, dimension) scrambling seed of the Sobol sampler, shared by all sample indices.
     uint64_t dimension_hash() { return mix_bits(m_pixel_hash + 0x9e3779b97f4a7c15ULL * (uint64_t(m_dim++) + 1)); }
     /// Owen-scrambled sample index: decorrelates padded dimension pairs while

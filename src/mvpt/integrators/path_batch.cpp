@@ -6,22 +6,24 @@
 // (tests/cpp/test_path_batch.cpp checks this).
 #include "path.h"
 
+#include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
 #include "../render/light.h"
 #include "../render/shape.h"
 #include "../scene/scene.h"
 
 #include <climits>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace mvpt {
 
 namespace {
-/// One path between two vertices: li's loop variables.
+/// One path between two vertices: li's loop variables (its ray is in WaveBuffers::rays).
 struct WavePath {
     Spectrum result{0.f}, throughput{1.f};
     float eta = 1.f;
-    Ray ray;
     Point3f prev_p;
     float prev_bsdf_pdf = 1.f;
     bool prev_bsdf_delta = true;
@@ -29,6 +31,16 @@ struct WavePath {
     uint32_t depth = 0;
     /// Index of the camera ray (sampler and output slot).
     uint32_t slot = 0;
+};
+
+/// A path that scatters at its current vertex: its emitter sample, carried between the
+/// shading loops (the vertex's random numbers are in WaveBuffers::u).
+struct ScatterVertex {
+    /// Index of the path among the active ones.
+    uint32_t path;
+    /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
+    bool nee = false;
+    std::pair<LightSample, Spectrum> emitter_sample;
 };
 
 /// Next-event estimate waiting for its shadow ray: added to `path`'s result if unblocked.
@@ -40,10 +52,19 @@ struct PendingShadow {
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
     std::vector<WavePath> paths;
-    std::vector<Ray> rays, shadow_rays;
+    /// The active paths' rays, in the order of `paths`.
+    std::vector<Ray> rays;
+    std::vector<Ray> shadow_rays;
     std::vector<SurfaceInteraction> si;
     std::vector<uint8_t> hit, blocked, alive;
+    std::vector<ScatterVertex> scatter;
     std::vector<PendingShadow> shadows;
+    /// Per scattering vertex, its random numbers in li's order (u_light_select, u_light.x,
+    /// u_light.y, u_lobe, u_dir.x, u_dir.y, u_rr) and, for independent samplers, the sample
+    /// hash and first dimension they are drawn from.
+    std::vector<float> u[7];
+    std::vector<uint64_t> u_hash;
+    std::vector<uint32_t> u_dim;
 };
 } // namespace
 
@@ -56,40 +77,48 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
 
     thread_local WaveBuffers buf;
     auto &paths = buf.paths;
-    paths.assign(n, WavePath{});
+    paths.resize(n);
+    buf.rays.assign(camera_rays, camera_rays + n);
+    bool independent = true; // then the vertices' numbers are drawn in one batched loop
     for (size_t i = 0; i < n; ++i) {
-        paths[i].ray = camera_rays[i];
+        paths[i] = WavePath{};
         paths[i].valid = valid0;
         paths[i].slot = uint32_t(i);
+        independent &= samplers[i].kind() == SamplerKind::Independent;
     }
-    buf.rays.resize(n);
     buf.si.resize(n);
     buf.hit.resize(n);
     buf.alive.resize(n);
     buf.shadow_rays.resize(n);
     buf.blocked.resize(n);
+    buf.scatter.resize(n);
     buf.shadows.resize(n);
+    for (auto &u : buf.u) u.resize(n);
+    buf.u_hash.resize(n);
+    buf.u_dim.resize(n);
+    float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
+                         buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
 
+    // Each vertex runs as a few loops over all paths, one step of li's loop body each, so
+    // that the paths' long dependency chains (square roots, divisions, virtual calls)
+    // overlap; every path still sees li's operations in li's order.
     size_t active = n;
     for (bool first = true; active > 0; first = false) {
-        for (size_t k = 0; k < active; ++k) {
-            buf.rays[k] = paths[k].ray;
-            buf.si[k] = SurfaceInteraction();
-        }
+        for (size_t k = 0; k < active; ++k) buf.si[k] = SurfaceInteraction();
         counters.rays += active;
         scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first);
 
-        size_t n_shadow = 0;
+        // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
+        size_t n_scatter = 0;
         for (size_t k = 0; k < active; ++k) {
             WavePath &p = paths[k];
             Sampler &sampler = samplers[p.slot];
             const SurfaceInteraction &si_hit = buf.si[k];
             const bool hit = buf.hit[k] != 0;
-            const Ray &ray = p.ray;
+            const Ray &ray = buf.rays[k];
             buf.alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
 
-            // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
             if (emitter && !(p.depth == 0 && m_cfg.hide_emitters)) {
@@ -104,49 +133,81 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             if (!hit || p.depth + 1 >= max_depth) continue;
 
             SurfaceInteraction &si = buf.si[k];
-            const Bsdf &bsdf = *si.shape->bsdf;
             si.wi = si.to_local(-ray.d);
-
-            // ---------------- Next-event estimation (shadow ray traced below) ----------------
-            float u_light_select = sampler.next_1d();
-            Vec2f u_light = sampler.next_2d();
-            if (bsdf.has_smooth() && !lights.empty()) {
-                size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
-                const Light &light = *lights[idx];
-                auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
-                if (!weight.is_black()) {
-                    weight *= float(lights.size());
-                    Vec3f wo = si.to_local(ls.d);
-                    Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
-                    if (!f.is_black()) {
-                        buf.shadow_rays[n_shadow] = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
-                        float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
-                        buf.shadows[n_shadow++] = {uint32_t(k), p.throughput * f * weight * w};
-                    }
-                }
+            // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
+            const size_t j = n_scatter++;
+            buf.scatter[j].path = uint32_t(k);
+            if (independent) {
+                buf.u_hash[j] = sampler.sample_hash();
+                buf.u_dim[j] = sampler.dimension();
+                sampler.set_dimension(sampler.dimension() + DimsPerVertex);
+            } else {
+                u[0][j] = sampler.next_1d();
+                Vec2f u_light = sampler.next_2d();
+                u[1][j] = u_light.x, u[2][j] = u_light.y;
+                u[3][j] = sampler.next_1d();
+                Vec2f u_dir = sampler.next_2d();
+                u[4][j] = u_dir.x, u[5][j] = u_dir.y;
+                u[6][j] = sampler.next_1d();
             }
+        }
+        if (independent) independent_vertex_draws(buf.u_hash.data(), buf.u_dim.data(), n_scatter, u);
 
-            // ---------------- BSDF sampling ----------------
-            float u_lobe = sampler.next_1d();
-            Vec2f u_dir = sampler.next_2d();
-            auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, u_dir);
+        // ---------------- Next-event estimation: emitter samples ----------------
+        for (size_t j = 0; j < n_scatter; ++j) {
+            ScatterVertex &v = buf.scatter[j];
+            const SurfaceInteraction &si = buf.si[v.path];
+            v.nee = si.shape->bsdf->has_smooth() && !lights.empty();
+            if (!v.nee) continue;
+            size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
+            const Light &light = *lights[idx];
+            // Constructed in place (guaranteed copy elision): copying the returned pair with wide
+            // loads right after the callee's narrow stores would stall on store forwarding.
+            ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, {u[1][j], u[2][j]}, si.time));
+        }
+
+        // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
+        size_t n_shadow = 0;
+        for (size_t j = 0; j < n_scatter; ++j) {
+            ScatterVertex &v = buf.scatter[j];
+            if (!v.nee || v.emitter_sample.second.is_black()) continue;
+            const SurfaceInteraction &si = buf.si[v.path];
+            const Bsdf &bsdf = *si.shape->bsdf;
+            const LightSample &ls = v.emitter_sample.first;
+            Spectrum weight = v.emitter_sample.second;
+            weight *= float(lights.size());
+            Vec3f wo = si.to_local(ls.d);
+            Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
+            if (!f.is_black()) {
+                buf.shadow_rays[n_shadow] = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
+                buf.shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
+            }
+        }
+
+        // ---------------- BSDF sampling and Russian roulette ----------------
+        for (size_t j = 0; j < n_scatter; ++j) {
+            const ScatterVertex &v = buf.scatter[j];
+            const size_t k = v.path;
+            WavePath &p = paths[k];
+            const SurfaceInteraction &si = buf.si[k];
+            const Bsdf &bsdf = *si.shape->bsdf;
+            auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
             Vec3f wo_world = si.to_world(bs.wo);
-            p.ray = si.spawn_ray(wo_world);
+            buf.rays[k] = si.spawn_ray(wo_world);
             p.throughput *= bsdf_weight;
             p.eta *= bs.eta;
             p.prev_p = si.p;
             p.prev_bsdf_pdf = bs.pdf;
             p.prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
 
-            // ---------------- Russian roulette ----------------
             float t_max = p.throughput.max_value();
-            float u_rr = sampler.next_1d();
             if (!(t_max > 0.f)) continue;
             if (p.depth + 1 >= uint32_t(m_cfg.rr_depth)) {
                 float q = std::min(t_max * p.eta * p.eta, 0.95f);
-                if (u_rr >= q) continue;
+                if (u[6][j] >= q) continue;
                 p.throughput *= 1.f / q;
             }
             ++p.depth;
@@ -163,7 +224,10 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         size_t next = 0;
         for (size_t k = 0; k < active; ++k) {
             if (buf.alive[k]) {
-                if (next != k) paths[next] = paths[k];
+                if (next != k) {
+                    paths[next] = paths[k];
+                    buf.rays[next] = buf.rays[k];
+                }
                 ++next;
             } else {
                 out[paths[k].slot] = paths[k].valid ? paths[k].result : Spectrum(0.f);

@@ -10,23 +10,28 @@ class DiffuseBsdf final : public Bsdf {
 public:
     explicit DiffuseBsdf(const Properties &props) {
         m_reflectance = props.get_texture("reflectance", 0.5f);
+        m_constant = m_reflectance->is_constant();
+        if (m_constant) m_constant_value = m_reflectance->eval(Vec2f(0.f, 0.f));
         m_flags = BsdfDiffuseReflection;
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, float,
                                            Vec2f u2) const override {
-        BsdfSample bs;
-        if (Frame::cos_theta(wi) <= 0.f) return {bs, {}};
+        // Filled in place (one named result): returning a copied pair is slower.
+        std::pair<BsdfSample, Spectrum> result;
+        BsdfSample &bs = result.first;
+        if (Frame::cos_theta(wi) <= 0.f) return result;
         bs.wo = warp::square_to_cosine_hemisphere(u2);
         bs.pdf = warp::square_to_cosine_hemisphere_pdf(bs.wo);
         bs.sampled_type = BsdfDiffuseReflection;
-        if (bs.pdf <= 0.f) return {bs, {}};
-        return {bs, m_reflectance->eval(si.uv)};
+        if (bs.pdf <= 0.f) return result;
+        result.second = reflectance(si.uv);
+        return result;
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
         if (Frame::cos_theta(wi) <= 0.f || Frame::cos_theta(wo) <= 0.f) return {};
-        return m_reflectance->eval(si.uv) * (InvPi * Frame::cos_theta(wo));
+        return reflectance(si.uv) * (InvPi * Frame::cos_theta(wo));
     }
 
     float pdf(const BsdfContext &, const SurfaceInteraction &, Vec3f wi, Vec3f wo) const override {
@@ -47,7 +52,12 @@ public:
     }
 
 private:
+    /// The reflectance texture at `uv`, without a virtual call when it is constant.
+    Color3f reflectance(Vec2f uv) const { return m_constant ? m_constant_value : m_reflectance->eval(uv); }
+
     std::shared_ptr<Texture> m_reflectance;
+    bool m_constant = false;
+    Color3f m_constant_value;
 };
 
 MVPT_REGISTER_PLUGIN("bsdf", "diffuse", [](const Properties &p, const LoadContext &) {

@@ -21,24 +21,27 @@ public:
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, float,
                                            Vec2f u2) const override {
-        BsdfSample bs;
+        // Filled in place (one named result): returning a copied pair is slower.
+        std::pair<BsdfSample, Spectrum> result;
+        BsdfSample &bs = result.first;
         float cos_theta_i = Frame::cos_theta(wi);
-        if (cos_theta_i <= 0.f) return {bs, {}};
+        if (cos_theta_i <= 0.f) return result;
         MicrofacetDistribution distr = m_distr.at(si);
         float pdf_m = 0.f;
         Vec3f m = distr.sample(wi, u2, &pdf_m);
         bs.wo = reflect(wi, m);
         bs.sampled_type = BsdfGlossyReflection;
-        if (pdf_m == 0.f || Frame::cos_theta(bs.wo) <= 0.f) return {bs, {}};
+        if (pdf_m == 0.f || Frame::cos_theta(bs.wo) <= 0.f) return result;
         // Jacobian of the half-vector mapping dm/dwo = 1 / (4 |wo.m|) [Walter et al. 2007, eq. 14].
         bs.pdf = pdf_m / (4.f * dot(bs.wo, m));
         float weight;
         if (distr.sample_visible()) weight = distr.smith_g1(bs.wo, m);
         else weight = distr.G(wi, bs.wo, m) * dot(wi, m) / (cos_theta_i * Frame::cos_theta(m));
         Spectrum F = fresnel_conductor(dot(wi, m), m_ior.eta->eval(si.uv), m_ior.k->eval(si.uv));
-        Spectrum w = F * weight;
+        Spectrum &w = result.second;
+        w = F * weight;
         if (m_specular_reflectance) w *= m_specular_reflectance->eval(si.uv);
-        return {bs, w};
+        return result;
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {

@@ -24,9 +24,9 @@ public:
                                            Vec2f u2) const override {
         if (wi.z > 0.f) return m_brdf[0]->sample(ctx, si, wi, u1, u2);
         if (wi.z < 0.f) {
-            auto [bs, w] = m_brdf[1]->sample(ctx, si, flip(wi), u1, u2);
-            bs.wo = flip(bs.wo);
-            return {bs, w};
+            std::pair<BsdfSample, Spectrum> result = m_brdf[1]->sample(ctx, si, flip(wi), u1, u2);
+            result.first.wo = flip(result.first.wo);
+            return result;
         }
         return {BsdfSample{}, {}};
     }

@@ -27,17 +27,20 @@ public:
     // density mapped onto the shape; here the shape's solid-angle sampling is
     // used for both cases (same expectation, different noise).
     std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float) const override {
+        // Filled in place (one named result): returning a copied pair is slower.
+        std::pair<LightSample, Spectrum> result;
+        LightSample &ls = result.first;
         auto [ss, pdf] = m_shape->sample_solid_angle(ref, u);
-        LightSample ls;
         ls.p = ss.p;
         ls.n = ss.n;
         Vec3f d = ss.p - ref;
         ls.dist = norm(d);
-        if (!(pdf > 0.f) || !(ls.dist > 0.f)) return {ls, {}};
+        if (!(pdf > 0.f) || !(ls.dist > 0.f)) return result;
         ls.d = d / ls.dist;
         ls.pdf = pdf;
-        if (dot(ls.n, ls.d) >= 0.f) return {ls, {}}; // back side of a one-sided emitter
-        return {ls, m_radiance->eval(ss.uv) / pdf};
+        if (dot(ls.n, ls.d) >= 0.f) return result; // back side of a one-sided emitter
+        result.second = m_radiance->eval(ss.uv) / pdf;
+        return result;
     }
 
     float pdf_li(Point3f ref, const SurfaceInteraction &si, Vec3f d) const override {

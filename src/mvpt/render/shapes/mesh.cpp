@@ -52,6 +52,19 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
             m_flat_vertex_normals[i] = n0 == n1 && n1 == n2 && squared_norm(n0) > 0.f;
         }
     }
+    size_t n_flat = 0;
+    for (size_t i = 0; i < m_face_normals.size(); ++i) n_flat += m_data.normals.empty() || m_flat_vertex_normals[i];
+    if (n_flat > 0 && 2 * n_flat >= m_face_normals.size()) {
+        m_const_frames.resize(m_face_normals.size());
+        m_has_const_frame.assign(m_face_normals.size(), 0);
+        for (size_t i = 0; i < m_const_frames.size(); ++i) {
+            if (!m_data.normals.empty() && !m_flat_vertex_normals[i]) continue;
+            m_has_const_frame[i] = 1;
+            const uint32_t *idx = &m_data.indices[3 * i];
+            Normal3f ns = m_data.normals.empty() ? m_face_normals[i] : m_data.normals[idx[0]];
+            m_const_frames[i] = shading_frame(idx[0], idx[1], idx[2], m_flip_normals ? -ns : ns);
+        }
+    }
     attach_shape_children(*this, props);
     if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
 }
@@ -115,20 +128,23 @@ void TriangleMesh::fill_interaction(const Ray &, float t, uint32_t prim, Vec2f b
     si.t = t;
     si.p = p0 * b0 + p1 * b.x + p2 * b.y;
     Normal3f n = m_face_normals[prim];
-    Normal3f ns = shading_normal(prim, i0, i1, i2, b0, b, n);
-    if (m_flip_normals) { n = -n; ns = -ns; }
-    si.n = n;
-
-    if (m_data.uvs.empty()) {
-        si.uv = b;
-        si.sh_frame = Frame(ns);
+    si.n = m_flip_normals ? -n : n;
+    si.uv = m_data.uvs.empty() ? b : m_data.uvs[i0] * b0 + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
+    if (!m_const_frames.empty() && m_has_const_frame[prim]) {
+        si.sh_frame = m_const_frames[prim];
         return;
     }
+    Normal3f ns = shading_normal(prim, i0, i1, i2, b0, b, n);
+    si.sh_frame = shading_frame(i0, i1, i2, m_flip_normals ? -ns : ns);
+}
+
+Frame TriangleMesh::shading_frame(uint32_t i0, uint32_t i1, uint32_t i2, Normal3f ns) const {
+    if (m_data.uvs.empty()) return Frame(ns);
     Vec2f uv0 = m_data.uvs[i0], uv1 = m_data.uvs[i1], uv2 = m_data.uvs[i2];
-    si.uv = uv0 * b0 + uv1 * b.x + uv2 * b.y;
     Vec2f duv0 = uv1 - uv0, duv1 = uv2 - uv0;
     float det = duv0.x * duv1.y - duv0.y * duv1.x;
     if (det != 0.f) {
+        const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
         Vec3f dp0 = p1 - p0, dp1 = p2 - p0;
         float inv = 1.f / det;
         Vec3f dp_du = (dp0 * duv1.y - dp1 * duv0.y) * inv;
@@ -138,32 +154,47 @@ void TriangleMesh::fill_interaction(const Ray &, float t, uint32_t prim, Vec2f b
             float l = norm(s);
             if (l > 1e-12f) {
                 s = s / l;
-                si.sh_frame = Frame(s, cross(ns, s), ns);
-                return;
+                return Frame(s, cross(ns, s), ns);
             }
         }
     }
-    si.sh_frame = Frame(ns);
+    return Frame(ns);
 }
 
 ShapeSample TriangleMesh::sample_area(Vec2f u) const {
+    ShapeSample s;
+    sample_point(u, s);
+    return s;
+}
+
+std::pair<ShapeSample, float> TriangleMesh::sample_solid_angle(Point3f ref, Vec2f u) const {
+    std::pair<ShapeSample, float> result;
+    ShapeSample &s = result.first;
+    sample_point(u, s);
+    result.second = area_to_solid_angle(s.pdf_a, ref, s.p, s.n);
+    return result;
+}
+
+void TriangleMesh::sample_point(Vec2f u, ShapeSample &s) const {
     float pmf, ux;
     size_t tri = m_area_distr.sample(u.x, &pmf, &ux);
     Vec2f b = warp::square_to_uniform_triangle({ux, u.y});
     uint32_t i0 = m_data.indices[3 * tri], i1 = m_data.indices[3 * tri + 1], i2 = m_data.indices[3 * tri + 2];
     const Point3f &p0 = m_data.positions[i0], &p1 = m_data.positions[i1], &p2 = m_data.positions[i2];
     float b0 = 1.f - b.x - b.y;
-    ShapeSample s;
     s.p = p0 * b0 + p1 * b.x + p2 * b.y;
     // Smooth meshes: the interpolated normal, as Mitsuba uses for emitter sampling.
-    Normal3f n = shading_normal(uint32_t(tri), i0, i1, i2, b0, b, m_face_normals[tri]);
-    s.n = m_flip_normals ? -n : n;
+    if (!m_const_frames.empty() && m_has_const_frame[tri]) {
+        s.n = m_const_frames[tri].n;
+    } else {
+        Normal3f n = shading_normal(uint32_t(tri), i0, i1, i2, b0, b, m_face_normals[tri]);
+        s.n = m_flip_normals ? -n : n;
+    }
     if (!m_data.uvs.empty())
         s.uv = m_data.uvs[i0] * b0 + m_data.uvs[i1] * b.x + m_data.uvs[i2] * b.y;
     else
         s.uv = b;
     s.pdf_a = m_inv_area;
-    return s;
 }
 
 } // namespace mvpt

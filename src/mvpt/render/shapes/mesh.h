@@ -21,6 +21,8 @@ public:
     float area() const override { return m_area; }
     BoundingBox bounds() const override { return m_bounds; }
     ShapeSample sample_area(Vec2f u) const override;
+    /// Area sampling converted to solid angle, as Shape's default, without the extra call and copy.
+    std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const override;
 
     const MeshData &data() const { return m_data; }
 
@@ -29,6 +31,10 @@ private:
     const Normal3f &face_normal(uint32_t prim) const { return m_face_normals[prim]; }
     /// Shading normal at barycentrics (b0, b.x, b.y) before flip_normals, falling back to `n`.
     Normal3f shading_normal(uint32_t prim, uint32_t i0, uint32_t i1, uint32_t i2, float b0, Vec2f b, Normal3f n) const;
+    /// Shading frame around the (flipped) shading normal `ns`, aligned with dp/du when the mesh has uvs.
+    Frame shading_frame(uint32_t i0, uint32_t i1, uint32_t i2, Normal3f ns) const;
+    /// `sample_area` into `s`.
+    void sample_point(Vec2f u, ShapeSample &s) const;
 
     MeshData m_data;
     bool m_flip_normals = false;
@@ -38,6 +44,12 @@ private:
     /// Per triangle: its three vertex normals are identical and non-zero, so
     /// interpolation and renormalisation reduce to that normal.
     std::vector<uint8_t> m_flat_vertex_normals;
+    /// Shading frames of the triangles whose frame is constant over them (face normals, or
+    /// flat vertex normals), flip_normals applied, so that their hits and emitter samples
+    /// skip normal interpolation and frame construction; `m_has_const_frame` marks them.
+    /// Empty when fewer than half of the triangles have one.
+    std::vector<Frame> m_const_frames;
+    std::vector<uint8_t> m_has_const_frame;
     DiscreteDistribution m_area_distr;
     BoundingBox m_bounds;
 };

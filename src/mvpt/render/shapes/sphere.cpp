@@ -77,8 +77,10 @@ public:
         Vec3f dc = m_center - ref;
         float dc2 = squared_norm(dc);
         float radius_adj = radius * (m_flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
-        ShapeSample s;
-        float pdf;
+        // Filled in place (one named result): returning a copied pair is slower.
+        std::pair<ShapeSample, float> result;
+        ShapeSample &s = result.first;
+        float &pdf = result.second;
         if (dc2 > radius_adj * radius_adj) {
             // Outside: uniform direction in the cone subtended by the sphere.
             float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
@@ -106,7 +108,7 @@ public:
         if (m_flip_normals) s.n = -s.n;
         if (sample_uv) s.uv = uv_of(s.p);
         s.pdf_a = m_inv_area;
-        return {s, pdf};
+        return result;
     }
 
     float pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const override {
