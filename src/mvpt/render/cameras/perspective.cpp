@@ -26,56 +26,48 @@ public:
                                                  " of a sensor's 'to_world' must be a rigid motion: scale or shear is not allowed"
                                            : "'to_world' of a sensor must be a rigid motion: scale or shear is not allowed");
         m_animated = m_to_world.is_animated();
-        m_pose = CameraPose(m_to_world.eval(shutter_open));
-        m_near = props.get_float("near_clip", 1e-2f);
-        m_far = props.get_float("far_clip", 1e4f);
-        if (!(m_near > 0.f) || !(m_far > m_near))
-            props.fail("near_clip", "need 0 < near_clip < far_clip, got " + std::to_string(m_near) + " and " + std::to_string(m_far));
-        m_focus_distance = props.get_float("focus_distance", m_far);
+        m_proj.pose = CameraPose(m_to_world.eval(shutter_open));
+        m_proj.near_clip = props.get_float("near_clip", 1e-2f);
+        m_proj.far_clip = props.get_float("far_clip", 1e4f);
+        if (!(m_proj.near_clip > 0.f) || !(m_proj.far_clip > m_proj.near_clip))
+            props.fail("near_clip", "need 0 < near_clip < far_clip, got " + std::to_string(m_proj.near_clip) + " and " +
+                                        std::to_string(m_proj.far_clip));
+        m_focus_distance = props.get_float("focus_distance", m_proj.far_clip);
         if (thin_lens) {
-            m_aperture_radius = props.get_float("aperture_radius");
-            if (!(m_aperture_radius >= 0.f)) props.fail("aperture_radius", "'aperture_radius' must be >= 0");
+            m_proj.aperture_radius = props.get_float("aperture_radius");
+            if (!(m_proj.aperture_radius >= 0.f)) props.fail("aperture_radius", "'aperture_radius' must be >= 0");
             if (!(m_focus_distance > 0.f)) props.fail("focus_distance", "'focus_distance' must be > 0");
         }
-        read_field_of_view(props, film.width, film.height, &m_tan_x, &m_tan_y);
+        read_field_of_view(props, film.width, film.height, &m_proj.tan_x, &m_proj.tan_y);
         // Off-axis (sheared) frustum: Mitsuba's principal_point_offset_x/_y, in units of the
         // full film's width/height, are added to the film position before it is mapped to the
         // near plane (so +x moves the image content left). Mitsuba 3 has them on `perspective`
         // only; mvpt also accepts them on `thinlens` (camera rigs shear thin-lens views too).
-        m_ppo_x = props.get_float("principal_point_offset_x", 0.f);
-        m_ppo_y = props.get_float("principal_point_offset_y", 0.f);
+        m_proj.ppo_x = props.get_float("principal_point_offset_x", 0.f);
+        m_proj.ppo_y = props.get_float("principal_point_offset_y", 0.f);
         // Pixels are square for every fov_axis (tan_x / W == tan_y / H), so one film distance serves.
-        m_film_distance = 0.5f * float(film.width) / m_tan_x;
-        m_proj.pose = m_pose;
-        m_proj.near_clip = m_near;
-        m_proj.far_clip = m_far;
-        m_proj.aperture_radius = m_aperture_radius;
+        m_proj.film_distance = 0.5f * float(film.width) / m_proj.tan_x;
         m_proj.inv_focus_distance = 1.f / m_focus_distance;
-        m_proj.tan_x = m_tan_x;
-        m_proj.tan_y = m_tan_y;
-        m_proj.ppo_x = m_ppo_x;
-        m_proj.ppo_y = m_ppo_y;
         m_proj.width = float(film.width);
         m_proj.height = float(film.height);
-        m_proj.film_distance = m_film_distance;
     }
 
     Ray generate_ray(Vec2f film_pos, Vec2f lens, float time) const override {
         // The static case uses the cached pose: no per-ray matrix evaluation.
         return m_animated ? ray_in_pose(CameraPose(m_to_world.eval(time)), film_pos, lens, time)
-                          : ray_in_pose(m_pose, film_pos, lens, time);
+                          : ray_in_pose(m_proj.pose, film_pos, lens, time);
     }
 
     bool project(Point3f y, float time, Vec2f lens, Vec2f *film_pos) const override {
         Point3f p = pose_at(time).to_camera(y);
-        if (!(p.z >= m_near && p.z <= m_far)) return false;
+        if (!(p.z >= m_proj.near_clip && p.z <= m_proj.far_clip)) return false;
         // Point q on the plane z = 1 that the film position maps to (design doc §3). Thin lens:
         // the ray u -> p meets the focus plane z = f_d at P = u + (p - u) f_d / p.z, and
         // q = P / f_d = u (1/f_d - 1/p.z) + p / p.z; a pinhole (u = 0) gives q = p / p.z.
         float inv_z = 1.f / p.z;
         float qx = p.x * inv_z, qy = p.y * inv_z;
-        if (m_aperture_radius > 0.f) {
-            float k = m_aperture_radius * (1.f / m_focus_distance - inv_z);
+        if (m_proj.aperture_radius > 0.f) {
+            float k = m_proj.aperture_radius * (m_proj.inv_focus_distance - inv_z);
             qx += lens.x * k;
             qy += lens.y * k;
         }
@@ -97,7 +89,7 @@ public:
         float cos_theta = dot(w, normalize(pose.axis[2])) / d;
         if (!(cos_theta > 0.f)) return 0.f;
         float cos_phi = absdot(n_y, w) / (norm(n_y) * d);
-        return sqr(m_film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
+        return sqr(m_proj.film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
     }
 
     bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const override {
@@ -109,12 +101,12 @@ public:
 
     const CameraProjection *static_projection() const override { return m_animated ? nullptr : &m_proj; }
 
-    float lens_radius() const override { return m_aperture_radius; }
+    float lens_radius() const override { return m_proj.aperture_radius; }
     bool is_animated() const override { return m_animated; }
 
 private:
     /// The pose at `time` (keyframes interpolated only for an animated camera).
-    CameraPose pose_at(float time) const { return m_animated ? CameraPose(m_to_world.eval(time)) : m_pose; }
+    CameraPose pose_at(float time) const { return m_animated ? CameraPose(m_to_world.eval(time)) : m_proj.pose; }
 
     static bool is_rigid(const Matrix4 &m) {
         for (int i = 0; i < 3; ++i)
@@ -128,15 +120,15 @@ private:
     /// Film position (pixels) -> camera-space point on the plane z = 1 (Mitsuba's sample_to_camera:
     /// film x grows to the camera's right = -x, film y grows downwards = -y).
     Vec3f plane_from_film(Vec2f film_pos) const {
-        float u = film_pos.x / float(film.width) + m_ppo_x, v = film_pos.y / float(film.height) + m_ppo_y;
-        return {-(2.f * u - 1.f) * m_tan_x, -(2.f * v - 1.f) * m_tan_y, 1.f};
+        float u = film_pos.x / float(film.width) + m_proj.ppo_x, v = film_pos.y / float(film.height) + m_proj.ppo_y;
+        return {-(2.f * u - 1.f) * m_proj.tan_x, -(2.f * v - 1.f) * m_proj.tan_y, 1.f};
     }
     /// Inverse of `plane_from_film`.
     Vec2f film_from_plane(float qx, float qy) const { return m_proj.film_from_plane(qx, qy); }
 
     Point3f lens_point_in_pose(const CameraPose &pose, Vec2f lens) const {
-        if (m_aperture_radius > 0.f)
-            return pose.to_world(Point3f(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f));
+        if (m_proj.aperture_radius > 0.f)
+            return pose.to_world(Point3f(lens.x * m_proj.aperture_radius, lens.y * m_proj.aperture_radius, 0.f));
         return pose.origin;
     }
 
@@ -144,8 +136,8 @@ private:
         Vec3f near_p = plane_from_film(film_pos);
         Vec3f d_cam;
         Ray r;
-        if (m_aperture_radius > 0.f) {
-            Vec3f o_cam(lens.x * m_aperture_radius, lens.y * m_aperture_radius, 0.f);
+        if (m_proj.aperture_radius > 0.f) {
+            Vec3f o_cam(lens.x * m_proj.aperture_radius, lens.y * m_proj.aperture_radius, 0.f);
             d_cam = normalize(near_p * m_focus_distance - o_cam);
             r.o = pose.to_world(o_cam);
         } else {
@@ -154,20 +146,18 @@ private:
         }
         float inv_z = 1.f / d_cam.z;
         r.d = normalize(pose.vector_to_world(d_cam));
-        r.tmin = m_near * inv_z;
-        r.tmax = m_far * inv_z;
+        r.tmin = m_proj.near_clip * inv_z;
+        r.tmax = m_proj.far_clip * inv_z;
         r.time = time;
         return r;
     }
 
     AnimatedTransform m_to_world;
-    CameraPose m_pose; ///< the pose of a static camera
     bool m_animated = false;
-    float m_near, m_far, m_focus_distance, m_aperture_radius = 0.f;
-    float m_tan_x = 1.f, m_tan_y = 1.f;
-    float m_ppo_x = 0.f, m_ppo_y = 0.f; ///< principal point offset (fractions of the film size)
-    float m_film_distance = 1.f; ///< f = (W/2) / tan(fov_x/2), in pixels
-    CameraProjection m_proj;     ///< all of the above in the static pose, for shift_geometry
+    float m_focus_distance = 1e4f;
+    /// The static pose (shutter open), clip range, lens, field of view (tangents), principal
+    /// point offset and film distance f = (W/2) / tan(fov_x/2) in pixels.
+    CameraProjection m_proj;
 };
 
 MVPT_REGISTER_PLUGIN("sensor", "perspective", [](const Properties &p, const LoadContext &) {
