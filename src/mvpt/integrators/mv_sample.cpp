@@ -1,5 +1,6 @@
 #include "mv_sample.h"
 
+#include "mv_candidates.h"
 #include "mv_mixture.h"
 
 #include "../core/warp.h"
@@ -34,6 +35,9 @@ void MvContext::prepare() {
         proj.push_back(p ? *p : CameraProjection{});
     }
     projections = ProjectionTable(proj);
+    std::vector<const FilmDesc *> film_list;
+    for (const MvView &v : views) film_list.push_back(&v.camera->film);
+    films = FilmTable(film_list);
 }
 
 namespace {
@@ -43,7 +47,7 @@ const BsdfContext Ctx;
 float cached_similarity(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si, size_t a,
                         size_t b) {
     if (a == b) return 1.f;
-    size_t m = sc.cand.size();
+    size_t m = sc.cand.size;
     float &v = sc.sm[a * m + b];
     if (v < 0.f) v = sc.sm[b * m + a] = material_similarity(bsdf, si, sc.lobe[a], sc.lobe[b], ctx.cfg.tv, sc.alpha);
     return v;
@@ -53,108 +57,108 @@ float cached_similarity(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, c
 float selection(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si, size_t j,
                 size_t k) {
     if (j == k) return 1.f;
-    float s = ctx.cfg.select_jacobian ? jacobian_similarity(sc.cand[j].geo.density, sc.cand[k].geo.density) : 1.f;
+    float s = ctx.cfg.select_jacobian ? jacobian_similarity(sc.cand.g[j], sc.cand.g[k]) : 1.f;
     if (s > 0.f && sc.material) s *= cached_similarity(ctx, sc, bsdf, si, j, k);
     return s;
 }
 
-/// The candidates of §3 for the native sample of view `slot_l` with first hit `y`: cand[0] is l
-/// itself, then every view that passes the cheap tests, with its native count and lobe.
+/// The shift of y to every view with the cheap tests (§3 tests 1–3), into sc.shifts.
+void shift_all_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc) {
+    if (ctx.static_shift) { // one vector loop over contiguous camera data, no virtual call per view
+        shift_static_views(ctx.projections, ctx.films, y, sc.shifts);
+        return;
+    }
+    const size_t nv = ctx.views.size();
+    ViewShifts &vs = sc.shifts;
+    vs.resize(nv);
+    ShiftBatch &b = vs.geo;
+    const MvView &l = ctx.views[slot_l];
+    for (size_t k = 0; k < nv; ++k) {
+        const MvView &vk = ctx.views[k];
+        float t_k = y.time;
+        if (int(k) != slot_l && !shift_time(l, vk, y.time, ctx.scene_moves, &t_k)) {
+            vs.status[k] = ShiftTimeOff;
+            continue;
+        }
+        ShiftGeometry g;
+        bool ok = vk.camera->shift_geometry(y.p, y.n, t_k, y.lens, &g);
+        vs.status[k] = shift_status(y, ok, g, vk.camera->film, &vs.pixel[k]);
+        b.film_x[k] = g.film.x, b.film_y[k] = g.film.y;
+        b.lens_x[k] = g.lens_point.x, b.lens_y[k] = g.lens_point.y, b.lens_z[k] = g.lens_point.z;
+        b.density[k] = g.density;
+        b.visible_length[k] = g.visible_length;
+    }
+}
+
+/// The candidates of §3 for the native sample of view `slot_l` (pixel `pixel_l`) with first hit
+/// `y`: the native view first, then every view that passes the cheap tests, with its native
+/// count and viewing direction (and lobe, for the material similarity).
 void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvVertex &y, const Bsdf &bsdf,
                    const SurfaceInteraction &si, MvScratch &sc, MvViewStats *st_l) {
-    const MvView &l = ctx.views[slot_l];
-    auto &cand = sc.cand;
-    cand.clear();
-    ShiftCandidate self;
-    self.slot = slot_l;
-    self.pixel = pixel_l;
-    self.time = y.time;
-    const ShiftBatch &b = sc.batch;
-    auto batch_geometry = [&](int k) {
-        return ShiftGeometry{{b.film_x[k], b.film_y[k]}, {b.lens_x[k], b.lens_y[k], b.lens_z[k]}, b.density[k],
-                             b.visible_length[k]};
-    };
-    bool self_ok;
-    if (ctx.static_shift) { // every view's geometry at once (vectorised), no virtual call per view
-        shift_geometry_batch(ctx.projections, y.p, y.n, y.lens, sc.batch);
-        self.geo = batch_geometry(slot_l);
-        self_ok = b.ok[slot_l];
-    } else {
-        self_ok = l.camera->shift_geometry(y.p, y.n, y.time, y.lens, &self.geo);
-    }
-    self_ok = self_ok && self.geo.density > 0.f;
-    cand.push_back(self);
-    if (self_ok) {
-        const int nv = int(ctx.views.size());
+    const int nv = int(ctx.views.size());
+    shift_all_views(ctx, slot_l, y, sc);
+    const ViewShifts &vs = sc.shifts;
+    MvCandidates &c = sc.cand;
+    c.reserve(size_t(nv));
+    c.size = 0;
+    c.push(vs, slot_l, float(ctx.native_map[slot_l][pixel_l]));
+    c.pixel[0] = pixel_l;
+    if (!(vs.status[slot_l] & ShiftDepth)) {
         if (st_l) st_l->tried += uint64_t(nv - 1);
-        ShiftCandidate c;
         for (int k = 0; k < nv; ++k) {
             if (k == slot_l) continue;
-            ShiftTest test;
-            if (ctx.static_shift) {
-                float t_k = 0.f;
-                shift_time(l, ctx.views[k], y.time, false, &t_k);
-                test = accept_shift(ctx.views[k], k, y, t_k, b.ok[k], batch_geometry(k), &c);
-            } else {
-                test = shift_to_view(l, ctx.views[k], k, y, ctx.scene_moves, &c);
-            }
-            if (test != ShiftTest::Count) {
-                if (st_l) ++st_l->rejected[int(test)];
+            if (uint32_t status = vs.status[k]) {
+                if (st_l) ++st_l->rejected[int(first_failed_test(status))];
                 continue;
             }
-            cand.push_back(c);
+            c.push(vs, k, float(ctx.native_map[k][vs.pixel[k]]));
         }
+    } else {
+        c.g[0] = 1.f; // no density to compare (G_l <= 0, a grazing hit): the sample is l's alone, D_l = n_l
     }
-    const size_t m = cand.size();
-    sc.lobe.resize(m);
-    sc.n.resize(m);
+    const size_t m = c.size;
+    c.wi[0] = si.wi;
+    viewing_directions(c, 1, si.p, si.sh_frame);
     sc.s_sel.assign(m, 1.f);
     sc.visible.assign(m, 1);
     sc.selected.assign(m, 1);
     sc.alpha = bsdf.roughness(si);
     sc.material = ctx.cfg.select_material && (bsdf.flags() & BsdfGlossy);
-    if (sc.material) sc.sm.assign(m * m, -1.f);
-    for (size_t i = 0; i < m; ++i) {
-        const ShiftCandidate &c = cand[i];
-        sc.n[i] = float(ctx.native_map[c.slot][c.pixel]);
-        Vec3f wi = i == 0 ? si.wi : si.to_local(normalize(c.geo.lens_point - si.p));
-        sc.lobe[i] = sc.material ? view_lobe(bsdf, si, wi) : ViewLobe{wi, {}, 0.f};
+    if (sc.material) {
+        sc.sm.assign(m * m, -1.f);
+        sc.lobe.resize(m);
+        for (size_t i = 0; i < m; ++i) sc.lobe[i] = view_lobe(bsdf, si, c.wi[i]);
     }
 }
 
 /// Visibility of y from every candidate's lens point (or only the selected ones), traced as
-/// packets; fills sc.visible.
+/// coherent packets from one origin; fills sc.visible.
 void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, float t, bool selected_only,
                       RayCounters &counters, MvViewStats *st_l) {
-    auto &rays = sc.rays;
-    auto &ray_of = sc.ray_of;
-    rays.clear();
-    ray_of.clear();
+    const MvCandidates &c = sc.cand;
+    const size_t m = c.size;
+    if (m < 2) return;
+    auto &seg = sc.segments;
+    seg.resize(4 * m);
+    float *dx = seg.data(), *dy = dx + m, *dz = dy + m, *t_max = dz + m;
     // Every candidate's lens point is on the native lens point's side of the surface (§3
     // orientation test), so all visibility rays leave from one offset origin.
-    const Point3f o = si.offset_p(sc.cand[0].geo.lens_point - si.p);
-    for (size_t i = 1; i < sc.cand.size(); ++i) {
-        if (selected_only && !sc.selected[i]) {
-            if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
-            sc.visible[i] = 0;
-            continue;
-        }
-        const ShiftCandidate &c = sc.cand[i];
-        Vec3f d = c.geo.lens_point - o;
-        float dist = norm(d);
-        // Up to k's near clip plane: what is closer to the lens is invisible to its camera rays too.
-        float len = c.geo.visible_length - (norm(c.geo.lens_point - si.p) - dist);
-        if (!(len > 0.f)) continue; // y itself lies at the near plane: nothing can block
-        rays.push_back(Ray{o, d / dist, 0.f, len * (1.f - ShadowEpsilon), t});
-        ray_of.push_back(uint32_t(i));
-    }
+    const Point3f o = si.offset_p(c.lens_point(0) - si.p);
+    visibility_segments(c, o, si.p, dx, dy, dz, t_max);
+    if (selected_only)
+        for (size_t i = 1; i < m; ++i)
+            if (!sc.selected[i]) {
+                t_max[i - 1] = -1.f;
+                sc.visible[i] = 0;
+                if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
+            }
     auto &blocked = sc.blocked;
-    blocked.assign(rays.size(), 0);
-    if (!rays.empty()) ctx.scene->occluded(rays.data(), rays.size(), blocked.data(), true); // one origin: coherent
-    counters.shadow_rays += rays.size();
-    for (size_t r = 0; r < rays.size(); ++r) {
-        uint32_t i = ray_of[r];
-        sc.visible[i] = !blocked[r];
+    blocked.resize(m);
+    ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data());
+    for (size_t i = 1; i < m; ++i) {
+        if (selected_only && !sc.selected[i]) continue;
+        counters.shadow_rays += t_max[i - 1] > 0.f;
+        sc.visible[i] = !blocked[i - 1];
         if (!st_l) continue;
         if (!sc.visible[i]) ++st_l->rejected[int(ShiftTest::Visibility)];
         else if (!selected_only && !sc.selected[i]) ++st_l->rejected[int(ShiftTest::Selection)];
@@ -164,66 +168,49 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
 /// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d.
 void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si,
                        const std::vector<int> &targets) {
-    const auto &cand = sc.cand;
-    const size_t m = cand.size();
+    const MvCandidates &c = sc.cand;
+    const size_t m = c.size;
     //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
     // over the strategies j whose shift to k is valid (visibility included).
     auto &valid_set = sc.valid_set;
     valid_set.clear();
     for (size_t j = 0; j < m; ++j)
         if (sc.visible[j]) valid_set.push_back(uint32_t(j));
-    const bool material = sc.material;
     sc.d.assign(m, 0.f);
     const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
-    if (!material && uniform_time && ctx.all_time_compatible) {
-        // No pairwise terms: with r_j = G_j / G_k and s_{j->k} = min(1, r_j) (or 1),
-        //   D_k = sum_j n_j r_j s_{j->k}   (j = k gives n_k),
-        // summed in Lanes independent partial sums (vectorised; a fixed order, so deterministic).
-        constexpr size_t Lanes = 8;
-        const size_t nv = valid_set.size(), padded = (nv + Lanes - 1) / Lanes * Lanes;
-        auto &g = sc.g_valid, &nn = sc.n_valid;
-        g.assign(padded, 0.f); // padding: n = 0 adds nothing
-        nn.assign(padded, 0.f);
+    if (!sc.material && uniform_time && ctx.all_time_compatible) {
+        // No pairwise terms: the vector loop of balance_sums (j = k gives n_k).
+        const size_t nv = valid_set.size(), padded = (targets.size() + 7) / 8 * 8;
+        auto &g = sc.g_valid, &nn = sc.n_valid, &gt = sc.g_targets, &dt = sc.d_targets;
+        g.resize(nv);
+        nn.resize(nv);
         for (size_t i = 0; i < nv; ++i) {
-            g[i] = cand[valid_set[i]].geo.density;
-            nn[i] = sc.n[valid_set[i]];
+            g[i] = c.g[valid_set[i]];
+            nn[i] = c.n[valid_set[i]];
         }
-        const float *gp = g.data(), *np = nn.data();
-        const bool jacobian = ctx.cfg.select_jacobian;
-        for (int k : targets) {
-            const float inv_gk = 1.f / cand[k].geo.density;
-            float acc[Lanes] = {};
-            if (jacobian) // r min(1, r) = min(r, r^2)
-                for (size_t j0 = 0; j0 < padded; j0 += Lanes)
-                    for (size_t q = 0; q < Lanes; ++q) {
-                        float r = gp[j0 + q] * inv_gk;
-                        acc[q] += np[j0 + q] * std::min(r, r * r);
-                    }
-            else
-                for (size_t j0 = 0; j0 < padded; j0 += Lanes)
-                    for (size_t q = 0; q < Lanes; ++q) acc[q] += np[j0 + q] * (gp[j0 + q] * inv_gk);
-            float sum = 0.f;
-            for (float a : acc) sum += a;
-            sc.d[k] = sum;
+        gt.assign(padded, 1.f); // padding: any positive G
+        dt.resize(padded);
+        for (size_t t = 0; t < targets.size(); ++t) gt[t] = c.g[targets[t]];
+        balance_sums(g.data(), nn.data(), nv, gt.data(), padded, ctx.cfg.select_jacobian, dt.data());
+        for (size_t t = 0; t < targets.size(); ++t) sc.d[targets[t]] = dt[t];
+        return;
+    }
+    for (int k : targets) {
+        const MvView &vk = ctx.views[c.slot[k]];
+        const float inv_gk = 1.f / c.g[k];
+        double sum = c.n[k];
+        for (uint32_t j : valid_set) {
+            if (int(j) == k) continue;
+            const MvView &vj = ctx.views[c.slot[j]];
+            // Validity of j -> k is that of l -> j and l -> k except for time, which is not transitive.
+            if (!ctx.all_time_compatible && !time_compatible(vj, vk, ctx.scene_moves)) continue;
+            float ratio = c.g[j] * inv_gk; // |T'_{k->j}| = G_j / G_k
+            float s = ctx.cfg.select_jacobian ? std::min(1.f, ratio) : 1.f;
+            if (sc.material && s > 0.f) s *= cached_similarity(ctx, sc, bsdf, si, j, size_t(k));
+            float tau = time_density_ratio(vk, vj, ctx.scene_moves);
+            sum += double(c.n[j]) * double(tau * ratio * s);
         }
-    } else {
-        for (int k : targets) {
-            const MvView &vk = ctx.views[cand[k].slot];
-            const float inv_gk = 1.f / cand[k].geo.density;
-            double sum = sc.n[k];
-            for (uint32_t j : valid_set) {
-                if (int(j) == k) continue;
-                const MvView &vj = ctx.views[cand[j].slot];
-                // Validity of j -> k is that of l -> j and l -> k except for time, which is not transitive.
-                if (!ctx.all_time_compatible && !time_compatible(vj, vk, ctx.scene_moves)) continue;
-                float ratio = cand[j].geo.density * inv_gk; // |T'_{k->j}| = G_j / G_k
-                float s = ctx.cfg.select_jacobian ? std::min(1.f, ratio) : 1.f;
-                if (material && s > 0.f) s *= cached_similarity(ctx, sc, bsdf, si, j, size_t(k));
-                float tau = time_density_ratio(vk, vj, ctx.scene_moves);
-                sum += double(sc.n[j]) * double(tau * ratio * s);
-            }
-            sc.d[k] = float(sum);
-        }
+        sc.d[k] = float(sum);
     }
 }
 
@@ -244,10 +231,10 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
     RayCounters counters;
     trace_visibility(ctx, sc, si, time, false, counters, nullptr);
     std::vector<int> targets;
-    for (size_t i = 0; i < sc.cand.size(); ++i)
+    for (size_t i = 0; i < sc.cand.size; ++i)
         if (sc.visible[i]) targets.push_back(int(i));
     balance_densities(ctx, sc, bsdf, si, targets);
-    for (int i : targets) out.emplace_back(sc.cand[i].slot, sc.d[i]);
+    for (int i : targets) out.emplace_back(sc.cand.slot[i], sc.d[i]);
     return out;
 }
 
@@ -320,12 +307,12 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     // ---------------- Shifts (§3 tests 1-3), selection (§6), visibility (test 5) ----------------
     MvVertex y{si.p, si.n, t, xi, dot(si.n, ray.o - si.p)};
     gather_shifts(ctx, slot_l, pixel_l, y, bsdf, si, sc, &st_l);
-    const size_t m = sc.cand.size();
-    auto &cand = sc.cand;
+    const MvCandidates &cand = sc.cand;
+    const size_t m = cand.size;
     for (size_t i = 1; i < m; ++i) {
         sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
         if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)
-        sampler.set_dimension(DimSelectBase + ctx.views[cand[i].slot].scene_index);
+        sampler.set_dimension(DimSelectBase + ctx.views[cand.slot[i]].scene_index);
         sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
     }
     // The balance estimator needs the visibility of every candidate (it enters D); the
@@ -351,7 +338,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     // and the contribution L_i / D_i.
     auto &wis = sc.sharing_wi;
     wis.resize(ns);
-    for (size_t i = 0; i < ns; ++i) wis[i] = sc.lobe[sharing[i]].wi;
+    for (size_t i = 0; i < ns; ++i) wis[i] = cand.wi[sharing[i]];
     const auto &lights = scene.lights();
     auto &f_nee = sc.nee_f;
     f_nee.resize(ns);
@@ -429,19 +416,18 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     splats.resize(ns);
     for (size_t i = 0; i < ns; ++i) {
         int k = sharing[i];
-        const ShiftCandidate &ck = cand[k];
         Spectrum L(0.f);
         if (nee) L = f_nee[i] * nee_weight;
         if (bounce && (!mix.delta || i == mix.view)) L += (mix.delta ? mix.weight : fs[i]) * b_scale * suffix;
         float w = 1.f / sc.d[k];
         MvSplat &s = splats[i];
-        s.slot = ck.slot;
-        s.pixel = ck.pixel;
+        s.slot = cand.slot[k];
+        s.pixel = cand.pixel[k];
         s.lw = final_valid ? L * w : Spectrum(0.f);
         s.w = w;
         s.has_e = k == 0;
         s.e = s.has_e ? le_y * (1.f / n_l) : Spectrum(0.f);
-        ++stats[ck.slot].received;
+        ++stats[cand.slot[k]].received;
     }
     sink.splat(splats.data(), ns);
     st_l.sharing += ns;

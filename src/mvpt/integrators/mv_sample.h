@@ -4,6 +4,7 @@
 // bounce (§7), and the contributions splatted into each sharing view.
 #pragma once
 
+#include "mv_candidates.h"
 #include "mv_selection.h"
 #include "mv_shift.h"
 #include "mvpath.h"
@@ -51,6 +52,7 @@ struct MvContext {
     /// computed for all views at once from `projections` (by slot) instead of calling each camera.
     bool static_shift = false;
     ProjectionTable projections;
+    FilmTable films; ///< crop windows, by slot
 
     /// Sets the derived members above from `views` and `scene_moves`.
     void prepare();
@@ -78,14 +80,15 @@ public:
 
 /// Per-thread scratch space (kept between samples to avoid allocations).
 struct MvScratch {
-    std::vector<ShiftCandidate> cand;
-    ShiftBatch batch; ///< the shift geometry of every view (static views)
-    std::vector<ViewLobe> lobe;
-    std::vector<float> n, s_sel, d, sm;
+    ViewShifts shifts;  ///< the shift of y to every view
+    MvCandidates cand;  ///< the views that passed the cheap tests
+    std::vector<ViewLobe> lobe; ///< candidates' lobes (for the material similarity only)
+    std::vector<float> s_sel, d, sm;
     std::vector<uint8_t> visible, selected, blocked;
-    std::vector<Ray> rays;
-    std::vector<uint32_t> ray_of, valid_set;
-    std::vector<float> g_valid, n_valid; ///< G and n of the valid strategies (padded), for D
+    std::vector<float> segments; ///< visibility segments (directions, lengths) as arrays
+    std::vector<uint32_t> valid_set;
+    std::vector<float> g_valid, n_valid; ///< G and n of the valid strategies, for D
+    std::vector<float> g_targets, d_targets;
     std::vector<int> sharing;
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex

@@ -29,14 +29,6 @@ struct MvVertex {
 /// Which test rejected a shift (§3, cheap tests first); counted per view.
 enum class ShiftTest : int { Time = 0, Orientation, Image, Bsdf, Visibility, Selection, Count };
 
-/// A shift that passed the cheap tests (time, orientation, image).
-struct ShiftCandidate {
-    int slot = -1;         ///< index of the view among the rendered views
-    uint32_t pixel = 0;    ///< crop-window pixel index (row-major) that x_k falls in
-    float time = 0.f;      ///< the time at which camera k is posed (t, or t mapped between shutters)
-    ShiftGeometry geo;     ///< x_k, u_k, G_k, visible segment length
-};
-
 /// Whether strategy j -> k can produce k's samples with a density in time (§3 test 1), a
 /// symmetric relation. When shapes move (`scene_moves`) the time is kept: zero-length
 /// shutters (Dirac deltas) pair only with each other. Otherwise time is mapped affinely
@@ -68,40 +60,6 @@ inline bool shift_time(const MvView &l, const MvView &k, float t, bool scene_mov
 /// affine map or between zero-length shutters.
 inline float time_density_ratio(const MvView &k, const MvView &j, bool scene_moves) {
     return scene_moves && j.dt > 0.f ? k.dt / j.dt : 1.f;
-}
-
-/// The tests of the shift of `y` to view `k` (slot `slot`) that follow the time test, given
-/// k's shift geometry `geo` at time `t_k` (`geo_ok`: y's depth is inside k's clip range):
-/// orientation and clip range, image bounds. Returns the failed test, or ShiftTest::Count
-/// when `out` holds a candidate.
-inline ShiftTest accept_shift(const MvView &k, int slot, const MvVertex &y, float t_k, bool geo_ok,
-                              const ShiftGeometry &geo, ShiftCandidate *out) {
-    // Orientation: in front of k within its clip range, and k's lens point on the same side of
-    // the surface as l's (so both see the same face of y).
-    if (!geo_ok) return ShiftTest::Orientation;
-    float side = dot(y.n, geo.lens_point - y.p);
-    if (!(side * y.side > 0.f) || !(geo.density > 0.f) || !(geo.visible_length > 0.f)) return ShiftTest::Orientation;
-    const FilmDesc &film = k.camera->film;
-    if (!film.contains(geo.film)) return ShiftTest::Image;
-    int px = std::min(int(geo.film.x), film.crop_x + film.crop_width - 1) - film.crop_x;
-    int py = std::min(int(geo.film.y), film.crop_y + film.crop_height - 1) - film.crop_y;
-    out->slot = slot;
-    out->pixel = uint32_t(py) * uint32_t(film.crop_width) + uint32_t(px);
-    out->time = t_k;
-    out->geo = geo;
-    return ShiftTest::Count;
-}
-
-/// The cheap tests of the shift of `y` (a native sample of `l`) to view `k` (slot `slot`):
-/// time, orientation and clip range, image bounds. Returns the failed test, or
-/// ShiftTest::Count when `out` holds a candidate.
-inline ShiftTest shift_to_view(const MvView &l, const MvView &k, int slot, const MvVertex &y, bool scene_moves,
-                               ShiftCandidate *out) {
-    float t_k;
-    if (!shift_time(l, k, y.time, scene_moves, &t_k)) return ShiftTest::Time;
-    ShiftGeometry geo;
-    bool ok = k.camera->shift_geometry(y.p, y.n, t_k, y.lens, &geo);
-    return accept_shift(k, slot, y, t_k, ok, geo, out);
 }
 
 } // namespace mvpt

@@ -236,6 +236,35 @@ void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent)
     }
 }
 
+void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const float *dz, const float *t_max,
+                              size_t n, float time, uint8_t *blocked) const {
+    constexpr size_t Width = 8;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    alignas(32) RTCRay8 p;
+    const bool origin_ok = embree_can_trace(Ray{o, Vec3f(0.f, 0.f, 1.f), 0.f, 1.f, time});
+    for (size_t i = 0; i < Width; ++i) {
+        p.org_x[i] = o.x; p.org_y[i] = o.y; p.org_z[i] = o.z;
+        p.time[i] = m_animated ? m_motion.to_embree(time) : 0.f;
+        p.mask[i] = 0xffffffffu;
+        p.flags[i] = 0;
+        p.tnear[i] = 0.f;
+    }
+    for (size_t b = 0; b < n; b += Width) {
+        const size_t m = std::min(Width, n - b);
+        alignas(32) int valid[Width];
+        for (size_t i = 0; i < Width; ++i) {
+            size_t j = b + std::min(i, m - 1);
+            p.dir_x[i] = dx[j]; p.dir_y[i] = dy[j]; p.dir_z[i] = dz[j];
+            p.tfar[i] = t_max[j];
+            valid[i] = -int((i < m) & origin_ok & (t_max[j] > 0.f)); // not traced: padding, nothing to block
+        }
+        rtcOccluded8(valid, m_scene, &ctx, &p);
+        for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
+    }
+}
+
 template <int Width>
 void Scene::occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const {
     using Packet = std::conditional_t<Width == 8, RTCRay8, RTCRay16>;

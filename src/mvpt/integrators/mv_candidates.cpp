@@ -1,0 +1,155 @@
+#include "mv_candidates.h"
+
+#include "../render/interaction.h"
+
+namespace mvpt {
+
+// Loops over many views: one clone per instruction set, picked at load time (GCC ifunc).
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define MVPT_VIEW_LOOP __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define MVPT_VIEW_LOOP
+#endif
+
+FilmTable::FilmTable(const std::vector<const FilmDesc *> &films) {
+    for (const FilmDesc *f : films) {
+        x0.push_back(f->crop_x);
+        y0.push_back(f->crop_y);
+        x1.push_back(f->crop_x + f->crop_width);
+        y1.push_back(f->crop_y + f->crop_height);
+    }
+}
+
+void ViewShifts::resize(size_t n) {
+    for (auto *v : {&geo.film_x, &geo.film_y, &geo.lens_x, &geo.lens_y, &geo.lens_z, &geo.density, &geo.visible_length})
+        v->resize(n);
+    geo.ok.resize(n);
+    status.resize(n);
+    pixel.resize(n);
+}
+
+namespace {
+
+/// The cheap tests of §3 on one view's shift geometry, branch-free: orientation (y in the
+/// clip range, G > 0, k's lens point on the native lens point's side of the surface, y beyond
+/// k's near plane) and image bounds; the pixel index is computed from the clamped position.
+[[gnu::always_inline]] inline uint32_t status_of(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, int32_t x0,
+                                                int32_t y0, int32_t x1, int32_t y1, uint32_t *pixel) {
+    float side = dot(y.n, g.lens_point - y.p);
+    bool depth = depth_ok & (g.density > 0.f);
+    bool facing = (side * y.side > 0.f) & (g.visible_length > 0.f);
+    float fx0 = float(x0), fy0 = float(y0), fx1 = float(x1), fy1 = float(y1);
+    bool inside = (g.film.x >= fx0) & (g.film.x < fx1) & (g.film.y >= fy0) & (g.film.y < fy1);
+    // Clamped into the window first (a NaN becomes x0), so the conversion is always defined.
+    float cx = g.film.x > fx0 ? g.film.x : fx0, cy = g.film.y > fy0 ? g.film.y : fy0;
+    cx = cx < fx1 - 1.f ? cx : fx1 - 1.f;
+    cy = cy < fy1 - 1.f ? cy : fy1 - 1.f;
+    *pixel = uint32_t(int32_t(cy) - y0) * uint32_t(x1 - x0) + uint32_t(int32_t(cx) - x0);
+    return (depth ? 0u : ShiftDepth) | (facing ? 0u : ShiftFacing) | (inside ? 0u : ShiftOutside);
+}
+
+MVPT_VIEW_LOOP void shift_kernel(const float *__restrict proj, const int32_t *__restrict wx0,
+                                 const int32_t *__restrict wy0, const int32_t *__restrict wx1,
+                                 const int32_t *__restrict wy1, size_t n, MvVertex y, float *__restrict fx,
+                                 float *__restrict fy, float *__restrict lx, float *__restrict ly, float *__restrict lz,
+                                 float *__restrict dens, float *__restrict vis, uint32_t *__restrict status,
+                                 uint32_t *__restrict pixel) {
+    for (size_t k = 0; k < n; ++k) {
+        ShiftGeometry g;
+        bool ok = shift_geometry(ProjectionTable::at(proj, n, k), y.p, y.n, y.lens, &g);
+        fx[k] = g.film.x;
+        fy[k] = g.film.y;
+        lx[k] = g.lens_point.x;
+        ly[k] = g.lens_point.y;
+        lz[k] = g.lens_point.z;
+        dens[k] = g.density;
+        vis[k] = g.visible_length;
+        status[k] = status_of(y, ok, g, wx0[k], wy0[k], wx1[k], wy1[k], &pixel[k]);
+    }
+}
+
+MVPT_VIEW_LOOP void direction_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
+                                     size_t first, size_t n, Point3f p, Frame f, Vec3f *__restrict wi) {
+    for (size_t i = first; i < n; ++i) {
+        Vec3f w(lx[i] - p.x, ly[i] - p.y, lz[i] - p.z);
+        w = w * (1.f / norm(w));
+        wi[i] = f.to_local(w);
+    }
+}
+
+MVPT_VIEW_LOOP void segment_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
+                                   const float *__restrict vis, size_t n, Point3f o, Point3f y, float *__restrict dx,
+                                   float *__restrict dy, float *__restrict dz, float *__restrict t_max) {
+    for (size_t i = 1; i < n; ++i) {
+        Vec3f d(lx[i] - o.x, ly[i] - o.y, lz[i] - o.z), w(lx[i] - y.x, ly[i] - y.y, lz[i] - y.z);
+        float dist = norm(d);
+        // The visible length is measured from y; from the offset origin it is shorter or longer
+        // by the difference of the two distances to the lens point.
+        float len = vis[i] - (norm(w) - dist);
+        float inv = 1.f / dist;
+        dx[i - 1] = d.x * inv;
+        dy[i - 1] = d.y * inv;
+        dz[i - 1] = d.z * inv;
+        bool traced = (len > 0.f) & (dist > 0.f) & (dist < Infinity); // a finite segment with room to block
+        t_max[i - 1] = select(traced, len * (1.f - ShadowEpsilon), -1.f); // bit select: the loop has no branch
+    }
+}
+
+MVPT_VIEW_LOOP void balance_kernel(const float *__restrict g, const float *__restrict nn, size_t nv,
+                                   const float *__restrict g_targets, size_t padded_targets, bool jacobian,
+                                   float *__restrict d) {
+    // Eight targets at a time in the lanes of a vector, each summing over j in order (deterministic).
+    typedef float F8 __attribute__((vector_size(32)));
+    for (size_t t0 = 0; t0 < padded_targets; t0 += 8) {
+        F8 gk, acc = {};
+        __builtin_memcpy(&gk, g_targets + t0, sizeof(gk));
+        const F8 inv_gk = 1.f / gk;
+        if (jacobian) // r min(1, r) = min(r, r^2)
+            for (size_t j = 0; j < nv; ++j) {
+                F8 r = g[j] * inv_gk, r2 = r * r;
+                acc += nn[j] * (r < r2 ? r : r2);
+            }
+        else
+            for (size_t j = 0; j < nv; ++j) acc += nn[j] * (g[j] * inv_gk);
+        __builtin_memcpy(d + t0, &acc, sizeof(acc));
+    }
+}
+
+} // namespace
+
+uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const FilmDesc &film, uint32_t *pixel) {
+    return status_of(y, depth_ok, g, film.crop_x, film.crop_y, film.crop_x + film.crop_width,
+                     film.crop_y + film.crop_height, pixel);
+}
+
+void shift_static_views(const ProjectionTable &table, const FilmTable &films, const MvVertex &y, ViewShifts &out) {
+    const size_t n = table.size();
+    out.resize(n);
+    ShiftBatch &b = out.geo;
+    shift_kernel(table.data(), films.x0.data(), films.y0.data(), films.x1.data(), films.y1.data(), n, y,
+                 b.film_x.data(), b.film_y.data(), b.lens_x.data(), b.lens_y.data(), b.lens_z.data(),
+                 b.density.data(), b.visible_length.data(), out.status.data(), out.pixel.data());
+}
+
+void MvCandidates::reserve(size_t views) {
+    if (slot.size() >= views) return;
+    slot.resize(views);
+    pixel.resize(views);
+    for (auto *v : {&g, &n, &lx, &ly, &lz, &vis}) v->resize(views);
+    wi.resize(views);
+}
+
+void viewing_directions(MvCandidates &c, size_t first, Point3f p, const Frame &frame) {
+    direction_kernel(c.lx.data(), c.ly.data(), c.lz.data(), first, c.size, p, frame, c.wi.data());
+}
+
+void visibility_segments(const MvCandidates &c, Point3f o, Point3f y, float *dx, float *dy, float *dz, float *t_max) {
+    segment_kernel(c.lx.data(), c.ly.data(), c.lz.data(), c.vis.data(), c.size, o, y, dx, dy, dz, t_max);
+}
+
+void balance_sums(const float *g, const float *n, size_t valid, const float *g_targets, size_t padded_targets,
+                  bool jacobian, float *d) {
+    balance_kernel(g, n, valid, g_targets, padded_targets, jacobian, d);
+}
+
+} // namespace mvpt

@@ -1,0 +1,97 @@
+// The views that may share one native sample (docs/multiview-path-tracing.md §3–§5), held
+// as arrays over views, and the loops over them: the shift of y with its cheap tests, the
+// viewing directions, the visibility segments and the balance sums D_k. The loops over
+// many views are compiled for AVX-512, AVX2 and baseline x86-64 and chosen at run time;
+// the project is built without FMA contraction, so every variant computes the same bits.
+#pragma once
+
+#include "mv_shift.h"
+
+#include "../render/camera_projection.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace mvpt {
+
+/// Outcome bits of the cheap tests of the shift of y to one view (ViewShifts::status); 0: a candidate.
+enum ShiftStatus : uint8_t {
+    ShiftDepth = 1,   ///< y's depth is outside k's clip range or G_k <= 0 (the native view checks only this)
+    ShiftFacing = 2,  ///< k's lens point is on the other side of the surface, or y lies at k's near plane
+    ShiftOutside = 4, ///< x_k falls outside k's crop window
+    ShiftTimeOff = 8, ///< the time test failed
+};
+
+/// The test of §3 that a nonzero status reports (time first, then orientation, then image).
+inline ShiftTest first_failed_test(uint32_t status) {
+    return status & ShiftTimeOff ? ShiftTest::Time : status & (ShiftDepth | ShiftFacing) ? ShiftTest::Orientation
+                                                                                         : ShiftTest::Image;
+}
+
+/// Crop windows of many views as arrays (by slot), for the image test.
+struct FilmTable {
+    std::vector<int32_t> x0, y0, x1, y1; ///< [x0, x1) x [y0, y1), full-film pixels
+    FilmTable() = default;
+    explicit FilmTable(const std::vector<const FilmDesc *> &films);
+};
+
+/// The shift of y to every view, by slot.
+struct ViewShifts {
+    ShiftBatch geo;                ///< x_k, u_k, G_k, visible length (meaningful where status = 0)
+    std::vector<uint32_t> status;  ///< ShiftStatus bits (32-bit: the vector loop's lanes stay float-wide)
+    std::vector<uint32_t> pixel;   ///< crop-window pixel index of x_k (where status = 0)
+    void resize(size_t n);
+};
+
+/// Status and pixel of one view's shift geometry `g` (the same tests as the vector loop).
+uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const FilmDesc &film, uint32_t *pixel);
+
+/// The shift of y to every static view of `table` with the cheap tests (§3 tests 2–3), in one
+/// vector loop; `films` holds the same views' crop windows.
+void shift_static_views(const ProjectionTable &table, const FilmTable &films, const MvVertex &y, ViewShifts &out);
+
+/// The candidates of one native sample: index 0 is the native view l, then every view that
+/// passed the cheap tests, by ascending slot.
+struct MvCandidates {
+    size_t size = 0;
+    std::vector<int32_t> slot;
+    std::vector<uint32_t> pixel;
+    std::vector<float> g;          ///< film density G_k at y (§4)
+    std::vector<float> n;          ///< n_k of the candidate's pixel this pass
+    std::vector<float> lx, ly, lz; ///< lens point u_k
+    std::vector<float> vis;        ///< length of the segment y -> u_k in front of k's near plane
+    std::vector<Vec3f> wi;         ///< direction to u_k in the shading frame at y
+    /// Room for `views` candidates.
+    void reserve(size_t views);
+    /// Appends view `slot` (of `shifts`) with native count `n_k`.
+    void push(const ViewShifts &shifts, int slot, float n_k) {
+        const ShiftBatch &b = shifts.geo;
+        size_t i = size++;
+        this->slot[i] = slot;
+        pixel[i] = shifts.pixel[slot];
+        g[i] = b.density[slot];
+        n[i] = n_k;
+        lx[i] = b.lens_x[slot], ly[i] = b.lens_y[slot], lz[i] = b.lens_z[slot];
+        vis[i] = b.visible_length[slot];
+    }
+    Point3f lens_point(size_t i) const { return {lx[i], ly[i], lz[i]}; }
+};
+
+/// wi[i] = frame.to_local(normalize(u_i - p)) for candidates [first, size).
+void viewing_directions(MvCandidates &c, size_t first, Point3f p, const Frame &frame);
+
+/// Visibility segments from origin `o` (y offset off its surface) to the lens points of
+/// candidates [1, size): unit directions and lengths up to each view's near plane, shortened
+/// by the shadow epsilon; length -1 where nothing can block (y lies at the near plane) or the
+/// segment is degenerate.
+void visibility_segments(const MvCandidates &c, Point3f o, Point3f y, float *dx, float *dy, float *dz, float *t_max);
+
+/// Balance sums of §5 without pairwise terms, for every target: with r_j = G_j / G_k,
+///   D_k = sum_j n_j r_j min(1, r_j)  (`jacobian`, s_J of §6)   or   sum_j n_j r_j,
+/// over the `valid` strategies j (arrays g, n), summed in the order of j (deterministic).
+/// `g_targets`: the G_k of the targets, padded to a multiple of 8 with positive values; d gets
+/// as many entries.
+void balance_sums(const float *g, const float *n, size_t valid, const float *g_targets, size_t padded_targets,
+                  bool jacobian, float *d);
+
+} // namespace mvpt
