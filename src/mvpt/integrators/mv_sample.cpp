@@ -132,7 +132,7 @@ void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvV
 }
 
 /// Visibility of y from every candidate's lens point (or only the selected ones), traced as
-/// coherent packets from one origin; fills sc.visible.
+/// packets from one origin; fills sc.visible.
 void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, float t, bool selected_only,
                       RayCounters &counters, MvViewStats *st_l) {
     const MvCandidates &c = sc.cand;
@@ -180,18 +180,23 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
     const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
     if (!sc.material && uniform_time && ctx.all_time_compatible) {
         // No pairwise terms: the vector loop of balance_sums (j = k gives n_k).
-        const size_t nv = valid_set.size(), padded = (targets.size() + 7) / 8 * 8;
+        const size_t nv = valid_set.size(), nt = targets.size(), padded = (nt + 7) / 8 * 8;
         auto &g = sc.g_valid, &nn = sc.n_valid, &gt = sc.g_targets, &dt = sc.d_targets;
-        g.resize(nv);
-        nn.resize(nv);
-        for (size_t i = 0; i < nv; ++i) {
-            g[i] = c.g[valid_set[i]];
-            nn[i] = c.n[valid_set[i]];
+        const float *gp = c.g.data(), *np = c.n.data();
+        if (nv < m) { // gather the valid strategies
+            g.resize(nv);
+            nn.resize(nv);
+            for (size_t i = 0; i < nv; ++i) {
+                g[i] = c.g[valid_set[i]];
+                nn[i] = c.n[valid_set[i]];
+            }
+            gp = g.data(), np = nn.data();
         }
-        gt.assign(padded, 1.f); // padding: any positive G
+        gt.resize(padded);
         dt.resize(padded);
-        for (size_t t = 0; t < targets.size(); ++t) gt[t] = c.g[targets[t]];
-        balance_sums(g.data(), nn.data(), nv, gt.data(), padded, ctx.cfg.select_jacobian, dt.data());
+        for (size_t t = 0; t < nt; ++t) gt[t] = c.g[targets[t]];
+        std::fill(gt.begin() + nt, gt.end(), 1.f); // padding: any positive G
+        balance_sums(gp, np, nv, gt.data(), padded, ctx.cfg.select_jacobian, dt.data());
         for (size_t t = 0; t < targets.size(); ++t) sc.d[targets[t]] = dt[t];
         return;
     }
@@ -337,8 +342,12 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     //   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included),
     // and the contribution L_i / D_i.
     auto &wis = sc.sharing_wi;
-    wis.resize(ns);
-    for (size_t i = 0; i < ns; ++i) wis[i] = cand.wi[sharing[i]];
+    const Vec3f *wi_s = cand.wi.data(); // the sharing views' directions (all candidates share: no gather)
+    if (ns < m) {
+        wis.resize(ns);
+        for (size_t i = 0; i < ns; ++i) wis[i] = cand.wi[sharing[i]];
+        wi_s = wis.data();
+    }
     const auto &lights = scene.lights();
     auto &f_nee = sc.nee_f;
     f_nee.resize(ns);
@@ -351,7 +360,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             Vec3f wo = si.to_local(ls.d);
             auto &pdf = sc.view_pdf;
             pdf.resize(ns);
-            bsdf.eval_pdf_views(Ctx, si, wis.data(), ns, wo, f_nee.data(), pdf.data());
+            bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee.data(), pdf.data());
             bool any = false;
             float p_mix = 0.f; // the bounce's density: the lobe mixture (divided by |S| below)
             for (size_t i = 0; i < ns; ++i) {
@@ -374,7 +383,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     fs.resize(ns);
     sc.view_pdf.resize(ns);
     MixtureSample mix =
-        sample_lobe_mixture(bsdf, si, wis.data(), ns, sampler.next_1d(), u_lobe, u_dir, fs.data(), sc.view_pdf.data());
+        sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs.data(), sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     bool final_valid = valid_after;

@@ -40,7 +40,7 @@ public:
     /// towards nearby targets.
     void occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent = false) const;
     /// Visibility of `n` segments from one origin `o` at scene time `time`: unit directions
-    /// (dx, dy, dz) and finite lengths `t_max` as arrays, traced as coherent 8-wide packets; a
+    /// (dx, dy, dz) and finite lengths `t_max` as arrays, traced as 8-wide packets; a
     /// segment with t_max <= 0 (or NaN) is not traced (not blocked). Equals `occluded` of each
     /// segment's ray.
     void occluded_segments(Point3f o, const float *dx, const float *dy, const float *dz, const float *t_max, size_t n,
