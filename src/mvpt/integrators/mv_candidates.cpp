@@ -1,15 +1,9 @@
 #include "mv_candidates.h"
 
+#include "../core/multi_isa.h"
 #include "../render/interaction.h"
 
 namespace mvpt {
-
-// Loops over many views: one clone per instruction set, picked at load time (GCC ifunc).
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define MVPT_VIEW_LOOP __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define MVPT_VIEW_LOOP
-#endif
 
 FilmTable::FilmTable(const std::vector<const FilmDesc *> &films) {
     for (const FilmDesc *f : films) {
@@ -48,7 +42,7 @@ namespace {
     return (depth ? 0u : ShiftDepth) | (facing ? 0u : ShiftFacing) | (inside ? 0u : ShiftOutside);
 }
 
-MVPT_VIEW_LOOP void shift_kernel(const float *__restrict proj, const int32_t *__restrict wx0,
+MVPT_MULTI_ISA void shift_kernel(const float *__restrict proj, const int32_t *__restrict wx0,
                                  const int32_t *__restrict wy0, const int32_t *__restrict wx1,
                                  const int32_t *__restrict wy1, size_t n, MvVertex y, float *__restrict fx,
                                  float *__restrict fy, float *__restrict lx, float *__restrict ly, float *__restrict lz,
@@ -68,7 +62,7 @@ MVPT_VIEW_LOOP void shift_kernel(const float *__restrict proj, const int32_t *__
     }
 }
 
-MVPT_VIEW_LOOP void direction_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
+MVPT_MULTI_ISA void direction_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
                                      size_t first, size_t n, Point3f p, Frame f, Vec3f *__restrict wi) {
     for (size_t i = first; i < n; ++i) {
         Vec3f w(lx[i] - p.x, ly[i] - p.y, lz[i] - p.z);
@@ -77,7 +71,7 @@ MVPT_VIEW_LOOP void direction_kernel(const float *__restrict lx, const float *__
     }
 }
 
-MVPT_VIEW_LOOP void segment_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
+MVPT_MULTI_ISA void segment_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
                                    const float *__restrict vis, size_t n, Point3f o, Point3f y, float *__restrict dx,
                                    float *__restrict dy, float *__restrict dz, float *__restrict t_max) {
     for (size_t i = 1; i < n; ++i) {
@@ -95,7 +89,7 @@ MVPT_VIEW_LOOP void segment_kernel(const float *__restrict lx, const float *__re
     }
 }
 
-MVPT_VIEW_LOOP void balance_kernel(const float *__restrict g, const float *__restrict nn, size_t nv,
+MVPT_MULTI_ISA void balance_kernel(const float *__restrict g, const float *__restrict nn, size_t nv,
                                    const float *__restrict g_targets, size_t padded_targets, bool jacobian,
                                    float *__restrict d) {
     // Eight targets at a time in the lanes of a vector, each summing over j in order (deterministic).

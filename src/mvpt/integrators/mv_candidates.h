@@ -1,8 +1,7 @@
 // The views that may share one native sample (docs/multiview-path-tracing.md §3–§5), held
 // as arrays over views, and the loops over them: the shift of y with its cheap tests, the
 // viewing directions, the visibility segments and the balance sums D_k. The loops over
-// many views are compiled for AVX-512, AVX2 and baseline x86-64 and chosen at run time;
-// the project is built without FMA contraction, so every variant computes the same bits.
+// many views are compiled for several instruction sets (core/multi_isa.h).
 #pragma once
 
 #include "mv_shift.h"

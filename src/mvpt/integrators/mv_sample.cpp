@@ -139,8 +139,10 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     const size_t m = c.size;
     if (m < 2) return;
     auto &seg = sc.segments;
-    seg.resize(4 * m);
-    float *dx = seg.data(), *dy = dx + m, *dz = dy + m, *t_max = dz + m;
+    const size_t padded = (m - 1 + 7) / 8 * 8; // whole packets (Scene::occluded_segments)
+    seg.resize(4 * padded);
+    float *dx = seg.data(), *dy = dx + padded, *dz = dy + padded, *t_max = dz + padded;
+    std::fill(t_max + (m - 1), t_max + padded, -1.f);
     // Every candidate's lens point is on the native lens point's side of the surface (§3
     // orientation test), so all visibility rays leave from one offset origin.
     const Point3f o = si.offset_p(c.lens_point(0) - si.p);

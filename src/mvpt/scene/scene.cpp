@@ -4,6 +4,7 @@
 #include "rig.h"
 
 #include <algorithm>
+#include <cstring>
 #include <cstdio>
 #include <type_traits>
 
@@ -254,16 +255,16 @@ void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const
         p.tnear[i] = 0.f;
     }
     for (size_t b = 0; b < n; b += Width) {
-        const size_t m = std::min(Width, n - b);
+        // The arrays hold whole packets: padding lanes have t_max <= 0 and are not traced.
+        std::memcpy(p.dir_x, dx + b, sizeof(p.dir_x));
+        std::memcpy(p.dir_y, dy + b, sizeof(p.dir_y));
+        std::memcpy(p.dir_z, dz + b, sizeof(p.dir_z));
+        std::memcpy(p.tfar, t_max + b, sizeof(p.tfar));
         alignas(32) int valid[Width];
-        for (size_t i = 0; i < Width; ++i) {
-            size_t j = b + std::min(i, m - 1);
-            p.dir_x[i] = dx[j]; p.dir_y[i] = dy[j]; p.dir_z[i] = dz[j];
-            p.tfar[i] = t_max[j];
-            valid[i] = -int((i < m) & origin_ok & (t_max[j] > 0.f)); // not traced: padding, nothing to block
-        }
+        for (size_t i = 0; i < Width; ++i) valid[i] = -int(origin_ok & (p.tfar[i] > 0.f));
         rtcOccluded8(valid, m_scene, &ctx, &p);
-        for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
+        const size_t m = std::min(Width, n - b);
+        for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
     }
 }
 

@@ -41,7 +41,8 @@ public:
     void occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent = false) const;
     /// Visibility of `n` segments from one origin `o` at scene time `time`: unit directions
     /// (dx, dy, dz) and finite lengths `t_max` as arrays, traced as 8-wide packets; a
-    /// segment with t_max <= 0 (or NaN) is not traced (not blocked). Equals `occluded` of each
+    /// segment with t_max <= 0 (or NaN) is not traced (not blocked). The arrays hold n rounded
+    /// up to a multiple of 8 entries, the padding with t_max <= 0. Equals `occluded` of each
     /// segment's ray.
     void occluded_segments(Point3f o, const float *dx, const float *dy, const float *dz, const float *t_max, size_t n,
                            float time, uint8_t *blocked) const;

@@ -6,11 +6,52 @@
 #include "../../scene/plugin.h"
 
 #include <algorithm>
+#include "../../core/multi_isa.h"
 #include "../../core/warp.h"
 #include "../bsdf.h"
 #include "../texture.h"
 
 namespace mvpt {
+
+namespace {
+
+/// The lobes of `n` viewers at one `wo` (cos(wo) > 0): f = kd + ks cos^e(alpha_c) and
+/// pdf = spec_pdf cos^e(alpha_c) + diffuse_pdf, zero for viewers below the surface; cos^e by
+/// repeated squaring when `int_e` >= 0 (the same products as PhongBsdf::lobe_power). Views
+/// in chunks, each step a branch-free loop over the chunk.
+MVPT_MULTI_ISA void phong_lobes(const Vec3f *__restrict wi, size_t n, Vec3f wo, int int_e, float e, Spectrum kd,
+                                Spectrum ks, float spec_pdf, float diffuse_pdf, Spectrum *__restrict f,
+                                float *__restrict pdf) {
+    constexpr size_t Chunk = 64;
+    for (size_t c0 = 0; c0 < n; c0 += Chunk) {
+        const size_t m = std::min(Chunk, n - c0);
+        float base[Chunk], lobe[Chunk];
+        for (size_t c = 0; c < m; ++c) {
+            const Vec3f w = wi[c0 + c];
+            float cos_a = dot(wo, Vec3f(-w.x, -w.y, w.z)); // wo . mirror(w), as in eval
+            base[c] = cos_a > 0.f ? cos_a : 0.f;
+            lobe[c] = 1.f;
+        }
+        if (int_e >= 0) {
+            for (int k = int_e; k > 0; k >>= 1) {
+                if (k & 1)
+                    for (size_t c = 0; c < m; ++c) lobe[c] *= base[c];
+                for (size_t c = 0; c < m; ++c) base[c] *= base[c];
+            }
+        } else {
+            for (size_t c = 0; c < m; ++c) lobe[c] = std::pow(base[c], e);
+        }
+        for (size_t c = 0; c < m; ++c) {
+            const bool front = wi[c0 + c].z > 0.f;
+            const float l = lobe[c];
+            f[c0 + c] = Spectrum(select(front, kd.r + ks.r * l, 0.f), select(front, kd.g + ks.g * l, 0.f),
+                                 select(front, kd.b + ks.b * l, 0.f));
+            pdf[c0 + c] = select(front, spec_pdf * l + diffuse_pdf, 0.f);
+        }
+    }
+}
+
+} // namespace
 
 class PhongBsdf final : public Bsdf {
 public:
@@ -100,17 +141,7 @@ public:
         const float e = exponent(si), p_spec = specular_probability(si);
         const Spectrum kd = diffuse(si) * (InvPi * cos_o), ks = specular(si) * ((e + 2.f) * InvTwoPi * cos_o);
         const float spec_pdf = p_spec * (e + 1.f) * InvTwoPi, diffuse_pdf = (1.f - p_spec) * InvPi * cos_o;
-        for (size_t c = 0; c < n; ++c) {
-            if (Frame::cos_theta(wi[c]) <= 0.f) {
-                f[c] = Spectrum(0.f);
-                pdf[c] = 0.f;
-                continue;
-            }
-            float cos_a = std::max(0.f, dot(wo, Vec3f(-wi[c].x, -wi[c].y, wi[c].z)));
-            float lobe = lobe_power(cos_a, e);
-            f[c] = kd + ks * lobe;
-            pdf[c] = spec_pdf * lobe + diffuse_pdf;
-        }
+        phong_lobes(wi, n, wo, m_int_exponent, e, kd, ks, spec_pdf, diffuse_pdf, f, pdf);
     }
 
     /// GGX-equivalent roughness of the lobe: alpha = sqrt(2 / (e + 2)).
