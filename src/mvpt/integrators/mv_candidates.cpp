@@ -126,6 +126,7 @@ void shift_static_views(const ProjectionTable &table, const FilmTable &films, co
 }
 
 void MvCandidates::reserve(size_t views) {
+    views = (views + 7) / 8 * 8;
     if (slot.size() >= views) return;
     slot.resize(views);
     pixel.resize(views);

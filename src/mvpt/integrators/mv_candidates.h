@@ -8,6 +8,7 @@
 
 #include "../render/camera_projection.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -60,7 +61,7 @@ struct MvCandidates {
     std::vector<float> lx, ly, lz; ///< lens point u_k
     std::vector<float> vis;        ///< length of the segment y -> u_k in front of k's near plane
     std::vector<Vec3f> wi;         ///< direction to u_k in the shading frame at y
-    /// Room for `views` candidates.
+    /// Room for `views` candidates (rounded up to a multiple of 8, for g_padded).
     void reserve(size_t views);
     /// Appends view `slot` (of `shifts`) with native count `n_k`.
     void push(const ViewShifts &shifts, int slot, float n_k) {
@@ -74,6 +75,12 @@ struct MvCandidates {
         vis[i] = b.visible_length[slot];
     }
     Point3f lens_point(size_t i) const { return {lx[i], ly[i], lz[i]}; }
+    /// g with entries [size, padded) set to 1: the targets of balance_sums when every candidate
+    /// is one (padded: size rounded up to a multiple of 8).
+    const float *g_padded(size_t padded) {
+        std::fill(g.begin() + long(size), g.begin() + long(padded), 1.f);
+        return g.data();
+    }
 };
 
 /// wi[i] = frame.to_local(normalize(u_i - p)) for candidates [first, size).

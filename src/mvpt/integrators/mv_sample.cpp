@@ -170,7 +170,7 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
 /// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d.
 void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si,
                        const std::vector<int> &targets) {
-    const MvCandidates &c = sc.cand;
+    MvCandidates &c = sc.cand;
     const size_t m = c.size;
     //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
     // over the strategies j whose shift to k is valid (visibility included).
@@ -194,12 +194,17 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
             }
             gp = g.data(), np = nn.data();
         }
+        if (nt == m) { // every candidate is a target (they are 0..m-1): no gather, no scatter
+            sc.d.resize(padded);
+            balance_sums(gp, np, nv, sc.cand.g_padded(padded), padded, ctx.cfg.select_jacobian, sc.d.data());
+            return;
+        }
         gt.resize(padded);
         dt.resize(padded);
         for (size_t t = 0; t < nt; ++t) gt[t] = c.g[targets[t]];
         std::fill(gt.begin() + nt, gt.end(), 1.f); // padding: any positive G
         balance_sums(gp, np, nv, gt.data(), padded, ctx.cfg.select_jacobian, dt.data());
-        for (size_t t = 0; t < targets.size(); ++t) sc.d[targets[t]] = dt[t];
+        for (size_t t = 0; t < nt; ++t) sc.d[targets[t]] = dt[t];
         return;
     }
     for (int k : targets) {
