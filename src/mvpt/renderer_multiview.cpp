@@ -11,8 +11,10 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
+#include <tuple>
 
 namespace mvpt {
 
@@ -96,7 +98,17 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
     double native_done = 0.0; // mean native samples per pixel so far
 
-    const std::vector<Tile> tiles = make_tiles();
+    // Tiles by image region, then view: one task renders the same region of every view, whose
+    // native samples splat into overlapping neighbourhoods of the other views; those parts of
+    // the thread's splat buffers then stay in cache across the region's tiles (splat cache
+    // misses were 10 % of the light field's time with view-major tiles).
+    std::vector<Tile> tiles = make_tiles();
+    std::stable_sort(tiles.begin(), tiles.end(),
+                     [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
+    std::vector<size_t> region_begin; // first tile of each region, and tiles.size()
+    for (size_t i = 0; i < tiles.size(); ++i)
+        if (i == 0 || tiles[i].x0 != tiles[i - 1].x0 || tiles[i].y0 != tiles[i - 1].y0) region_begin.push_back(i);
+    region_begin.push_back(tiles.size());
 
     // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
     const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
@@ -110,10 +122,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         auto t_pass = clock::now();
 
         arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, region_begin.size() - 1, 1), [&](const tbb::blocked_range<size_t> &r) {
                 MvThreadState &ts = state.local();
                 BufferSink sink(ts.buffer, ts.dropped);
-                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
+                for (size_t ti = region_begin[r.begin()]; ti != region_begin[r.end()]; ++ti) {
                     const Tile &tile = tiles[ti];
                     const FilmDesc &film = m_mv.views[tile.view_slot].camera->film;
                     const MvFilm &mf = m_mv_films[tile.view_slot];
