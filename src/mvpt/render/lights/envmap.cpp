@@ -58,7 +58,16 @@ public:
     std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float) const override {
         LightSample ls;
         float pdf_uv;
-        Vec2f uv = m_distr.sample(u, &pdf_uv);
+        // The texels that `lookup` reads below are those of the sampled patch: fetching
+        // them while the sampler reads the patch's density overlaps two cache misses.
+        Vec2f uv = m_distr.sample(u, &pdf_uv, [this](int x, int y) {
+            const Color3f *row0 = &m_texels[size_t(y) * m_w + x], *row1 = row0 + m_w;
+            // Texels x and x + 1 of both rows: 24 bytes each, possibly across a line boundary.
+            __builtin_prefetch(row0);
+            __builtin_prefetch(row1);
+            __builtin_prefetch(reinterpret_cast<const char *>(row0 + 2) - 1);
+            __builtin_prefetch(reinterpret_cast<const char *>(row1 + 2) - 1);
+        });
         if (!(pdf_uv > 0.f)) return {ls, {}};
         uv.x += half_texel();
         float inv_sin_theta;
