@@ -125,11 +125,15 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
             if (emitter && !(p.depth == 0 && m_cfg.hide_emitters)) {
-                Spectrum le = hit ? emitter->eval(si_hit, -ray.d) : emitter->eval_environment(ray.d);
+                float env_pdf = 0.f;
+                Spectrum le = hit ? emitter->eval(si_hit, -ray.d)
+                                  : emitter->eval_environment_pdf(p.prev_p, si_hit, ray.d,
+                                                                  p.prev_bsdf_delta ? nullptr : &env_pdf);
                 if (!le.is_black()) {
                     float w = 1.f;
                     if (!p.prev_bsdf_delta)
-                        w = mis_power(p.prev_bsdf_pdf, emitter_pdf(scene, emitter, p.prev_p, si_hit, ray.d));
+                        w = mis_power(p.prev_bsdf_pdf, hit ? emitter_pdf(scene, emitter, p.prev_p, si_hit, ray.d)
+                                                           : emitter_pdf_from(scene, emitter, env_pdf));
                     p.result += p.throughput * le * w;
                 }
             }
