@@ -43,11 +43,16 @@ public:
     }
 
     /// Point in [0,1)^2 with density `*pdf` w.r.t. area of the unit square.
-    Vec2f sample(Vec2f u, float *pdf) const {
+    Vec2f sample(Vec2f u, float *pdf) const { return sample(u, pdf, [](int, int) {}); }
+
+    /// As above; `on_cell(x, y)` is called as soon as the patch is chosen, before its
+    /// vertices are read (a caller can prefetch its own data of that patch meanwhile).
+    template <typename OnCell> Vec2f sample(Vec2f u, float *pdf, OnCell &&on_cell) const {
         float uy, ux;
         size_t py = m_marginal.sample(u.y, nullptr, &uy);
         size_t px = m_rows[py].sample(u.x, nullptr, &ux);
         const int x = int(px), y = int(py);
+        on_cell(x, y);
         float v00 = vertex(x, y), v10 = vertex(x + 1, y), v01 = vertex(x, y + 1), v11 = vertex(x + 1, y + 1);
         // Marginal in y is linear between the row sums, then x given y is linear.
         float fy = sample_linear(uy, v00 + v10, v01 + v11);

@@ -16,6 +16,12 @@ float emitter_pdf(const Scene &scene, const Light *light, Point3f ref, const Sur
     return light->pdf_li(ref, si_light, d) / float(n);
 }
 
+float emitter_pdf_from(const Scene &scene, const Light *light, float pdf_li) {
+    size_t n = scene.lights().size();
+    if (n == 0 || light->is_delta()) return 0.f;
+    return pdf_li / float(n);
+}
+
 Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &sampler, RayCounters &counters) const {
     PathState state;
     // Mitsuba 3 keeps a path's radiance only if it scattered at a non-null surface, hit
@@ -54,10 +60,15 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
         const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
         if (emitter && !m_cfg.hide_emitters && hit) valid = true;
         if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
-            Spectrum le = hit ? emitter->eval(si, -ray.d) : emitter->eval_environment(ray.d);
+            // An escaped ray's radiance and NEE density come from one lookup of its direction.
+            float env_pdf = 0.f;
+            Spectrum le = hit ? emitter->eval(si, -ray.d)
+                              : emitter->eval_environment_pdf(prev_p, si, ray.d, prev_bsdf_delta ? nullptr : &env_pdf);
             if (!le.is_black()) {
                 float w = 1.f;
-                if (!prev_bsdf_delta) w = mis_power(prev_bsdf_pdf, emitter_pdf(scene, emitter, prev_p, si, ray.d));
+                if (!prev_bsdf_delta)
+                    w = mis_power(prev_bsdf_pdf, hit ? emitter_pdf(scene, emitter, prev_p, si, ray.d)
+                                                     : emitter_pdf_from(scene, emitter, env_pdf));
                 result += throughput * le * w;
             }
         }

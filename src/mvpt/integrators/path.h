@@ -61,6 +61,8 @@ private:
 /// Probability density (solid angle, selection included) that NEE picks the
 /// emitter point `si_light` / direction `d` from `ref`.
 float emitter_pdf(const Scene &scene, const Light *light, Point3f ref, const SurfaceInteraction &si_light, Vec3f d);
+/// `emitter_pdf` from the light's own density `pdf_li` of that point or direction.
+float emitter_pdf_from(const Scene &scene, const Light *light, float pdf_li);
 
 /// Power heuristic with exponent 2 [Veach 1997, §9.2.4].
 inline float mis_power(float a, float b) {

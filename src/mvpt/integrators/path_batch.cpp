@@ -104,7 +104,9 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     // overlap; every path still sees li's operations in li's order.
     size_t active = n;
     for (bool first = true; active > 0; first = false) {
-        for (size_t k = 0; k < active; ++k) buf.si[k] = SurfaceInteraction();
+        // No reset of the interactions first: a hit's fill_interaction sets every field that
+        // li reads (Shape::fill_interaction's contract; wi is set below), and misses are reset
+        // in the emission loop.
         counters.rays += active;
         scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first);
 
@@ -118,15 +120,20 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             const Ray &ray = buf.rays[k];
             buf.alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
+            if (!hit) buf.si[k] = SurfaceInteraction();
 
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
             if (emitter && !(p.depth == 0 && m_cfg.hide_emitters)) {
-                Spectrum le = hit ? emitter->eval(si_hit, -ray.d) : emitter->eval_environment(ray.d);
+                float env_pdf = 0.f;
+                Spectrum le = hit ? emitter->eval(si_hit, -ray.d)
+                                  : emitter->eval_environment_pdf(p.prev_p, si_hit, ray.d,
+                                                                  p.prev_bsdf_delta ? nullptr : &env_pdf);
                 if (!le.is_black()) {
                     float w = 1.f;
                     if (!p.prev_bsdf_delta)
-                        w = mis_power(p.prev_bsdf_pdf, emitter_pdf(scene, emitter, p.prev_p, si_hit, ray.d));
+                        w = mis_power(p.prev_bsdf_pdf, hit ? emitter_pdf(scene, emitter, p.prev_p, si_hit, ray.d)
+                                                           : emitter_pdf_from(scene, emitter, env_pdf));
                     p.result += p.throughput * le * w;
                 }
             }

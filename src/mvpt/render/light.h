@@ -43,6 +43,12 @@ public:
     virtual Spectrum eval(const SurfaceInteraction &, Vec3f) const { return {}; }
     /// Radiance arriving along a ray that escaped in direction `d` (environment lights).
     virtual Spectrum eval_environment(Vec3f) const { return {}; }
+    /// `eval_environment(d)` and, when `pdf` is given, `pdf_li(ref, si, d)` into it: one
+    /// call for an escaped ray that needs both (an environment map maps `d` once).
+    virtual Spectrum eval_environment_pdf(Point3f ref, const SurfaceInteraction &si, Vec3f d, float *pdf) const {
+        if (pdf) *pdf = pdf_li(ref, si, d);
+        return eval_environment(d);
+    }
     /// Scene extent, for lights placed at infinity.
     virtual void set_scene_bounds(Point3f center, float radius) { (void)center; (void)radius; }
     /// Attach an area light to its shape.

@@ -6,32 +6,25 @@
 
 namespace mvpt {
 
+namespace {
+/// c[0] + c[1] w + ... + c[8] w^8 in Estrin's scheme: the same polynomial as Horner's rule
+/// (to float rounding) with a dependency chain of four multiply-adds instead of eight, which
+/// matters in the serial Newton iteration of Beckmann sampling.
+inline float poly8(float w, const float c[9]) {
+    float w2 = w * w, w4 = w2 * w2;
+    float p01 = c[0] + c[1] * w, p23 = c[2] + c[3] * w, p45 = c[4] + c[5] * w, p67 = c[6] + c[7] * w;
+    return (p01 + p23 * w2) + (p45 + p67 * w2) * w4 + c[8] * (w4 * w4);
+}
+} // namespace
+
 float erfinv(float x) {
     // Giles, "Approximating the erfinv function", GPU Computing Gems (2010).
-    float w = -std::log(std::max((1.f - x) * (1.f + x), 1e-30f)), p;
-    if (w < 5.f) {
-        w -= 2.5f;
-        p = 2.81022636e-08f;
-        p = 3.43273939e-07f + p * w;
-        p = -3.5233877e-06f + p * w;
-        p = -4.39150654e-06f + p * w;
-        p = 0.00021858087f + p * w;
-        p = -0.00125372503f + p * w;
-        p = -0.00417768164f + p * w;
-        p = 0.246640727f + p * w;
-        p = 1.50140941f + p * w;
-    } else {
-        w = std::sqrt(w) - 3.f;
-        p = -0.000200214257f;
-        p = 0.000100950558f + p * w;
-        p = 0.00134934322f + p * w;
-        p = -0.00367342844f + p * w;
-        p = 0.00573950773f + p * w;
-        p = -0.0076224613f + p * w;
-        p = 0.00943887047f + p * w;
-        p = 1.00167406f + p * w;
-        p = 2.83297682f + p * w;
-    }
+    static constexpr float Central[9] = {1.50140941f,     0.246640727f,  -0.00417768164f, -0.00125372503f, 0.00021858087f,
+                                         -4.39150654e-06f, -3.5233877e-06f, 3.43273939e-07f, 2.81022636e-08f};
+    static constexpr float Tail[9] = {2.83297682f,    1.00167406f,     0.00943887047f, -0.0076224613f, 0.00573950773f,
+                                      -0.00367342844f, 0.00134934322f, 0.000100950558f, -0.000200214257f};
+    float w = -std::log(std::max((1.f - x) * (1.f + x), 1e-30f));
+    float p = w < 5.f ? poly8(w - 2.5f, Central) : poly8(std::sqrt(w) - 3.f, Tail);
     return p * x;
 }
 

@@ -47,7 +47,8 @@ class Shape : public Object {
 public:
     /// Add the geometry to `scene`; returns its Embree geometry id.
     virtual unsigned attach(RTCDevice device, RTCScene scene, const MotionTime &motion) = 0;
-    /// Complete a hit: `prim` and barycentrics `b` come from Embree.
+    /// Complete a hit: `prim` and barycentrics `b` come from Embree. Must set t, p, n,
+    /// sh_frame and uv (the caller sets time, shape, prim; `si` may hold an older hit).
     virtual void fill_interaction(const Ray &ray, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const = 0;
     /// Complete a hit inside an Embree instance that this shape attached
     /// (instances, animated shapes): `inner_geom` is the geometry id in its

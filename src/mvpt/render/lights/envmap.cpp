@@ -58,7 +58,16 @@ public:
     std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float) const override {
         LightSample ls;
         float pdf_uv;
-        Vec2f uv = m_distr.sample(u, &pdf_uv);
+        // The texels that `lookup` reads below are those of the sampled patch: fetching
+        // them while the sampler reads the patch's density overlaps two cache misses.
+        Vec2f uv = m_distr.sample(u, &pdf_uv, [this](int x, int y) {
+            const Color3f *row0 = &m_texels[size_t(y) * m_w + x], *row1 = row0 + m_w;
+            // Texels x and x + 1 of both rows: 24 bytes each, possibly across a line boundary.
+            __builtin_prefetch(row0);
+            __builtin_prefetch(row1);
+            __builtin_prefetch(reinterpret_cast<const char *>(row0 + 2) - 1);
+            __builtin_prefetch(reinterpret_cast<const char *>(row1 + 2) - 1);
+        });
         if (!(pdf_uv > 0.f)) return {ls, {}};
         uv.x += half_texel();
         float inv_sin_theta;
@@ -74,15 +83,18 @@ public:
 
     float pdf_li(Point3f, const SurfaceInteraction &, Vec3f d) const override {
         Vec3f v = m_to_local.vector(d);
-        Vec2f uv = direction_to_uv(v);
-        uv.x -= half_texel();
-        uv = {uv.x - std::floor(uv.x), uv.y - std::floor(uv.y)};
-        float inv_sin_theta = 1.f / std::sqrt(std::max(v.x * v.x + v.z * v.z, sqr(Epsilon)));
-        return m_distr.pdf(uv) * inv_sin_theta * (1.f / (2.f * Pi * Pi));
+        return pdf_local(v, direction_to_uv(v));
     }
 
     Spectrum eval_environment(Vec3f d) const override {
         return lookup(direction_to_uv(m_to_local.vector(d)));
+    }
+
+    Spectrum eval_environment_pdf(Point3f, const SurfaceInteraction &, Vec3f d, float *pdf) const override {
+        Vec3f v = m_to_local.vector(d);
+        Vec2f uv = direction_to_uv(v);
+        if (pdf) *pdf = pdf_local(v, uv);
+        return lookup(uv);
     }
 
 private:
@@ -90,6 +102,14 @@ private:
     static constexpr float Epsilon = 0x1p-24f;
 
     float half_texel() const { return 0.5f / float(m_w - 1); }
+
+    /// pdf_li of the emitter-space direction `v`, whose lat-long coordinates are `uv`.
+    float pdf_local(Vec3f v, Vec2f uv) const {
+        uv.x -= half_texel();
+        uv = {uv.x - std::floor(uv.x), uv.y - std::floor(uv.y)};
+        float inv_sin_theta = 1.f / std::sqrt(std::max(v.x * v.x + v.z * v.z, sqr(Epsilon)));
+        return m_distr.pdf(uv) * inv_sin_theta * (1.f / (2.f * Pi * Pi));
+    }
 
     static Vec3f uv_to_direction(Vec2f uv, float &inv_sin_theta) {
         float theta = uv.y * Pi, phi = uv.x * 2.f * Pi;

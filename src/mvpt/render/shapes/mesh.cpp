@@ -2,6 +2,7 @@
 
 #include "../../core/warp.h"
 
+#include <algorithm>
 #include <cstring>
 #include "../bsdf.h"
 #include "../light.h"
@@ -65,6 +66,7 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
             m_const_frames[i] = shading_frame(idx[0], idx[1], idx[2], m_flip_normals ? -ns : ns);
         }
     }
+    detect_parallelogram();
     attach_shape_children(*this, props);
     if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
 }
@@ -175,7 +177,44 @@ std::pair<ShapeSample, float> TriangleMesh::sample_solid_angle(Point3f ref, Vec2
     return result;
 }
 
+void TriangleMesh::detect_parallelogram() {
+    if (m_data.triangle_count() != 2 || m_const_frames.empty() || !m_has_const_frame[0] || !m_has_const_frame[1] ||
+        !(m_const_frames[0].n == m_const_frames[1].n))
+        return;
+    const uint32_t *a = &m_data.indices[0], *b = &m_data.indices[3];
+    // The vertex of each triangle that the other lacks; the two shared ones form the diagonal.
+    auto in = [&](const uint32_t *t, uint32_t i) {
+        const Point3f &p = m_data.positions[i];
+        return p == m_data.positions[t[0]] || p == m_data.positions[t[1]] || p == m_data.positions[t[2]];
+    };
+    int only_a = -1, only_b = -1, shared = 0;
+    for (int k = 0; k < 3; ++k) {
+        if (in(b, a[k])) ++shared;
+        else only_a = k;
+        if (!in(a, b[k])) only_b = k;
+    }
+    if (shared != 2 || only_a < 0 || only_b < 0) return;
+    const Point3f &pa = m_data.positions[a[only_a]], &pb = m_data.positions[b[only_b]];
+    const Point3f &s1 = m_data.positions[a[(only_a + 1) % 3]], &s2 = m_data.positions[a[(only_a + 2) % 3]];
+    // A parallelogram's diagonals bisect each other: pa + pb = s1 + s2 (to float rounding).
+    Vec3f gap = (pa + pb) - (s1 + s2);
+    float scale = std::max({std::abs(pa.x), std::abs(pa.y), std::abs(pa.z), std::abs(pb.x), std::abs(pb.y), std::abs(pb.z),
+                            std::abs(s1.x), std::abs(s1.y), std::abs(s1.z), std::abs(s2.x), std::abs(s2.y), std::abs(s2.z)});
+    if (!(std::max({std::abs(gap.x), std::abs(gap.y), std::abs(gap.z)}) <= 1e-6f * scale)) return;
+    m_is_parallelogram = true;
+    m_quad_origin = pa;
+    m_quad_e1 = s1 - pa;
+    m_quad_e2 = s2 - pa;
+    m_quad_normal = m_const_frames[0].n;
+}
+
 void TriangleMesh::sample_point(Vec2f u, ShapeSample &s) const {
+    if (m_is_parallelogram && !sample_uv) {
+        s.p = m_quad_origin + m_quad_e1 * u.x + m_quad_e2 * u.y;
+        s.n = m_quad_normal;
+        s.pdf_a = m_inv_area;
+        return;
+    }
     float pmf, ux;
     size_t tri = m_area_distr.sample(u.x, &pmf, &ux);
     Vec2f b = warp::square_to_uniform_triangle({ux, u.y});

@@ -52,6 +52,16 @@ private:
     std::vector<uint8_t> m_has_const_frame;
     DiscreteDistribution m_area_distr;
     BoundingBox m_bounds;
+    /// Two flat triangles forming a parallelogram (a rectangle or quad emitter): when no uv
+    /// is needed, `sample_point` maps u to m_quad_origin + u.x m_quad_e1 + u.y m_quad_e2
+    /// (uniform by area, as the triangle choice and triangle warp give) with the constant
+    /// normal m_quad_normal.
+    bool m_is_parallelogram = false;
+    Point3f m_quad_origin;
+    Vec3f m_quad_e1, m_quad_e2;
+    Normal3f m_quad_normal;
+    /// Sets the members above when the mesh is such a parallelogram.
+    void detect_parallelogram();
 };
 
 /// Shared parameters of every shape plugin: bsdf (default diffuse 0.5) and an

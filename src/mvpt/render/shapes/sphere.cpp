@@ -30,6 +30,7 @@ public:
     }
 
     double intersect_t(const double o[3], const double d[3], double tmin, double tmax) const override {
+        if (segment_misses(o, d, tmin, tmax)) return std::nan("");
         double near_t, far_t;
         if (!roots(o, d, near_t, far_t)) return std::nan("");
         if (near_t >= tmin && near_t <= tmax) return near_t;
@@ -118,6 +119,33 @@ public:
     }
 
 private:
+    /// Cheap exact-enough rejection without square root or division: the squared
+    /// distance to the center is convex along the ray, so the segment [tmin, tmax] misses
+    /// the sphere when its point closest to the center lies outside. Most shadow rays
+    /// (which stop just short of a sampled point on the sphere) and passing rays end here.
+    /// The margin leaves every case that rounding could decide either way to `roots`.
+    bool segment_misses(const double o[3], const double d[3], double tmin, double tmax) const {
+        double l[3], dd = 0, ld = 0, ll = 0;
+        for (int i = 0; i < 3; ++i) {
+            l[i] = o[i] - double(m_center[i]);
+            dd += d[i] * d[i];
+            ld += l[i] * d[i];
+            ll += l[i] * l[i];
+        }
+        const double r2 = m_radius * m_radius * (1.0 + 1e-6);
+        double t; // the segment's point closest to the center, when it is an end point
+        if (-ld >= tmax * dd) t = tmax;      // the closest approach lies beyond tmax
+        else if (-ld <= tmin * dd) t = tmin; // ... before tmin
+        else return ll * dd - ld * ld > r2 * dd; // squared line distance times dd
+        if (!std::isfinite(t)) return false;
+        double p2 = 0;
+        for (int i = 0; i < 3; ++i) {
+            double p = l[i] + t * d[i];
+            p2 += p * p;
+        }
+        return p2 > r2;
+    }
+
     bool roots(const double o[3], const double d[3], double &near_t, double &far_t) const {
         // Intersect from the point of the ray closest to the center: the
         // quadratic is then well conditioned for far-away or large spheres
