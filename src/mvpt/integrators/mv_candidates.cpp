@@ -1,16 +1,20 @@
 #include "mv_candidates.h"
 
+#include <algorithm>
+
 #include "../core/multi_isa.h"
 #include "../render/interaction.h"
 
 namespace mvpt {
 
-FilmTable::FilmTable(const std::vector<const FilmDesc *> &films) {
-    for (const FilmDesc *f : films) {
-        x0.push_back(f->crop_x);
-        y0.push_back(f->crop_y);
-        x1.push_back(f->crop_x + f->crop_width);
-        y1.push_back(f->crop_y + f->crop_height);
+FilmTable::FilmTable(const std::vector<const FilmDesc *> &films, size_t padded)
+    : x0(padded, 0), y0(padded, 0), x1(padded, 0), y1(padded, 0) {
+    for (size_t k = 0; k < films.size(); ++k) {
+        const FilmDesc &f = *films[k];
+        x0[k] = f.crop_x;
+        y0[k] = f.crop_y;
+        x1[k] = f.crop_x + f.crop_width;
+        y1[k] = f.crop_y + f.crop_height;
     }
 }
 
@@ -63,8 +67,8 @@ MVPT_MULTI_ISA void shift_kernel(const float *__restrict proj, const int32_t *__
 }
 
 MVPT_MULTI_ISA void direction_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
-                                     size_t first, size_t n, Point3f p, Frame f, Vec3f *__restrict wi) {
-    for (size_t i = first; i < n; ++i) {
+                                     size_t n, Point3f p, Frame f, Vec3f *__restrict wi) {
+    for (size_t i = 0; i < n; ++i) {
         Vec3f w(lx[i] - p.x, ly[i] - p.y, lz[i] - p.z);
         w = w * (1.f / norm(w));
         wi[i] = f.to_local(w);
@@ -74,18 +78,18 @@ MVPT_MULTI_ISA void direction_kernel(const float *__restrict lx, const float *__
 MVPT_MULTI_ISA void segment_kernel(const float *__restrict lx, const float *__restrict ly, const float *__restrict lz,
                                    const float *__restrict vis, size_t n, Point3f o, Point3f y, float *__restrict dx,
                                    float *__restrict dy, float *__restrict dz, float *__restrict t_max) {
-    for (size_t i = 1; i < n; ++i) {
+    for (size_t i = 0; i < n; ++i) {
         Vec3f d(lx[i] - o.x, ly[i] - o.y, lz[i] - o.z), w(lx[i] - y.x, ly[i] - y.y, lz[i] - y.z);
         float dist = norm(d);
         // The visible length is measured from y; from the offset origin it is shorter or longer
         // by the difference of the two distances to the lens point.
         float len = vis[i] - (norm(w) - dist);
         float inv = 1.f / dist;
-        dx[i - 1] = d.x * inv;
-        dy[i - 1] = d.y * inv;
-        dz[i - 1] = d.z * inv;
+        dx[i] = d.x * inv;
+        dy[i] = d.y * inv;
+        dz[i] = d.z * inv;
         bool traced = (len > 0.f) & (dist > 0.f) & (dist < Infinity); // a finite segment with room to block
-        t_max[i - 1] = select(traced, len * (1.f - ShadowEpsilon), -1.f); // bit select: the loop has no branch
+        t_max[i] = select(traced, len * (1.f - ShadowEpsilon), -1.f); // bit select: the loop has no branch
     }
 }
 
@@ -126,7 +130,7 @@ void shift_static_views(const ProjectionTable &table, const FilmTable &films, co
 }
 
 void MvCandidates::reserve(size_t views) {
-    views = (views + 7) / 8 * 8;
+    views = whole_lanes(views + 1); // the segment loop reads one entry past whole_lanes(size - 1)
     if (slot.size() >= views) return;
     slot.resize(views);
     pixel.resize(views);
@@ -134,12 +138,14 @@ void MvCandidates::reserve(size_t views) {
     wi.resize(views);
 }
 
-void viewing_directions(MvCandidates &c, size_t first, Point3f p, const Frame &frame) {
-    direction_kernel(c.lx.data(), c.ly.data(), c.lz.data(), first, c.size, p, frame, c.wi.data());
+void viewing_directions(MvCandidates &c, Point3f p, const Frame &frame) {
+    direction_kernel(c.lx.data(), c.ly.data(), c.lz.data(), whole_lanes(c.size), p, frame, c.wi.data());
 }
 
 void visibility_segments(const MvCandidates &c, Point3f o, Point3f y, float *dx, float *dy, float *dz, float *t_max) {
-    segment_kernel(c.lx.data(), c.ly.data(), c.lz.data(), c.vis.data(), c.size, o, y, dx, dy, dz, t_max);
+    const size_t n = c.size - 1, padded = whole_lanes(n);
+    segment_kernel(c.lx.data() + 1, c.ly.data() + 1, c.lz.data() + 1, c.vis.data() + 1, padded, o, y, dx, dy, dz, t_max);
+    std::fill(t_max + n, t_max + padded, -1.f); // the padding is not traced
 }
 
 void balance_sums(const float *g, const float *n, size_t valid, const float *g_targets, size_t padded_targets,

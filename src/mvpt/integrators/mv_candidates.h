@@ -14,6 +14,11 @@
 
 namespace mvpt {
 
+/// Views per vector of the widest view loop: the tables and arrays over views are padded to a
+/// multiple of it, so that the loops run in whole vectors (no scalar remainder).
+inline constexpr size_t ViewLanes = 16;
+inline size_t whole_lanes(size_t n) { return (n + ViewLanes - 1) / ViewLanes * ViewLanes; }
+
 /// Outcome bits of the cheap tests of the shift of y to one view (ViewShifts::status); 0: a candidate.
 enum ShiftStatus : uint8_t {
     ShiftDepth = 1,   ///< y's depth is outside k's clip range or G_k <= 0 (the native view checks only this)
@@ -32,7 +37,8 @@ inline ShiftTest first_failed_test(uint32_t status) {
 struct FilmTable {
     std::vector<int32_t> x0, y0, x1, y1; ///< [x0, x1) x [y0, y1), full-film pixels
     FilmTable() = default;
-    explicit FilmTable(const std::vector<const FilmDesc *> &films);
+    /// The windows of `films`, then empty windows (every shift falls outside) up to `padded` entries.
+    FilmTable(const std::vector<const FilmDesc *> &films, size_t padded);
 };
 
 /// The shift of y to every view, by slot.
@@ -47,7 +53,7 @@ struct ViewShifts {
 uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const FilmDesc &film, uint32_t *pixel);
 
 /// The shift of y to every static view of `table` with the cheap tests (§3 tests 2–3), in one
-/// vector loop; `films` holds the same views' crop windows.
+/// vector loop; `films` holds the same views' crop windows (both padded with whole_lanes).
 void shift_static_views(const ProjectionTable &table, const FilmTable &films, const MvVertex &y, ViewShifts &out);
 
 /// The candidates of one native sample: index 0 is the native view l, then every view that
@@ -61,7 +67,7 @@ struct MvCandidates {
     std::vector<float> lx, ly, lz; ///< lens point u_k
     std::vector<float> vis;        ///< length of the segment y -> u_k in front of k's near plane
     std::vector<Vec3f> wi;         ///< direction to u_k in the shading frame at y
-    /// Room for `views` candidates (rounded up to a multiple of 8, for g_padded).
+    /// Room for `views` candidates and the padding of the vector loops.
     void reserve(size_t views);
     /// Appends view `slot` (of `shifts`) with native count `n_k`.
     void push(const ViewShifts &shifts, int slot, float n_k) {
@@ -83,13 +89,14 @@ struct MvCandidates {
     }
 };
 
-/// wi[i] = frame.to_local(normalize(u_i - p)) for candidates [first, size).
-void viewing_directions(MvCandidates &c, size_t first, Point3f p, const Frame &frame);
+/// wi[i] = frame.to_local(normalize(u_i - p)) for every candidate (and the padding after them).
+void viewing_directions(MvCandidates &c, Point3f p, const Frame &frame);
 
 /// Visibility segments from origin `o` (y offset off its surface) to the lens points of
-/// candidates [1, size): unit directions and lengths up to each view's near plane, shortened
-/// by the shadow epsilon; length -1 where nothing can block (y lies at the near plane) or the
-/// segment is degenerate.
+/// candidates [1, size), into entries [0, size - 1) of arrays of whole_lanes(size - 1) entries:
+/// unit directions and lengths up to each view's near plane, shortened by the shadow epsilon;
+/// length -1 where nothing can block (y lies at the near plane), the segment is degenerate, or
+/// in the padding.
 void visibility_segments(const MvCandidates &c, Point3f o, Point3f y, float *dx, float *dy, float *dz, float *t_max);
 
 /// Balance sums of §5 without pairwise terms, for every target: with r_j = G_j / G_k,

@@ -34,10 +34,13 @@ void MvContext::prepare() {
         static_shift &= p != nullptr;
         proj.push_back(p ? *p : CameraProjection{});
     }
+    // Padded to whole vectors with copies of a real camera whose film window is empty.
+    const size_t padded = whole_lanes(views.size());
+    if (!proj.empty()) proj.resize(padded, proj.back());
     projections = ProjectionTable(proj);
     std::vector<const FilmDesc *> film_list;
     for (const MvView &v : views) film_list.push_back(&v.camera->film);
-    films = FilmTable(film_list);
+    films = FilmTable(film_list, padded);
 }
 
 namespace {
@@ -117,8 +120,8 @@ void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvV
         c.g[0] = 1.f; // no density to compare (G_l <= 0, a grazing hit): the sample is l's alone, D_l = n_l
     }
     const size_t m = c.size;
-    c.wi[0] = si.wi;
-    viewing_directions(c, 1, si.p, si.sh_frame);
+    viewing_directions(c, si.p, si.sh_frame);
+    c.wi[0] = si.wi; // the native view's direction is the camera ray's
     sc.s_sel.assign(m, 1.f);
     sc.visible.assign(m, 1);
     sc.selected.assign(m, 1);
@@ -139,10 +142,9 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     const size_t m = c.size;
     if (m < 2) return;
     auto &seg = sc.segments;
-    const size_t padded = (m - 1 + 7) / 8 * 8; // whole packets (Scene::occluded_segments)
+    const size_t padded = whole_lanes(m - 1); // whole vectors, and whole packets for occluded_segments
     seg.resize(4 * padded);
     float *dx = seg.data(), *dy = dx + padded, *dz = dy + padded, *t_max = dz + padded;
-    std::fill(t_max + (m - 1), t_max + padded, -1.f);
     // Every candidate's lens point is on the native lens point's side of the surface (§3
     // orientation test), so all visibility rays leave from one offset origin.
     const Point3f o = si.offset_p(c.lens_point(0) - si.p);
