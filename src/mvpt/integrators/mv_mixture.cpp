@@ -4,6 +4,30 @@
 
 namespace mvpt {
 
+float sum_over_views(const float *v, size_t n) {
+    constexpr size_t Lanes = 8;
+    float acc[Lanes] = {};
+    size_t i = 0;
+    for (; i + Lanes <= n; i += Lanes)
+        for (size_t q = 0; q < Lanes; ++q) acc[q] += v[i + q];
+    for (size_t q = 0; i + q < n; ++q) acc[q] += v[i + q];
+    return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+}
+
+float max_over_views(const Spectrum *f, size_t n) {
+    static_assert(sizeof(Spectrum) == 3 * sizeof(float));
+    const float *v = &f[0].r; // the channels of all views as one array
+    constexpr size_t Lanes = 8;
+    float acc[Lanes] = {};
+    size_t i = 0;
+    for (; i + Lanes <= 3 * n; i += Lanes)
+        for (size_t q = 0; q < Lanes; ++q) acc[q] = acc[q] > v[i + q] ? acc[q] : v[i + q];
+    for (size_t q = 0; i + q < 3 * n; ++q) acc[q] = acc[q] > v[i + q] ? acc[q] : v[i + q];
+    float m = 0.f;
+    for (float a : acc) m = m > a ? m : a;
+    return m;
+}
+
 float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo) {
     const BsdfContext ctx;
     float p = 0.f;
@@ -25,9 +49,7 @@ MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si
         ms.pdf = bs.pdf / float(n);
     } else if (f && pdf_buf) {
         bsdf.eval_pdf_views(BsdfContext{}, si, wi, n, bs.wo, f, pdf_buf);
-        float p = 0.f;
-        for (size_t c = 0; c < n; ++c) p += pdf_buf[c];
-        ms.pdf = p / float(n);
+        ms.pdf = sum_over_views(pdf_buf, n) / float(n);
     } else {
         ms.pdf = lobe_mixture_pdf(bsdf, si, wi, n, bs.wo);
     }

@@ -18,6 +18,12 @@ struct MixtureSample {
     bool delta = false;
 };
 
+/// Sum of n per-view values in 8 independent lanes, the lanes then added in a fixed order:
+/// no serial dependency chain over the views, and the same bits on every run.
+float sum_over_views(const float *v, size_t n);
+/// Largest channel of n per-view spectra, 0 for none (no serial dependency chain either).
+float max_over_views(const Spectrum *f, size_t n);
+
 /// Mixture density (1/n) sum_c p_c(wo | wi[c]) of the non-delta lobes; divided by n, not by
 /// the number of non-zero terms.
 float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo);

@@ -370,13 +370,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             auto &pdf = sc.view_pdf;
             pdf.resize(ns);
             bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee.data(), pdf.data());
-            bool any = false;
-            float p_mix = 0.f; // the bounce's density: the lobe mixture (divided by |S| below)
-            for (size_t i = 0; i < ns; ++i) {
-                p_mix += pdf[i];
-                any |= !f_nee[i].is_black();
-            }
-            if (any) {
+            const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
+            if (max_over_views(f_nee.data(), ns) > 0.f) { // some view reflects light this way
                 Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
                 ++counters.shadow_rays;
                 if (!scene.occluded(shadow))
@@ -404,8 +399,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
         if (mix.delta) {
             t_max = mix.weight.max_value() * float(ns);
         } else {
-            for (size_t i = 0; i < ns; ++i) t_max = std::max(t_max, fs[i].max_value());
-            t_max /= mix.pdf;
+            t_max = max_over_views(fs.data(), ns) / mix.pdf;
         }
         b_scale = mix.delta ? 1.f : 1.f / mix.pdf;
         bool alive = t_max > 0.f;
