@@ -61,7 +61,7 @@ struct Fixture {
     std::vector<std::vector<uint16_t>> maps;
     MvContext ctx;
 
-    /// `static_only`: the four static cameras only (then D takes the O(V log V) path).
+    /// `static_only`: the four static cameras only (then shifts and D take the vector loops).
     Fixture(bool jacobian, bool material, bool static_only, uint32_t seed) {
         std::mt19937 rng(seed);
         ctx.scene = scene.get();

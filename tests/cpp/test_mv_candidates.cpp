@@ -1,0 +1,153 @@
+// The vector loops over views of multi-view path tracing (integrators/mv_candidates.*):
+// they run in the clone for this CPU's instruction set and must give exactly what the
+// scalar per-camera code gives (the build has no FMA contraction), and the visibility
+// packets must agree with one-ray queries.
+#include "mvpt/core/warp.h"
+#include "mvpt/integrators/mv_candidates.h"
+#include "mvpt/integrators/mv_sample.h"
+#include "mvpt/render/interaction.h"
+#include "mvpt/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+using namespace mvpt;
+
+namespace {
+
+const char *SceneXml = R"(<scene version="3.0.0">
+  <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"/></shape>
+  <shape type="sphere"><point name="center" x="0.1" y="0.35" z="0"/><float name="radius" value="0.3"/>
+    <bsdf type="diffuse"/></shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.2"/><translate x="-0.6" y="0.2" z="0.3"/></transform>
+    <bsdf type="diffuse"/></shape>
+  <sensor type="perspective" id="a"><float name="fov" value="45"/>
+    <transform name="to_world"><lookat origin="0, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/></film></sensor>
+  <sensor type="perspective" id="b"><float name="fov" value="30"/><float name="near_clip" value="2.5"/>
+    <transform name="to_world"><lookat origin="0.4, 1.0, 3.2" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/>
+      <integer name="crop_offset_x" value="4"/><integer name="crop_offset_y" value="6"/>
+      <integer name="crop_width" value="12"/><integer name="crop_height" value="10"/></film></sensor>
+  <sensor type="thinlens" id="c"><float name="fov" value="50"/><float name="aperture_radius" value="0.08"/>
+    <float name="focus_distance" value="3"/>
+    <transform name="to_world"><lookat origin="-0.5, 1.1, 2.8" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film></sensor>
+  <sensor type="perspective" id="below"><float name="fov" value="60"/>
+    <transform name="to_world"><lookat origin="0, -1, 1" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+</scene>)";
+
+bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+} // namespace
+
+// shift_static_views (one vector loop over the padded view tables) gives, view by view, the
+// status bits, pixel and geometry of the camera's own shift_geometry and shift_status.
+TEST(MvCandidates, StaticShiftLoopEqualsEachCamera) {
+    auto scene = load_scene_string(SceneXml, ".");
+    MvContext ctx;
+    ctx.scene = scene.get();
+    const auto &cams = scene->cameras();
+    for (size_t i = 0; i < cams.size(); ++i)
+        ctx.views.push_back({cams[i].get(), uint32_t(i), cams[i]->shutter_open, 0.f});
+    ctx.prepare();
+    ASSERT_TRUE(ctx.static_shift);
+    ASSERT_EQ(ctx.projections.size() % ViewLanes, 0u);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    ViewShifts vs;
+    int accepted = 0, rejected[3] = {};
+    for (int trial = 0; trial < 2000; ++trial) {
+        const Camera &cam = *cams[0];
+        Vec2f xi = warp::square_to_uniform_disk_concentric({u(rng), u(rng)});
+        Ray ray = cam.generate_ray({u(rng) * cam.film.width, u(rng) * cam.film.height}, xi, 0.f);
+        SurfaceInteraction si;
+        if (!scene->intersect(ray, si)) continue;
+        MvVertex y{si.p, si.n, 0.f, xi, dot(si.n, ray.o - si.p)};
+        shift_static_views(ctx.projections, ctx.films, y, vs);
+        for (size_t k = 0; k < cams.size(); ++k) {
+            ShiftGeometry g;
+            bool ok = cams[k]->shift_geometry(y.p, y.n, 0.f, y.lens, &g);
+            uint32_t pixel = 0;
+            uint32_t status = shift_status(y, ok, g, cams[k]->film, &pixel);
+            ASSERT_EQ(vs.status[k], status) << "view " << k << ", trial " << trial;
+            if (status & ShiftDepth) continue;
+            EXPECT_TRUE(same_bits(vs.geo.density[k], g.density));
+            EXPECT_TRUE(same_bits(vs.geo.visible_length[k], g.visible_length));
+            EXPECT_TRUE(same_bits(vs.geo.lens_x[k], g.lens_point.x) && same_bits(vs.geo.lens_y[k], g.lens_point.y) &&
+                        same_bits(vs.geo.lens_z[k], g.lens_point.z));
+            EXPECT_TRUE(same_bits(vs.geo.film_x[k], g.film.x) && same_bits(vs.geo.film_y[k], g.film.y));
+            if (status == 0) {
+                ASSERT_EQ(vs.pixel[k], pixel);
+                ASSERT_LT(pixel, uint32_t(cams[k]->film.crop_width * cams[k]->film.crop_height));
+                ++accepted;
+            } else {
+                ++rejected[status & ShiftFacing ? 0 : status & ShiftOutside ? 1 : 2];
+            }
+        }
+        for (size_t k = cams.size(); k < ctx.projections.size(); ++k)
+            ASSERT_TRUE(vs.status[k] & ShiftOutside) << "padding view " << k << " must never be a candidate";
+    }
+    // Every kind of outcome occurred: shifts accepted, facing away (the camera below the
+    // floor), outside the crop window.
+    EXPECT_GT(accepted, 1000);
+    EXPECT_GT(rejected[0], 100);
+    EXPECT_GT(rejected[1], 100);
+}
+
+// Segments from one origin traced as 8-wide packets block exactly when the one-ray query does;
+// segments of length <= 0 and the padding are not traced.
+TEST(MvCandidates, OccludedSegmentsEqualsOccluded) {
+    auto scene = load_scene_string(SceneXml, ".");
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    int blocked_count = 0, free_count = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        const Point3f o(u(rng) * 2.f - 1.f, u(rng) * 1.2f + 0.01f, u(rng) * 2.f - 1.f);
+        const size_t n = 1 + rng() % 40, padded = whole_lanes(n);
+        std::vector<float> dx(padded, 0.f), dy(padded, 0.f), dz(padded, 1.f), t_max(padded, -1.f);
+        for (size_t i = 0; i < n; ++i) {
+            Vec3f d = warp::square_to_uniform_sphere({u(rng), u(rng)});
+            dx[i] = d.x, dy[i] = d.y, dz[i] = d.z;
+            t_max[i] = i % 7 == 3 ? -0.5f : u(rng) * 3.f;
+        }
+        std::vector<uint8_t> blocked(n, 7);
+        scene->occluded_segments(o, dx.data(), dy.data(), dz.data(), t_max.data(), n, 0.f, blocked.data());
+        for (size_t i = 0; i < n; ++i) {
+            bool expect = t_max[i] > 0.f && scene->occluded(Ray{o, Vec3f(dx[i], dy[i], dz[i]), 0.f, t_max[i], 0.f});
+            ASSERT_EQ(bool(blocked[i]), expect) << "trial " << trial << ", segment " << i;
+            (expect ? blocked_count : free_count) += 1;
+        }
+    }
+    EXPECT_GT(blocked_count, 200);
+    EXPECT_GT(free_count, 200);
+}
+
+// balance_sums (eight targets in vector lanes) against a direct double-precision sum.
+TEST(MvCandidates, BalanceSumsMatchDirectSums) {
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    for (int trial = 0; trial < 200; ++trial) {
+        const size_t nv = 1 + rng() % 70, nt = 1 + rng() % nv, padded = (nt + 7) / 8 * 8;
+        std::vector<float> g(nv), n(nv), gt(padded, 1.f), d(padded);
+        for (size_t j = 0; j < nv; ++j) {
+            g[j] = std::exp(4.f * u(rng) - 2.f);
+            n[j] = float(1 + rng() % 16);
+        }
+        for (size_t t = 0; t < nt; ++t) gt[t] = g[rng() % nv];
+        for (bool jacobian : {false, true}) {
+            balance_sums(g.data(), n.data(), nv, gt.data(), padded, jacobian, d.data());
+            for (size_t t = 0; t < nt; ++t) {
+                double sum = 0.0;
+                for (size_t j = 0; j < nv; ++j) {
+                    double r = double(g[j]) / gt[t];
+                    sum += n[j] * (jacobian ? r * std::min(1.0, r) : r);
+                }
+                ASSERT_NEAR(d[t], sum, 2e-6 * sum * double(nv)) << "trial " << trial << ", target " << t;
+            }
+        }
+    }
+}
