@@ -4,6 +4,7 @@
 // to the film area of a surface patch. Cameras differ in fov, fov_axis, resolution and
 // lens radius; two of them move during the shutter.
 #include "mvpt/core/warp.h"
+#include "mvpt/integrators/mv_candidates.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/render/camera_projection.h"
 #include "mvpt/scene/scene.h"
@@ -375,19 +376,23 @@ TEST(CameraProjection, ShiftGeometryAgreesWithProjectLensPointAndFilmDensity) {
 
 TEST(CameraProjection, BatchOverStaticCamerasEqualsEachCamera) {
     // Multi-view path tracing shifts a sample to all static views at once from a structure of
-    // arrays (shift_geometry_batch); it must give each camera's own shift_geometry, including
-    // the depth test, for pinholes and thin lenses alike.
+    // arrays (shift_static_views, a vector loop); it must give each camera's own
+    // shift_geometry, including the depth test, for pinholes and thin lenses alike.
     auto s = load(CameraXml);
     std::vector<const Camera *> cams;
     std::vector<CameraProjection> proj;
+    std::vector<const FilmDesc *> films;
     for (const auto &cam : s->cameras())
         if (const CameraProjection *p = cam->static_projection()) {
             cams.push_back(cam.get());
             proj.push_back(*p);
+            films.push_back(&cam->film);
         }
     ASSERT_GE(cams.size(), 3u);
     ProjectionTable table(proj);
-    ShiftBatch batch;
+    FilmTable film_table(films, table.size());
+    ViewShifts shifts;
+    const ShiftBatch &batch = shifts.geo;
     Rng rng(9);
     int in_range = 0, out_of_range = 0;
     for (int i = 0; i < 2000; ++i) {
@@ -395,11 +400,12 @@ TEST(CameraProjection, BatchOverStaticCamerasEqualsEachCamera) {
         Point3f y(8.f * rng.next() - 4.f, 8.f * rng.next() - 4.f, 20.f * rng.next() - 8.f);
         Normal3f n = normalize(Vec3f(rng.next() - 0.5f, rng.next() - 0.5f, rng.next() - 0.5f));
         Vec2f xi = warp::square_to_uniform_disk_concentric(rng.next_2d());
-        shift_geometry_batch(table, y, n, xi, batch);
+        shift_static_views(table, film_table, MvVertex{y, n, 0.f, xi, 1.f}, shifts);
         for (size_t k = 0; k < cams.size(); ++k) {
             ShiftGeometry geo;
             bool ok = cams[k]->shift_geometry(y, n, 0.f, xi, &geo);
-            ASSERT_EQ(bool(batch.ok[k]), ok);
+            ok = ok && geo.density > 0.f;
+            ASSERT_EQ(!(shifts.status[k] & ShiftDepth), ok);
             (ok ? in_range : out_of_range)++;
             if (!ok) continue;
             EXPECT_FLOAT_EQ(batch.film_x[k], geo.film.x);

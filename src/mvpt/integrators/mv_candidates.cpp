@@ -21,7 +21,6 @@ FilmTable::FilmTable(const std::vector<const FilmDesc *> &films, size_t padded)
 void ViewShifts::resize(size_t n) {
     for (auto *v : {&geo.film_x, &geo.film_y, &geo.lens_x, &geo.lens_y, &geo.lens_z, &geo.density, &geo.visible_length})
         v->resize(n);
-    geo.ok.resize(n);
     status.resize(n);
     pixel.resize(n);
 }

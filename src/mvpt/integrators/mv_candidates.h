@@ -41,6 +41,11 @@ struct FilmTable {
     FilmTable(const std::vector<const FilmDesc *> &films, size_t padded);
 };
 
+/// Shift geometry of many views as arrays by view.
+struct ShiftBatch {
+    std::vector<float> film_x, film_y, lens_x, lens_y, lens_z, density, visible_length;
+};
+
 /// The shift of y to every view, by slot.
 struct ViewShifts {
     ShiftBatch geo;                ///< x_k, u_k, G_k, visible length (meaningful where status = 0)

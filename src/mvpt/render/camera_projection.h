@@ -2,7 +2,7 @@
 // docs/multiview-path-tracing.md §3–§4 computed from it. It is the one implementation
 // behind PerspectiveCamera::shift_geometry, and lets multi-view path tracing shift a
 // sample to every static view in one loop over contiguous data, without a virtual call
-// or a pose evaluation per view.
+// or a pose evaluation per view (integrators/mv_candidates.*).
 #pragma once
 
 #include "camera.h"
@@ -114,40 +114,5 @@ private:
     size_t m_size = 0;
     std::vector<float> m_data;
 };
-
-/// shift_geometry of y for every camera of a table, as arrays by camera (`ok`: 1 when y's
-/// depth is in the camera's clip range).
-struct ShiftBatch {
-    std::vector<float> film_x, film_y, lens_x, lens_y, lens_z, density, visible_length;
-    std::vector<uint8_t> ok;
-};
-
-/// The loop of shift_geometry_batch over raw arrays (restrict-qualified, so that it vectorises).
-inline void shift_geometry_kernel(const float *__restrict in, size_t n, Point3f y, Normal3f n_y, Vec2f lens,
-                                  float *__restrict fx, float *__restrict fy, float *__restrict lx,
-                                  float *__restrict ly, float *__restrict lz, float *__restrict dens,
-                                  float *__restrict vis, uint8_t *__restrict ok) {
-    for (size_t k = 0; k < n; ++k) {
-        ShiftGeometry g;
-        ok[k] = shift_geometry(ProjectionTable::at(in, n, k), y, n_y, lens, &g);
-        fx[k] = g.film.x;
-        fy[k] = g.film.y;
-        lx[k] = g.lens_point.x;
-        ly[k] = g.lens_point.y;
-        lz[k] = g.lens_point.z;
-        dens[k] = g.density;
-        vis[k] = g.visible_length;
-    }
-}
-
-inline void shift_geometry_batch(const ProjectionTable &table, Point3f y, Normal3f n_y, Vec2f lens, ShiftBatch &out) {
-    const size_t n = table.size();
-    for (auto *v : {&out.film_x, &out.film_y, &out.lens_x, &out.lens_y, &out.lens_z, &out.density, &out.visible_length})
-        v->resize(n);
-    out.ok.resize(n);
-    shift_geometry_kernel(table.data(), n, y, n_y, lens, out.film_x.data(), out.film_y.data(), out.lens_x.data(),
-                          out.lens_y.data(), out.lens_z.data(), out.density.data(), out.visible_length.data(),
-                          out.ok.data());
-}
 
 } // namespace mvpt
