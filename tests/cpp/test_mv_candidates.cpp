@@ -45,14 +45,21 @@ bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 
 } // namespace
 
 // shift_static_views (one vector loop over the padded view tables) gives, view by view, the
-// status bits, pixel and geometry of the camera's own shift_geometry and shift_status.
-TEST(MvCandidates, StaticShiftLoopEqualsEachCamera) {
+// status bits, pixel and geometry of the camera's own shift_geometry and shift_status; with
+// the scene's 4 cameras (one vector) and with 5 copies of them (20 views: two vectors, padding).
+class StaticShiftLoop : public testing::TestWithParam<int> {};
+
+TEST_P(StaticShiftLoop, EqualsEachCamera) {
     auto scene = load_scene_string(SceneXml, ".");
     MvContext ctx;
     ctx.scene = scene.get();
-    const auto &cams = scene->cameras();
-    for (size_t i = 0; i < cams.size(); ++i)
-        ctx.views.push_back({cams[i].get(), uint32_t(i), cams[i]->shutter_open, 0.f});
+    const auto &scene_cams = scene->cameras();
+    std::vector<const Camera *> cams;
+    for (int copy = 0; copy < GetParam(); ++copy)
+        for (size_t i = 0; i < scene_cams.size(); ++i) {
+            cams.push_back(scene_cams[i].get());
+            ctx.views.push_back({cams.back(), uint32_t(i), cams.back()->shutter_open, 0.f});
+        }
     ctx.prepare();
     ASSERT_TRUE(ctx.static_shift);
     ASSERT_EQ(ctx.projections.size() % ViewLanes, 0u);
@@ -97,6 +104,8 @@ TEST(MvCandidates, StaticShiftLoopEqualsEachCamera) {
     EXPECT_GT(rejected[0], 100);
     EXPECT_GT(rejected[1], 100);
 }
+
+INSTANTIATE_TEST_SUITE_P(MvCandidates, StaticShiftLoop, testing::Values(1, 5));
 
 // Segments from one origin traced as 8-wide packets block exactly when the one-ray query does;
 // segments of length <= 0 and the padding are not traced.
