@@ -72,7 +72,7 @@ TEST(PathBatch, BatchedQueriesMatchSingleRays) {
             std::vector<SurfaceInteraction> si(rays.size());
             std::vector<uint8_t> hit(rays.size()), blocked(rays.size());
             scene->intersect(rays.data(), rays.size(), si.data(), hit.data(), coherent);
-            scene->occluded(rays.data(), rays.size(), blocked.data(), coherent);
+            scene->occluded(rays.data(), rays.size(), blocked.data());
             for (size_t i = 0; i < rays.size(); ++i) {
                 SurfaceInteraction ref;
                 bool h = scene->intersect(rays[i], ref);

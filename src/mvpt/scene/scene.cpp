@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cstring>
 #include <cstdio>
-#include <type_traits>
 
 namespace mvpt {
 
@@ -229,14 +228,6 @@ void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t
     }
 }
 
-void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent) const {
-    if (coherent) {
-        occluded_packets<8>(rays, n, blocked, RTC_INTERSECT_CONTEXT_FLAG_COHERENT);
-    } else {
-        occluded_packets<16>(rays, n, blocked, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
-    }
-}
-
 void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const float *dz, const float *t_max,
                               size_t n, float time, uint8_t *blocked) const {
     // 8-wide packets flagged incoherent: Embree then traces these nearly parallel segments
@@ -268,15 +259,14 @@ void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const
     }
 }
 
-template <int Width>
-void Scene::occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const {
-    using Packet = std::conditional_t<Width == 8, RTCRay8, RTCRay16>;
+void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
+    constexpr size_t Width = 16;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = flags;
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     for (size_t b = 0; b < n; b += Width) {
-        size_t m = std::min<size_t>(Width, n - b);
-        alignas(64) Packet p;
+        size_t m = std::min(Width, n - b);
+        alignas(64) RTCRay16 p;
         alignas(64) int valid[Width];
         for (size_t i = 0; i < Width; ++i) {
             const Ray &ray = rays[b + std::min(i, m - 1)];
@@ -289,10 +279,7 @@ void Scene::occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCInt
             p.mask[i] = 0xffffffffu;
             p.flags[i] = 0;
         }
-        if constexpr (Width == 8)
-            rtcOccluded8(valid, m_scene, &ctx, &p);
-        else
-            rtcOccluded16(valid, m_scene, &ctx, &p);
+        rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
     }
 }

@@ -35,10 +35,8 @@ public:
     /// coherent stream, for a tile's camera rays); `hit[i]` is 0 on a miss. Each result
     /// equals what `intersect` computes from Embree's hit.
     void intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent = false) const;
-    /// `occluded` for `n` rays at once, into `blocked`: 16-wide packets of unrelated rays, or
-    /// (`coherent`) 8-wide packets with Embree's coherent flag, for rays that leave one point
-    /// towards nearby targets.
-    void occluded(const Ray *rays, size_t n, uint8_t *blocked, bool coherent = false) const;
+    /// `occluded` for `n` unrelated rays at once, into `blocked` (16-wide packets).
+    void occluded(const Ray *rays, size_t n, uint8_t *blocked) const;
     /// Visibility of `n` segments from one origin `o` at scene time `time`: unit directions
     /// (dx, dy, dz) and finite lengths `t_max` as arrays, traced as 8-wide packets; a
     /// segment with t_max <= 0 (or NaN) is not traced (not blocked). The arrays hold n rounded
@@ -65,8 +63,6 @@ private:
     /// Completes a hit reported by Embree (geometry ids, primitive, barycentrics).
     void fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
                   SurfaceInteraction &si) const;
-    template <int Width>
-    void occluded_packets(const Ray *rays, size_t n, uint8_t *blocked, RTCIntersectContextFlags flags) const;
 
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
