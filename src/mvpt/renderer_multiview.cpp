@@ -89,6 +89,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     }
     for (MvFilm &f : m_mv_films) m_mv.native_map.push_back(f.map.data());
     m_mv.prepare();
+    m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one

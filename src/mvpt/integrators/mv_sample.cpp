@@ -41,6 +41,15 @@ void MvContext::prepare() {
     std::vector<const FilmDesc *> film_list;
     for (const MvView &v : views) film_list.push_back(&v.camera->film);
     films = FilmTable(film_list, padded);
+    if (views.size() >= 2) {
+        auto centre = [](const MvView &v) {
+            const FilmDesc &f = v.camera->film;
+            Vec2f mid(float(f.crop_x) + 0.5f * float(f.crop_width), float(f.crop_y) + 0.5f * float(f.crop_height));
+            return v.camera->generate_ray(mid, Vec2f(0.f, 0.f), v.t0).o;
+        };
+        Vec3f d = centre(views[1]) - centre(views[0]);
+        if (squared_norm(d) > 0.f && std::isfinite(squared_norm(d))) across = normalize(d);
+    }
 }
 
 namespace {
@@ -158,7 +167,7 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
             }
     auto &blocked = sc.blocked;
     blocked.resize(m);
-    ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data());
+    ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data(), ctx.across);
     for (size_t i = 1; i < m; ++i) {
         if (selected_only && !sc.selected[i]) continue;
         counters.shadow_rays += t_max[i - 1] > 0.f;

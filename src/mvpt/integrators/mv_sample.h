@@ -53,6 +53,9 @@ struct MvContext {
     bool static_shift = false;
     ProjectionTable projections;
     FilmTable films; ///< crop windows, by slot
+    /// The direction from the first view's lens centre to the second's (a camera row or a
+    /// grid's row): it orients the bounding pyramid of a sample's visibility segments.
+    Vec3f across{1.f, 0.f, 0.f};
 
     /// Sets the derived members above from `views` and `scene_moves`.
     void prepare();

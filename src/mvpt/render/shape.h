@@ -9,6 +9,8 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <array>
+#include <vector>
 #include <memory>
 #include <stdexcept>
 #include <utility>
@@ -43,6 +45,15 @@ struct MotionTime {
     float to_embree(float t) const { return t1 > t0 ? std::clamp((t - t0) / (t1 - t0), 0.f, 1.f) : 0.f; }
 };
 
+/// Conservative stand-ins for a shape's surface (scene/segment_cull.h): together they
+/// contain everything Embree can hit on the shape.
+struct OccluderList {
+    std::vector<std::array<Point3f, 3>> triangles;
+    /// Centre and radius.
+    std::vector<std::pair<Point3f, double>> spheres;
+    std::vector<BoundingBox> boxes;
+};
+
 class Shape : public Object {
 public:
     /// Add the geometry to `scene`; returns its Embree geometry id.
@@ -61,6 +72,8 @@ public:
     virtual bool is_shapegroup() const { return false; }
     virtual float area() const = 0;
     virtual BoundingBox bounds() const = 0;
+    /// The shape's occluders; the default is its bounding box.
+    virtual void occluders(OccluderList &out) const { out.boxes.push_back(bounds()); }
     /// Uniform point on the surface (density 1/area).
     virtual ShapeSample sample_area(Vec2f u) const = 0;
     /// A point as seen from `ref`; returns it with its solid-angle density at `ref`

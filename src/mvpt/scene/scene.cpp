@@ -35,6 +35,7 @@ Scene::Scene() {
 }
 
 Scene::~Scene() {
+    m_occluders.reset(); // its nodes live in an Embree BVH of m_device
     m_shapes.clear(); // shapes may own Embree sub-scenes
     if (m_scene) rtcReleaseScene(m_scene);
     if (m_device) rtcReleaseDevice(m_device);
@@ -228,8 +229,24 @@ void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t
     }
 }
 
+void Scene::prepare_segment_culling(bool enable) const {
+    std::lock_guard<std::mutex> lock(m_occluders_mutex); // renders of one scene may start concurrently
+    if (!enable || m_animated) m_occluders.reset();
+    else if (!m_occluders) m_occluders = std::make_unique<OccluderBvh>(m_device, m_shapes);
+}
+
 void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const float *dz, const float *t_max,
-                              size_t n, float time, uint8_t *blocked) const {
+                              size_t n, float time, uint8_t *blocked, Vec3f across) const {
+    // Most bundles meet no occluder at all. Culling pays from two packets on: one packet of 8
+    // traces faster than the test that would spare it (glossy Cornell box, 8 segments: +12 %
+    // time with culling; 5x5 light field, 24 segments: -7 %).
+    if (m_occluders && n > 8) {
+        SegmentBundle bundle;
+        if (bundle.build(o, across, dx, dy, dz, t_max, n) && !m_occluders->may_block(bundle)) {
+            std::fill(blocked, blocked + n, uint8_t(0));
+            return;
+        }
+    }
     // 8-wide packets flagged incoherent: Embree then traces these nearly parallel segments
     // faster than with the coherent flag (10 % on the glossy Cornell box) or as single rays.
     constexpr size_t Width = 8;

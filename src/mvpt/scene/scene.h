@@ -5,6 +5,7 @@
 #include "../render/camera.h"
 #include "../render/light.h"
 #include "../render/shape.h"
+#include "segment_cull.h"
 #include "xml_parser.h"
 
 #include <embree3/rtcore.h>
@@ -12,6 +13,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -41,10 +43,15 @@ public:
     /// (dx, dy, dz) and finite lengths `t_max` as arrays, traced as 8-wide packets; a
     /// segment with t_max <= 0 (or NaN) is not traced (not blocked). The arrays hold n rounded
     /// up to a multiple of 8 entries, the padding with t_max <= 0. Equals `occluded` of each
-    /// segment's ray.
+    /// segment's ray. With prepare_segment_culling, a bundle that provably meets no occluder
+    /// is not traced; `across` orients its bounding pyramid (SegmentBundle::build).
     void occluded_segments(Point3f o, const float *dx, const float *dy, const float *dz, const float *t_max, size_t n,
-                           float time, uint8_t *blocked) const;
+                           float time, uint8_t *blocked, Vec3f across = Vec3f(1.f, 0.f, 0.f)) const;
 
+    /// Build the occluder tree with which `occluded_segments` proves bundles of segments
+    /// unblocked without tracing them (static scenes; multi-view rendering calls it once
+    /// before its passes). `enable = false` drops it (for tests).
+    void prepare_segment_culling(bool enable = true) const;
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
     const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
     /// The environment light (constant or envmap), if any.
@@ -74,6 +81,9 @@ private:
     std::shared_ptr<Integrator> m_integrator;
     BoundingBox m_bounds;
     MotionTime m_motion;
+    /// See prepare_segment_culling (built on demand, outside the parallel render loops).
+    mutable std::unique_ptr<OccluderBvh> m_occluders;
+    mutable std::mutex m_occluders_mutex;
     /// Some shape moves (otherwise Embree's ray time is irrelevant and left at 0).
     bool m_animated = false;
 };

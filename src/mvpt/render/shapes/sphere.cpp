@@ -62,6 +62,7 @@ public:
         b.expand(m_center + Vec3f(float(m_radius)));
         return b;
     }
+    void occluders(OccluderList &out) const override { out.spheres.emplace_back(m_center, m_radius); }
 
     ShapeSample sample_area(Vec2f u) const override {
         Normal3f n = warp::square_to_uniform_sphere(u);

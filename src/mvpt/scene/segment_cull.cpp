@@ -1,0 +1,393 @@
+#include "segment_cull.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <new>
+
+#include "../core/multi_isa.h"
+
+namespace mvpt {
+
+namespace {
+double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/// Relative margin of the double-precision tests: far above their rounding (~1e-15) and far
+/// below the spawn offset of a visibility ray's origin (~5e-6, interaction.h).
+constexpr double Margin = 1e-9;
+
+// 8-lane vectors of the loops over segments. The helpers taking them are always inlined, so
+// the baseline clone's vector ABI (which GCC warns about) never applies.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef float F8 __attribute__((vector_size(32)));
+typedef int32_t I8 __attribute__((vector_size(32)));
+
+[[gnu::always_inline]] inline F8 load8(const float *p) {
+    F8 v;
+    std::memcpy(&v, p, sizeof(v));
+    return v;
+}
+[[gnu::always_inline]] inline float hmin(F8 v) {
+    float m = v[0];
+    for (int i = 1; i < 8; ++i) m = v[i] < m ? v[i] : m;
+    return m;
+}
+[[gnu::always_inline]] inline float hmax(F8 v) { return -hmin(-v); }
+[[gnu::always_inline]] inline float hsum(F8 v) {
+    float s = 0.f;
+    for (int i = 0; i < 8; ++i) s += v[i];
+    return s;
+}
+
+/// Sum of the traced segments' directions (lanes with t_max > 0) over `padded` entries.
+MVPT_MULTI_ISA void direction_sum(const float *dx, const float *dy, const float *dz, const float *t_max, size_t padded,
+                                  float out[4]) {
+    F8 sx = {}, sy = {}, sz = {}, cnt = {};
+    const F8 zero = {}, one = zero + 1.f;
+    for (size_t b = 0; b < padded; b += 8) {
+        const I8 m = load8(t_max + b) > zero;
+        sx += m ? load8(dx + b) : zero;
+        sy += m ? load8(dy + b) : zero;
+        sz += m ? load8(dz + b) : zero;
+        cnt += m ? one : zero;
+    }
+    out[0] = hsum(sx), out[1] = hsum(sy), out[2] = hsum(sz), out[3] = hsum(cnt);
+}
+
+/// Ranges over the traced segments of the slopes (u.e / a.e, v.e / a.e) and height a.e of
+/// their end points e = t_max d, and the bounding box of o + e; `ok` is false when a traced
+/// segment is more than ~75 degrees off a (or not finite).
+struct SlopeRanges {
+    float su_lo, su_hi, sv_lo, sv_hi, h_max, t_max_max, lo[3], hi[3];
+    bool ok;
+};
+MVPT_MULTI_ISA SlopeRanges slope_ranges(const float *dx, const float *dy, const float *dz, const float *t_max,
+                                        size_t padded, const float a[3], const float u[3], const float v[3],
+                                        const float o[3]) {
+    const F8 zero = {}, inf = zero + INFINITY;
+    F8 su_lo = inf, su_hi = -inf, sv_lo = inf, sv_hi = -inf, h_max = zero, t_hi = zero;
+    F8 lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+    I8 bad = {};
+    for (size_t b = 0; b < padded; b += 8) {
+        const F8 t = load8(t_max + b);
+        const I8 m = t > zero;
+        const F8 e[3] = {load8(dx + b) * t, load8(dy + b) * t, load8(dz + b) * t};
+        const F8 h = a[0] * e[0] + a[1] * e[1] + a[2] * e[2];
+        const F8 x = u[0] * e[0] + u[1] * e[1] + u[2] * e[2], y = v[0] * e[0] + v[1] * e[1] + v[2] * e[2];
+        const F8 inv = 1.f / (m ? h : zero + 1.f);
+        const F8 su = x * inv, sv = y * inv;
+        bad |= m & ~((h > 0.25f * t) & (t < inf));
+        su_lo = m & (su < su_lo) ? su : su_lo;
+        su_hi = m & (su > su_hi) ? su : su_hi;
+        sv_lo = m & (sv < sv_lo) ? sv : sv_lo;
+        sv_hi = m & (sv > sv_hi) ? sv : sv_hi;
+        h_max = m & (h > h_max) ? h : h_max;
+        t_hi = m & (t > t_hi) ? t : t_hi;
+        for (int c = 0; c < 3; ++c) {
+            const F8 p = o[c] + e[c];
+            lo[c] = m & (p < lo[c]) ? p : lo[c];
+            hi[c] = m & (p > hi[c]) ? p : hi[c];
+        }
+    }
+    SlopeRanges r;
+    r.su_lo = hmin(su_lo), r.su_hi = hmax(su_hi), r.sv_lo = hmin(sv_lo), r.sv_hi = hmax(sv_hi);
+    r.h_max = hmax(h_max), r.t_max_max = hmax(t_hi);
+    for (int c = 0; c < 3; ++c) r.lo[c] = std::min(hmin(lo[c]), o[c]), r.hi[c] = std::max(hmax(hi[c]), o[c]);
+    bool any_bad = false;
+    for (int i = 0; i < 8; ++i) any_bad |= bad[i] != 0;
+    r.ok = !any_bad;
+    return r;
+}
+} // namespace
+
+bool SegmentBundle::build(Point3f o, Vec3f across, const float *dx, const float *dy, const float *dz,
+                          const float *t_max, size_t n) {
+    const size_t padded = (n + 7) / 8 * 8; // the arrays hold whole packets of 8 (Scene::occluded_segments)
+    float sum[4];
+    direction_sum(dx, dy, dz, t_max, padded, sum);
+    const Vec3f s(sum[0], sum[1], sum[2]);
+    const float len = norm(s);
+    // Empty, or spread over more than ~120 degrees (or not finite): no pyramid.
+    if (!(sum[3] > 0.f) || !(len > 0.5f * sum[3]) || !(len < INFINITY)) return false;
+    const Vec3f a = s / len;
+    // u across a, along `across` if it is not parallel to a (a row of cameras: a flat pyramid).
+    Vec3f u = across - a * dot(across, a);
+    if (!(squared_norm(u) > 1e-4f)) u = Frame(a).s;
+    u = normalize(u);
+    const Vec3f v = cross(a, u);
+    const float af[3] = {a.x, a.y, a.z}, uf[3] = {u.x, u.y, u.z}, vf[3] = {v.x, v.y, v.z}, of[3] = {o.x, o.y, o.z};
+    const SlopeRanges r = slope_ranges(dx, dy, dz, t_max, padded, af, uf, vf, of);
+    if (!r.ok) return false;
+    // The float slopes and heights err by less than ~1e-6 (1 + |s|) (h > |e| / 4): widened
+    // well beyond that, the half-spaces below hold the exact segments of the float inputs.
+    const double widen = 1e-5;
+    const double su_lo = r.su_lo - widen * (1 + std::abs(r.su_lo)), su_hi = r.su_hi + widen * (1 + std::abs(r.su_hi));
+    const double sv_lo = r.sv_lo - widen * (1 + std::abs(r.sv_lo)), sv_hi = r.sv_hi + widen * (1 + std::abs(r.sv_hi));
+    const double h_max = double(r.h_max) * (1 + widen) + widen;
+    origin[0] = o.x, origin[1] = o.y, origin[2] = o.z;
+    const double ad[3] = {a.x, a.y, a.z}, ud[3] = {u.x, u.y, u.z}, vd[3] = {v.x, v.y, v.z};
+    // Half-spaces n.(p - o) <= d: su <= su_hi, su >= su_lo, sv <= sv_hi, sv >= sv_lo, 0 <= h <= h_max
+    // (su = u.(p - o) / h: the slope, exact for the float axes a, u, v taken as given).
+    for (int c = 0; c < 3; ++c) {
+        normal[0][c] = ud[c] - su_hi * ad[c];
+        normal[1][c] = su_lo * ad[c] - ud[c];
+        normal[2][c] = vd[c] - sv_hi * ad[c];
+        normal[3][c] = sv_lo * ad[c] - vd[c];
+        normal[4][c] = -ad[c];
+        normal[5][c] = ad[c];
+    }
+    for (int k = 0; k < 5; ++k) offset[k] = 0;
+    offset[5] = h_max;
+    const double su[2] = {su_lo, su_hi}, sv[2] = {sv_lo, sv_hi};
+    for (int c = 0; c < 3; ++c) {
+        vertex[0][c] = origin[c];
+        for (int q = 0; q < 4; ++q) vertex[1 + q][c] = origin[c] + h_max * (ad[c] + su[q & 1] * ud[c] + sv[q >> 1] * vd[c]);
+    }
+    // The end points' box: float rounding of o + e is below 1e-6 (|o| + |e|).
+    double scale = 1.0 + r.t_max_max;
+    for (int c = 0; c < 3; ++c) scale += std::max(std::abs(r.lo[c]), std::abs(r.hi[c]));
+    const double pad = 1e-5 * scale;
+    for (int c = 0; c < 3; ++c) {
+        lo[c] = r.lo[c] - pad, hi[c] = r.hi[c] + pad;
+        lo_f[c] = float(lo[c]), hi_f[c] = float(hi[c]); // the pad exceeds the float rounding
+        origin_f[c] = float(origin[c]);
+    }
+    for (int k = 0; k < 6; ++k) {
+        double nn = 0, no = 0;
+        for (int c = 0; c < 3; ++c) {
+            normal_f[k][c] = float(normal[k][c]);
+            nn += normal[k][c] * normal[k][c];
+            no += normal[k][c] * origin[c];
+        }
+        offset_f[k] = float(offset[k]);
+        limit_f[k] = float(offset[k] + no);
+        norm1_f[k] = float(std::abs(normal[k][0]) + std::abs(normal[k][1]) + std::abs(normal[k][2]));
+        normal_len[k] = std::sqrt(nn);
+    }
+    eps = Margin * scale;
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+struct Header {
+    uint32_t leaf;
+};
+struct alignas(32) Inner : Header {
+    float lo[3][4], hi[3][4];
+    const Header *child[4];
+    uint32_t count;
+};
+struct Leaf : Header {
+    uint32_t count;
+    uint32_t prim[1]; // `count` entries
+};
+
+void *create_node(RTCThreadLocalAllocator alloc, unsigned count, void *) {
+    auto *n = new (rtcThreadLocalAlloc(alloc, sizeof(Inner), 32)) Inner{};
+    n->leaf = 0;
+    n->count = count;
+    return n;
+}
+void set_children(void *node, void **children, unsigned count, void *) {
+    for (unsigned i = 0; i < count; ++i) static_cast<Inner *>(node)->child[i] = static_cast<const Header *>(children[i]);
+}
+void set_bounds(void *node, const RTCBounds **bounds, unsigned count, void *) {
+    auto *n = static_cast<Inner *>(node);
+    for (unsigned i = 0; i < 4; ++i) {
+        const bool used = i < count; // unused lanes get an empty box
+        n->lo[0][i] = used ? bounds[i]->lower_x : INFINITY, n->hi[0][i] = used ? bounds[i]->upper_x : -INFINITY;
+        n->lo[1][i] = used ? bounds[i]->lower_y : INFINITY, n->hi[1][i] = used ? bounds[i]->upper_y : -INFINITY;
+        n->lo[2][i] = used ? bounds[i]->lower_z : INFINITY, n->hi[2][i] = used ? bounds[i]->upper_z : -INFINITY;
+    }
+}
+void *create_leaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive *prims, size_t count, void *) {
+    auto *l = static_cast<Leaf *>(rtcThreadLocalAlloc(alloc, sizeof(Leaf) + count * sizeof(uint32_t), 16));
+    l->leaf = 1;
+    l->count = uint32_t(count);
+    for (size_t i = 0; i < count; ++i) l->prim[i] = prims[i].primID;
+    return l;
+}
+} // namespace
+
+OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Shape>> &shapes) {
+    OccluderList list;
+    for (const auto &s : shapes) s->occluders(list);
+    std::vector<RTCBuildPrimitive> build;
+    auto add = [&](Prim p, BoundingBox b) {
+        if (!(b.min.x <= b.max.x)) return; // empty or NaN
+        RTCBuildPrimitive r;
+        r.lower_x = b.min.x, r.lower_y = b.min.y, r.lower_z = b.min.z;
+        r.upper_x = b.max.x, r.upper_y = b.max.y, r.upper_z = b.max.z;
+        r.geomID = 0;
+        r.primID = uint32_t(m_prims.size());
+        build.push_back(r);
+        p.lo[0] = b.min.x, p.lo[1] = b.min.y, p.lo[2] = b.min.z;
+        p.hi[0] = b.max.x, p.hi[1] = b.max.y, p.hi[2] = b.max.z;
+        m_prims.push_back(p);
+        m_extent = std::max({m_extent, std::abs(b.min.x), std::abs(b.min.y), std::abs(b.min.z), std::abs(b.max.x),
+                             std::abs(b.max.y), std::abs(b.max.z)});
+    };
+    // Boxes in float, rounded outwards: each holds its primitive exactly. Coordinates are kept
+    // out of [-1e-10, 1e-10] (a box side at 0 would round out to a denormal, and products with
+    // denormals take the slow microcode path in the node tests).
+    auto outward = [](BoundingBox b, double pad) {
+        for (int c = 0; c < 3; ++c) {
+            float lo = std::nextafter(float((&b.min.x)[c] - pad), -INFINITY);
+            float hi = std::nextafter(float((&b.max.x)[c] + pad), INFINITY);
+            (&b.min.x)[c] = std::abs(lo) < 1e-10f ? -1e-10f : lo;
+            (&b.max.x)[c] = std::abs(hi) < 1e-10f ? 1e-10f : hi;
+        }
+        return b;
+    };
+    for (const auto &t : list.triangles) {
+        Prim p{Kind::Triangle, {}, {}, 0, {}, {}};
+        BoundingBox b;
+        for (int v = 0; v < 3; ++v) {
+            p.p[v][0] = t[v].x, p.p[v][1] = t[v].y, p.p[v][2] = t[v].z;
+            b.expand(t[v]);
+        }
+        const double e1[3] = {p.p[1][0] - p.p[0][0], p.p[1][1] - p.p[0][1], p.p[1][2] - p.p[0][2]};
+        const double e2[3] = {p.p[2][0] - p.p[0][0], p.p[2][1] - p.p[0][1], p.p[2][2] - p.p[0][2]};
+        p.n[0] = e1[1] * e2[2] - e1[2] * e2[1], p.n[1] = e1[2] * e2[0] - e1[0] * e2[2], p.n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        p.n_len = std::sqrt(dot3(p.n, p.n));
+        add(p, outward(b, 0.0));
+    }
+    for (const auto &[c, r] : list.spheres) {
+        Prim p{Kind::Sphere, {{c.x, c.y, c.z}, {r, 0, 0}, {}}, {}, 0, {}, {}};
+        BoundingBox b;
+        b.min = b.max = c;
+        add(p, outward(b, r));
+    }
+    for (const BoundingBox &box : list.boxes) {
+        // Bounds of analytic shapes and instances are computed in float: pad them relatively.
+        double pad = 1e-5 * (1.0 + std::max({std::abs(box.min.x), std::abs(box.min.y), std::abs(box.min.z),
+                                               std::abs(box.max.x), std::abs(box.max.y), std::abs(box.max.z)}));
+        BoundingBox b = outward(box, pad);
+        add({Kind::Box, {{b.min.x, b.min.y, b.min.z}, {b.max.x, b.max.y, b.max.z}, {}}, {}, 0, {}, {}}, b);
+    }
+    if (build.empty()) return;
+    m_bvh = rtcNewBVH(device);
+    RTCBuildArguments args = rtcDefaultBuildArguments();
+    args.buildQuality = RTC_BUILD_QUALITY_HIGH;
+    args.maxBranchingFactor = 4;
+    args.maxLeafSize = 4;
+    args.bvh = m_bvh;
+    args.primitives = build.data();
+    args.primitiveCount = build.size();
+    args.primitiveArrayCapacity = build.size();
+    args.createNode = create_node;
+    args.setNodeChildren = set_children;
+    args.setNodeBounds = set_bounds;
+    args.createLeaf = create_leaf;
+    m_root = rtcBuildBVH(&args);
+}
+
+OccluderBvh::~OccluderBvh() {
+    if (m_bvh) rtcReleaseBVH(m_bvh);
+}
+
+bool OccluderBvh::prim_may_block(const Prim &prim, const SegmentBundle &b) const {
+    const double eps = b.eps;
+    for (int c = 0; c < 3; ++c) // the primitive's box against the end points' box
+        if (prim.lo[c] > b.hi[c] || prim.hi[c] < b.lo[c]) return false;
+    if (prim.kind == Kind::Triangle) {
+        // Separated by the triangle's plane: every pyramid vertex strictly on one side (first:
+        // it settles the triangle that y lies on).
+        const double *p0 = prim.p[0], *nt = prim.n;
+        const double tol = eps * prim.n_len;
+        int above = 0, below = 0;
+        for (int v = 0; v < 5; ++v) {
+            const double s = nt[0] * (b.vertex[v][0] - p0[0]) + nt[1] * (b.vertex[v][1] - p0[1]) +
+                             nt[2] * (b.vertex[v][2] - p0[2]);
+            above += s > tol;
+            below += s < -tol;
+        }
+        if (above == 5 || below == 5) return false;
+        // Separated by a plane of the pyramid: all three vertices beyond it, by more than eps |n|.
+        double q[3][3];
+        for (int v = 0; v < 3; ++v)
+            for (int c = 0; c < 3; ++c) q[v][c] = prim.p[v][c] - b.origin[c];
+        for (int k = 0; k < 6; ++k) {
+            const double *n = b.normal[k], lim = b.offset[k] + eps * b.normal_len[k];
+            if (dot3(n, q[0]) > lim && dot3(n, q[1]) > lim && dot3(n, q[2]) > lim) return false;
+        }
+        return true;
+    }
+    if (prim.kind == Kind::Sphere) {
+        const double *c = prim.p[0], r = prim.p[1][0];
+        const double q[3] = {c[0] - b.origin[0], c[1] - b.origin[1], c[2] - b.origin[2]};
+        // The plane tangent to the sphere facing the apex, when the apex is outside it (first:
+        // it settles the sphere that y lies on).
+        const double lm = std::sqrt(dot3(q, q));
+        if (lm > r + eps) {
+            bool all = true;
+            for (int v = 1; v < 5 && all; ++v) { // v = 0, the apex, is outside
+                const double w[3] = {b.vertex[v][0] - c[0], b.vertex[v][1] - c[1], b.vertex[v][2] - c[2]};
+                all = -dot3(w, q) > (r + eps) * lm;
+            }
+            if (all) return false;
+        }
+        for (int k = 0; k < 6; ++k)
+            if (dot3(b.normal[k], q) - r * b.normal_len[k] - b.offset[k] > eps * b.normal_len[k]) return false;
+        return true;
+    }
+    for (int k = 0; k < 6; ++k) { // a box: its corner nearest to the inside of each plane
+        const double *n = b.normal[k];
+        double low = 0;
+        for (int c = 0; c < 3; ++c) low += n[c] * ((n[c] >= 0 ? prim.p[0][c] : prim.p[1][c]) - b.origin[c]);
+        if (low - b.offset[k] > eps * b.normal_len[k]) return false;
+    }
+    return true;
+}
+
+bool OccluderBvh::may_block(const SegmentBundle &b) const {
+    if (!m_root) return false;
+    // The inner nodes' tests run in float: a box is cut off by a plane only when it lies beyond
+    // it by more than their rounding (below 1e-6 |n|_1 (|p| + |o| + |d|) inside the scene).
+    // The box corner nearest to the inside is min or max per axis by the sign of n's
+    // component: n.corner = n+ . lo + n- . hi with n+ = max(n, 0), n- = min(n, 0).
+    typedef float F4 __attribute__((vector_size(16)));
+    typedef int32_t I4 __attribute__((vector_size(16)));
+    const float extent = std::max({m_extent, std::abs(b.origin_f[0]), std::abs(b.origin_f[1]), std::abs(b.origin_f[2])});
+    // Only the four side planes: the box of the end points already bounds the height.
+    float limit[4], pos[4][3], neg[4][3];
+    for (int k = 0; k < 4; ++k) {
+        const float *n = b.normal_f[k];
+        limit[k] = b.limit_f[k] + 4e-6f * b.norm1_f[k] * (2.f * extent + std::abs(b.offset_f[k]));
+        // Components below 1e-10 are dropped (no denormal products; the change of n.p is far
+        // below the margin).
+        for (int c = 0; c < 3; ++c) {
+            const float nc = std::abs(n[c]) < 1e-10f ? 0.f : n[c];
+            pos[k][c] = std::max(nc, 0.f), neg[k][c] = std::min(nc, 0.f);
+        }
+    }
+    const Header *stack[128];
+    int sp = 0;
+    stack[sp++] = static_cast<const Header *>(m_root);
+    while (sp > 0) {
+        const Header *h = stack[--sp];
+        if (h->leaf) {
+            const Leaf *l = static_cast<const Leaf *>(h);
+            for (uint32_t i = 0; i < l->count; ++i)
+                if (prim_may_block(m_prims[l->prim[i]], b)) return true;
+            continue;
+        }
+        const Inner *n = static_cast<const Inner *>(h);
+        F4 box[6];
+        std::memcpy(box, n->lo, sizeof(box)); // lo[3][4] then hi[3][4]
+        I4 keep = (box[0] <= b.hi_f[0]) & (box[3] >= b.lo_f[0]) & (box[1] <= b.hi_f[1]) & (box[4] >= b.lo_f[1]) &
+                  (box[2] <= b.hi_f[2]) & (box[5] >= b.lo_f[2]);
+        for (int k = 0; k < 4; ++k) {
+            const F4 low = (pos[k][0] * box[0] + neg[k][0] * box[3]) + (pos[k][1] * box[1] + neg[k][1] * box[4]) +
+                           (pos[k][2] * box[2] + neg[k][2] * box[5]);
+            keep &= low <= limit[k];
+        }
+        for (uint32_t c = 0; c < n->count; ++c)
+            if (keep[c]) stack[sp++] = n->child[c];
+    }
+    return false;
+}
+
+} // namespace mvpt
