@@ -41,6 +41,7 @@ struct MvThreadState {
     std::vector<MvViewStats> stats;
     std::vector<uint64_t> dropped;
     MvScratch scratch;
+    MvPendingSamples pending;
     RayCounters counters;
     MvThreadState(const std::vector<size_t> &pixels) : buffer(pixels), stats(pixels.size()), dropped(pixels.size(), 0) {}
 };
@@ -135,8 +136,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                             size_t p = size_t(y) * film.crop_width + x;
                             for (uint32_t j = 0; j < mf.map[p]; ++j)
                                 mv_native_sample(m_mv, tile.view_slot, x + film.crop_x, y + film.crop_y, mf.native[p] + j,
-                                                 ts.scratch, sink, ts.counters, ts.stats.data());
+                                                 ts.scratch, ts.pending, sink, ts.counters, ts.stats.data());
                         }
+                    // The tile's suffixes as one wavefront of the path tracer.
+                    mv_finish_samples(m_mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
                 }
             });
 

@@ -1,7 +1,7 @@
-// The wavefront path tracer (PathIntegrator::li_batch) and the batched scene queries
-// against their one-ray-at-a-time counterparts, on every per-feature scene: the same hits
-// and bit-identical radiance per path (the renderer uses the batch; tests and the
-// multi-view integrator use li).
+// The wavefront path tracer (PathIntegrator::li_batch, trace_batch) and the batched scene
+// queries against their one-ray-at-a-time counterparts, on every per-feature scene: the
+// same hits and bit-identical radiance per path (the renderer uses the batches, for camera
+// paths and for multi-view suffixes; tests use li and trace).
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
 #include "mvpt/scene/scene.h"
@@ -126,5 +126,58 @@ TEST(PathBatch, RadianceBitIdenticalToLi) {
             }
             EXPECT_GT(nonzero, rays.size() / 10) << "variant " << variant; // the comparison saw light
         }
+    }
+}
+
+// trace_batch continues paths from given states (multi-view path tracing's suffixes) exactly
+// as trace does, result and valid flag, for states of every kind: deeper vertices, delta and
+// smooth previous lobes, paths not yet valid.
+TEST(PathBatch, TraceBatchContinuesLikeTrace) {
+    RayCounters counters;
+    for (const auto &path : feature_scenes()) {
+        SCOPED_TRACE(path.string());
+        auto scene = load_scene_file(path);
+        PathConfig cfg;
+        if (auto *p = dynamic_cast<const PathIntegrator *>(&scene->integrator())) cfg = p->config();
+        cfg.rr_depth = 2;
+        PathIntegrator integrator(cfg);
+        std::vector<Ray> camera, rays;
+        std::vector<Sampler> samplers, batch_samplers;
+        std::vector<PathState> states;
+        camera_rays(*scene, 16, 2, camera, samplers);
+        for (size_t i = 0; i < camera.size(); ++i) {
+            SurfaceInteraction si;
+            if (!scene->intersect(camera[i], si)) continue;
+            Sampler &s = samplers[i];
+            PathState st;
+            st.depth = 1 + uint32_t(s.next_1d() * 3.f);
+            st.throughput = Spectrum(0.2f + s.next_1d(), 0.5f, 0.2f + s.next_1d());
+            st.eta = s.next_1d() < 0.5f ? 1.f : 1.5f;
+            st.prev_p = si.p;
+            st.prev_bsdf_pdf = 0.05f + 2.f * s.next_1d();
+            st.prev_bsdf_delta = s.next_1d() < 0.2f;
+            st.valid = s.next_1d() < 0.7f;
+            Vec3f d = warp::square_to_uniform_sphere(s.next_2d());
+            if (dot(d, si.n) * dot(camera[i].d, si.n) > 0.f) d = -d; // back to the camera's side, as a bounce
+            rays.push_back(si.spawn_ray(d));
+            states.push_back(st);
+            batch_samplers.push_back(s);
+        }
+        std::vector<Sampler> ref_samplers = batch_samplers;
+        std::vector<Spectrum> batch(rays.size());
+        std::vector<uint8_t> valid(rays.size(), 7);
+        integrator.trace_batch(*scene, rays.data(), states.data(), batch_samplers.data(), batch.data(), valid.data(),
+                               rays.size(), counters);
+        size_t nonzero = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            bool ref_valid = true;
+            Spectrum ref = integrator.trace(*scene, rays[i], states[i], ref_samplers[i], counters, nullptr, &ref_valid);
+            nonzero += !ref.is_black();
+            ASSERT_EQ(bool(valid[i]), ref_valid) << "path " << i;
+            ASSERT_TRUE(same_bits(batch[i], ref)) << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " "
+                                                  << batch[i].b << ", trace " << ref.r << " " << ref.g << " " << ref.b;
+        }
+        EXPECT_GT(nonzero, rays.size() / 10); // the comparison saw light
+        EXPECT_GT(rays.size(), 100u);
     }
 }

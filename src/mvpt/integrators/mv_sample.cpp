@@ -261,8 +261,14 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
     return out;
 }
 
+void MvPendingSamples::clear() {
+    samples.clear();
+    slot.clear(), pixel.clear(), w.clear(), nee.clear(), bounce.clear(), e.clear(), use_bounce.clear(), has_e.clear();
+    rays.clear(), states.clear(), samplers.clear();
+}
+
 void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t sample_index, MvScratch &sc,
-                      MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
+                      MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
     const Scene &scene = *ctx.scene;
     const PathConfig &pc = ctx.path->config();
     const uint32_t max_depth = pc.max_depth < 0 ? UINT_MAX : uint32_t(pc.max_depth);
@@ -399,8 +405,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
         sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs.data(), sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
-    bool final_valid = valid_after;
-    Spectrum suffix(0.f);
+    MvPendingSamples::Sample rec;
+    rec.valid = valid_after;
     float b_scale = 0.f; // b_i = fs[i] * b_scale (smooth), or mix.weight |S| b_scale for the delta view only
     if (!mix.weight.is_black() && mix.pdf > 0.f) {
         // A delta lobe's direction serves only the view that sampled it.
@@ -417,7 +423,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             if (u_rr >= q) alive = false;
             else b_scale /= q;
         }
-        if (alive) {
+        if (alive) { // the suffix: traced with the tile's other suffixes (mv_finish_samples)
             PathState state;
             state.depth = 1;
             state.eta = bs.eta;
@@ -425,34 +431,66 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
             state.prev_bsdf_pdf = mix.pdf;
             state.prev_bsdf_delta = mix.delta;
             state.valid = valid_after;
-            Ray next = si.spawn_ray(si.to_world(bs.wo));
-            suffix = ctx.path->trace(scene, next, state, sampler, counters, nullptr, &final_valid);
+            rec.suffix = int32_t(pending.rays.size());
+            pending.rays.push_back(si.spawn_ray(si.to_world(bs.wo)));
+            pending.states.push_back(state);
+            pending.samplers.push_back(sampler);
         }
     }
-    const bool bounce = !suffix.is_black();
     if (mix.delta) b_scale *= float(ns);
 
-    // ---------------- Splat: L_i / D_i into each sharing view's pixel ----------------
-    auto &splats = sc.splats;
-    splats.resize(ns);
+    // ---------------- Each sharing view's share, L_i / D_i, splatted once the suffix is known ----------------
+    rec.first = uint32_t(pending.slot.size());
+    rec.count = uint32_t(ns);
     for (size_t i = 0; i < ns; ++i) {
         int k = sharing[i];
-        Spectrum L(0.f);
-        if (nee) L = f_nee[i] * nee_weight;
-        if (bounce && (!mix.delta || i == mix.view)) L += (mix.delta ? mix.weight : fs[i]) * b_scale * suffix;
-        float w = 1.f / sc.d[k];
-        MvSplat &s = splats[i];
-        s.slot = cand.slot[k];
-        s.pixel = cand.pixel[k];
-        s.lw = final_valid ? L * w : Spectrum(0.f);
-        s.w = w;
-        s.has_e = k == 0;
-        s.e = s.has_e ? le_y * (1.f / n_l) : Spectrum(0.f);
+        pending.slot.push_back(cand.slot[k]);
+        pending.pixel.push_back(cand.pixel[k]);
+        pending.w.push_back(1.f / sc.d[k]);
+        pending.nee.push_back(nee ? f_nee[i] * nee_weight : Spectrum(0.f));
+        const bool use = !mix.delta || i == mix.view;
+        pending.use_bounce.push_back(use);
+        pending.bounce.push_back(use ? (mix.delta ? mix.weight : fs[i]) * b_scale : Spectrum(0.f));
+        pending.has_e.push_back(k == 0);
+        pending.e.push_back(k == 0 ? le_y * (1.f / n_l) : Spectrum(0.f));
         ++stats[cand.slot[k]].received;
     }
-    sink.splat(splats.data(), ns);
+    pending.samples.push_back(rec);
     st_l.sharing += ns;
     st_l.rays += counters.rays + counters.shadow_rays - rays_before;
+}
+
+void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
+                       RayCounters &counters, MvViewStats *stats) {
+    const size_t n_suffix = pending.rays.size();
+    pending.radiance.resize(n_suffix);
+    pending.valid.resize(n_suffix);
+    const uint64_t rays_before = counters.rays + counters.shadow_rays;
+    if (n_suffix > 0)
+        ctx.path->trace_batch(*ctx.scene, pending.rays.data(), pending.states.data(), pending.samplers.data(),
+                              pending.radiance.data(), pending.valid.data(), n_suffix, counters);
+    stats[slot].rays += counters.rays + counters.shadow_rays - rays_before;
+    std::vector<MvSplat> &splats = pending.splats;
+    for (const MvPendingSamples::Sample &rec : pending.samples) {
+        const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
+        const bool final_valid = rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid;
+        const bool bounce = !suffix.is_black();
+        splats.resize(rec.count);
+        for (uint32_t i = 0; i < rec.count; ++i) {
+            const uint32_t j = rec.first + i;
+            Spectrum L = pending.nee[j];
+            if (bounce && pending.use_bounce[j]) L += pending.bounce[j] * suffix;
+            MvSplat &s = splats[i];
+            s.slot = pending.slot[j];
+            s.pixel = pending.pixel[j];
+            s.lw = final_valid ? L * pending.w[j] : Spectrum(0.f);
+            s.w = pending.w[j];
+            s.has_e = pending.has_e[j] != 0;
+            s.e = pending.e[j];
+        }
+        sink.splat(splats.data(), rec.count);
+    }
+    pending.clear();
 }
 
 } // namespace mvpt

@@ -98,7 +98,35 @@ struct MvScratch {
     std::vector<Vec3f> sharing_wi;
     std::vector<Spectrum> mixture_f, nee_f;
     std::vector<float> view_pdf;
+};
+
+/// Native samples whose suffix (the path continuing from the shared bounce, §7) waits to
+/// be traced with the other samples of its tile as one wavefront of the path tracer
+/// (PathIntegrator::trace_batch); mv_finish_samples then splats their contributions.
+struct MvPendingSamples {
+    /// Per sample: its sharing views' entries [first, first + count) below, its suffix (an index
+    /// into the suffix arrays, or -1), and its valid-path flag when it has no suffix.
+    struct Sample {
+        uint32_t first = 0, count = 0;
+        int32_t suffix = -1;
+        bool valid = false;
+    };
+    std::vector<Sample> samples;
+    /// Per sharing view of each sample: slot, pixel, W = 1/D, the NEE radiance, the factor of
+    /// the suffix radiance (applied only where `use_bounce`), the native-only radiance E.
+    std::vector<int> slot;
+    std::vector<uint32_t> pixel;
+    std::vector<float> w;
+    std::vector<Spectrum> nee, bounce, e;
+    std::vector<uint8_t> use_bounce, has_e;
+    /// The suffixes: start rays, path states and sample streams; results.
+    std::vector<Ray> rays;
+    std::vector<PathState> states;
+    std::vector<Sampler> samplers;
+    std::vector<Spectrum> radiance;
+    std::vector<uint8_t> valid;
     std::vector<MvSplat> splats;
+    void clear();
 };
 
 /// The densities D_k (§5) that a native sample of view `slot` whose camera ray (from
@@ -110,8 +138,13 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
                                                         Point3f lens_point, float time, Vec2f lens, MvScratch &sc);
 
 /// Take native sample `sample_index` of pixel (px, py) (full-film coordinates) of the view in
-/// `slot`, whose native count this pass is `n_l`; splat every contribution it makes.
+/// `slot`: contributions that need no suffix are splatted now, the others join `pending`.
 void mv_native_sample(const MvContext &ctx, int slot, int px, int py, uint32_t sample_index, MvScratch &scratch,
-                      MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
+                      MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
+
+/// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
+/// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).
+void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
+                       RayCounters &counters, MvViewStats *stats);
 
 } // namespace mvpt

@@ -51,6 +51,11 @@ public:
     /// packet queries; each result is bit-identical to `li` given the same hits (path_batch.cpp).
     void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
                   RayCounters &counters) const override;
+    /// `trace` for many paths as one wavefront: path i continues from `states[i]` along
+    /// `rays[i]` (states null: li's start, camera rays), its result into `out[i]` and, when
+    /// `valid_out` is given, its valid-path flag into `valid_out[i]`.
+    void trace_batch(const Scene &scene, const Ray *rays, const PathState *states, Sampler *samplers, Spectrum *out,
+                     uint8_t *valid_out, size_t n, RayCounters &counters) const;
     std::string name() const override { return "path"; }
     const PathConfig &config() const { return m_cfg; }
 

@@ -3,7 +3,8 @@
 // rays as 16-wide packets instead of one by one. The per-vertex arithmetic, the sample
 // dimensions and the order in which contributions are summed are those of
 // PathIntegrator::li, so each path's radiance is bit-identical to li's for the same hits
-// (tests/cpp/test_path_batch.cpp checks this).
+// (tests/cpp/test_path_batch.cpp checks this). trace_batch starts the paths from given
+// states instead: multi-view path tracing's suffixes, bit-identical to `trace`.
 #include "path.h"
 
 #include "../core/sampler_batch.h"
@@ -70,6 +71,11 @@ struct WaveBuffers {
 
 void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sampler *samplers, Spectrum *out, size_t n,
                               RayCounters &counters) const {
+    trace_batch(scene, camera_rays, nullptr, samplers, out, nullptr, n, counters);
+}
+
+void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, const PathState *states, Sampler *samplers,
+                                 Spectrum *out, uint8_t *valid_out, size_t n, RayCounters &counters) const {
     const auto &lights = scene.lights();
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
     const BsdfContext ctx;
@@ -78,11 +84,21 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     thread_local WaveBuffers buf;
     auto &paths = buf.paths;
     paths.resize(n);
-    buf.rays.assign(camera_rays, camera_rays + n);
+    buf.rays.assign(start_rays, start_rays + n);
     bool independent = true; // then the vertices' numbers are drawn in one batched loop
     for (size_t i = 0; i < n; ++i) {
         paths[i] = WavePath{};
         paths[i].valid = valid0;
+        if (states) { // trace's loop variables at the start
+            const PathState &st = states[i];
+            paths[i].throughput = st.throughput;
+            paths[i].eta = st.eta;
+            paths[i].prev_p = st.prev_p;
+            paths[i].prev_bsdf_pdf = st.prev_bsdf_pdf;
+            paths[i].prev_bsdf_delta = st.prev_bsdf_delta;
+            paths[i].valid = st.valid;
+            paths[i].depth = st.depth;
+        }
         paths[i].slot = uint32_t(i);
         independent &= samplers[i].kind() == SamplerKind::Independent;
     }
@@ -108,7 +124,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         // li reads (Shape::fill_interaction's contract; wi is set below), and misses are reset
         // in the emission loop.
         counters.rays += active;
-        scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first);
+        scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first && !states); // camera rays: coherent
 
         // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
         size_t n_scatter = 0;
@@ -238,6 +254,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
                 ++next;
             } else {
                 out[paths[k].slot] = paths[k].valid ? paths[k].result : Spectrum(0.f);
+                if (valid_out) valid_out[paths[k].slot] = paths[k].valid;
             }
         }
         active = next;
