@@ -263,7 +263,7 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
 
 void MvPendingSamples::clear() {
     samples.clear();
-    slot.clear(), pixel.clear(), w.clear(), nee.clear(), bounce.clear(), e.clear(), use_bounce.clear(), has_e.clear();
+    slot.clear(), pixel.clear(), w.clear(), nee.clear(), bounce.clear();
     rays.clear(), states.clear(), samplers.clear();
 }
 
@@ -440,19 +440,22 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     if (mix.delta) b_scale *= float(ns);
 
     // ---------------- Each sharing view's share, L_i / D_i, splatted once the suffix is known ----------------
+    // The native view is sharing[0] (candidate 0, always visible and selected).
     rec.first = uint32_t(pending.slot.size());
     rec.count = uint32_t(ns);
+    rec.delta_view = mix.delta ? int32_t(mix.view) : -1;
+    rec.e = le_y * (1.f / n_l);
+    const size_t end = rec.first + ns;
+    pending.slot.resize(end), pending.pixel.resize(end), pending.w.resize(end);
+    pending.nee.resize(end), pending.bounce.resize(end);
     for (size_t i = 0; i < ns; ++i) {
-        int k = sharing[i];
-        pending.slot.push_back(cand.slot[k]);
-        pending.pixel.push_back(cand.pixel[k]);
-        pending.w.push_back(1.f / sc.d[k]);
-        pending.nee.push_back(nee ? f_nee[i] * nee_weight : Spectrum(0.f));
-        const bool use = !mix.delta || i == mix.view;
-        pending.use_bounce.push_back(use);
-        pending.bounce.push_back(use ? (mix.delta ? mix.weight : fs[i]) * b_scale : Spectrum(0.f));
-        pending.has_e.push_back(k == 0);
-        pending.e.push_back(k == 0 ? le_y * (1.f / n_l) : Spectrum(0.f));
+        const int k = sharing[i];
+        const size_t j = rec.first + i;
+        pending.slot[j] = cand.slot[k];
+        pending.pixel[j] = cand.pixel[k];
+        pending.w[j] = 1.f / sc.d[k];
+        pending.nee[j] = nee ? f_nee[i] * nee_weight : Spectrum(0.f);
+        pending.bounce[j] = (mix.delta ? mix.weight : fs[i]) * b_scale;
         ++stats[cand.slot[k]].received;
     }
     pending.samples.push_back(rec);
@@ -479,14 +482,14 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
         for (uint32_t i = 0; i < rec.count; ++i) {
             const uint32_t j = rec.first + i;
             Spectrum L = pending.nee[j];
-            if (bounce && pending.use_bounce[j]) L += pending.bounce[j] * suffix;
+            if (bounce && (rec.delta_view < 0 || int32_t(i) == rec.delta_view)) L += pending.bounce[j] * suffix;
             MvSplat &s = splats[i];
             s.slot = pending.slot[j];
             s.pixel = pending.pixel[j];
             s.lw = final_valid ? L * pending.w[j] : Spectrum(0.f);
             s.w = pending.w[j];
-            s.has_e = pending.has_e[j] != 0;
-            s.e = pending.e[j];
+            s.has_e = i == 0;
+            s.e = i == 0 ? rec.e : Spectrum(0.f);
         }
         sink.splat(splats.data(), rec.count);
     }

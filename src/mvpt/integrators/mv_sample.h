@@ -104,21 +104,23 @@ struct MvScratch {
 /// be traced with the other samples of its tile as one wavefront of the path tracer
 /// (PathIntegrator::trace_batch); mv_finish_samples then splats their contributions.
 struct MvPendingSamples {
-    /// Per sample: its sharing views' entries [first, first + count) below, its suffix (an index
-    /// into the suffix arrays, or -1), and its valid-path flag when it has no suffix.
+    /// Per sample: its sharing views' entries [first, first + count) below (the native view
+    /// first), its suffix (an index into the suffix arrays, or -1), its valid-path flag when it
+    /// has no suffix, the view that sampled a delta lobe (then only its entry gets the suffix,
+    /// else -1), and the native view's radiance E.
     struct Sample {
         uint32_t first = 0, count = 0;
-        int32_t suffix = -1;
+        int32_t suffix = -1, delta_view = -1;
         bool valid = false;
+        Spectrum e{0.f};
     };
     std::vector<Sample> samples;
-    /// Per sharing view of each sample: slot, pixel, W = 1/D, the NEE radiance, the factor of
-    /// the suffix radiance (applied only where `use_bounce`), the native-only radiance E.
+    /// Per sharing view of each sample: slot, pixel, W = 1/D, the NEE radiance and the factor
+    /// of the suffix radiance.
     std::vector<int> slot;
     std::vector<uint32_t> pixel;
     std::vector<float> w;
-    std::vector<Spectrum> nee, bounce, e;
-    std::vector<uint8_t> use_bounce, has_e;
+    std::vector<Spectrum> nee, bounce;
     /// The suffixes: start rays, path states and sample streams; results.
     std::vector<Ray> rays;
     std::vector<PathState> states;
