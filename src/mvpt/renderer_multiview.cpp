@@ -234,6 +234,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     }
     develop_multiview();
     for (size_t s = 0; s < m_views.size(); ++s) {
+        // Contributions received: those in the film plus those dropped as not finite (counted
+        // from the films rather than per splat).
+        for (uint64_t r : m_mv_films[s].received) per_view[s].received += r;
+        for (MvThreadState &ts : state) per_view[s].received += ts.dropped[s];
         m_results[s].mv = per_view[s];
         m_stats.mv += per_view[s];
     }

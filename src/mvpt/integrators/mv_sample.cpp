@@ -303,7 +303,6 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     auto native_only = [&](const Spectrum &L) {
         MvSplat own{slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l), true};
         sink.splat(&own, 1);
-        ++st_l.received;
         ++st_l.sharing;
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
     };
@@ -456,7 +455,6 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
         pending.w[j] = 1.f / sc.d[k];
         pending.nee[j] = nee ? f_nee[i] * nee_weight : Spectrum(0.f);
         pending.bounce[j] = (mix.delta ? mix.weight : fs[i]) * b_scale;
-        ++stats[cand.slot[k]].received;
     }
     pending.samples.push_back(rec);
     st_l.sharing += ns;
