@@ -25,7 +25,8 @@ struct SegmentBundle {
     bool build(Point3f o, Vec3f across, const float *dx, const float *dy, const float *dz, const float *t_max,
                size_t n);
 
-    /// Six half-spaces n.(p - o) <= d whose intersection holds every segment.
+    /// Six half-spaces n.(p - o) <= d whose intersection holds every segment; `normal_len`
+    /// bounds |n| from above (|n|_1).
     double normal[6][3], offset[6], normal_len[6];
     /// The pyramid's apex and the four corners of its far cap.
     double vertex[5][3];
