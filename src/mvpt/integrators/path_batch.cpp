@@ -5,6 +5,7 @@
 // PathIntegrator::li, so each path's radiance is bit-identical to li's for the same hits
 // (tests/cpp/test_path_batch.cpp checks this).
 #include "path.h"
+#include "path_kernels.h"
 
 #include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
@@ -49,6 +50,9 @@ struct PendingShadow {
     Spectrum contribution;
 };
 
+/// Lanes per call of a Lambertian vector kernel: its columns (about 40 × 64 floats) stay in L1.
+constexpr size_t LambertChunk = 64;
+
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
     std::vector<WavePath> paths;
@@ -65,6 +69,9 @@ struct WaveBuffers {
     std::vector<float> u[7];
     std::vector<uint64_t> u_hash;
     std::vector<uint32_t> u_dim;
+    /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
+    SoaColumns lambert;
+    std::vector<uint32_t> lambert_index;
 };
 } // namespace
 
@@ -96,6 +103,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     for (auto &u : buf.u) u.resize(n);
     buf.u_hash.resize(n);
     buf.u_dim.resize(n);
+    buf.lambert_index.resize(LambertChunk);
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
 
@@ -174,13 +182,50 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         }
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
-        size_t n_shadow = 0;
+        // Constant Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.
+        size_t n_shadow = 0, n_lam = 0;
+        SoaColumns &lc = buf.lambert;
+        lc.resize(ln_col::Count, LambertChunk);
+        auto flush_nee = [&] {
+            if (n_lam == 0) return;
+            using namespace ln_col;
+            lambert_nee_kernel(lc, n_lam, float(lights.size()));
+            for (size_t m = 0; m < n_lam; ++m) {
+                if (!(lc[Ok][m] > 0.f)) continue;
+                const uint32_t k = buf.scatter[buf.lambert_index[m]].path;
+                buf.shadow_rays[n_shadow] = Ray{{lc[Ox][m], lc[Oy][m], lc[Oz][m]}, {lc[Dx][m], lc[Dy][m], lc[Dz][m]},
+                                                0.f, lc[TMax][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(lc[Cr][m], lc[Cg][m], lc[Cb][m])};
+            }
+            n_lam = 0;
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             if (!v.nee || v.emitter_sample.second.is_black()) continue;
             const SurfaceInteraction &si = buf.si[v.path];
             const Bsdf &bsdf = *si.shape->bsdf;
             const LightSample &ls = v.emitter_sample.first;
+            if (const LambertInfo *lam = bsdf.lambert()) {
+                using namespace ln_col;
+                const size_t m = n_lam++;
+                buf.lambert_index[m] = uint32_t(j);
+                const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
+                float *col = lc.data.data() + m;
+                const size_t st = lc.stride;
+                col[WiZ * st] = si.wi.z;
+                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
+                col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+                col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
+                col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
+                col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;
+                col[Wr * st] = weight.r, col[Wg * st] = weight.g, col[Wb * st] = weight.b;
+                if (n_lam == LambertChunk) flush_nee();
+                continue;
+            }
             Spectrum weight = v.emitter_sample.second;
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
@@ -191,14 +236,60 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
                 buf.shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
             }
         }
+        flush_nee();
 
         // ---------------- BSDF sampling and Russian roulette ----------------
+        lc.resize(ls_col::Count, LambertChunk);
+        // A Lambertian sample is never a null lobe (the path becomes valid), has eta 1 and is not a delta.
+        auto flush_sample = [&] {
+            if (n_lam == 0) return;
+            using namespace ls_col;
+            lambert_sample_kernel(lc, n_lam);
+            for (size_t m = 0; m < n_lam; ++m) {
+                const uint32_t k = buf.lambert_index[m];
+                WavePath &p = paths[k];
+                p.valid = true;
+                if (!(lc[Alive][m] > 0.f)) continue;
+                const SurfaceInteraction &si = buf.si[k];
+                buf.rays[k] = Ray{{lc[Ox][m], lc[Oy][m], lc[Oz][m]}, {lc[Dx][m], lc[Dy][m], lc[Dz][m]}, 0.f, Infinity,
+                                  si.time};
+                p.throughput = Spectrum(lc[Br][m], lc[Bg][m], lc[Bb][m]);
+                p.prev_p = si.p;
+                p.prev_bsdf_pdf = lc[Pdf][m];
+                p.prev_bsdf_delta = false;
+                ++p.depth;
+                buf.alive[k] = 1;
+            }
+            n_lam = 0;
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             const ScatterVertex &v = buf.scatter[j];
             const size_t k = v.path;
             WavePath &p = paths[k];
             const SurfaceInteraction &si = buf.si[k];
             const Bsdf &bsdf = *si.shape->bsdf;
+            if (const LambertInfo *lam = bsdf.lambert()) {
+                using namespace ls_col;
+                const size_t m = n_lam++;
+                buf.lambert_index[m] = uint32_t(k);
+                const Frame &f = si.sh_frame;
+                float *col = lc.data.data() + m;
+                const size_t st = lc.stride;
+                col[WiZ * st] = si.wi.z;
+                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
+                col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
+                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
+                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
+                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
+                col[Eta * st] = p.eta, col[URr * st] = u[6][j];
+                col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+                if (n_lam == LambertChunk) flush_sample();
+                continue;
+            }
             auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
@@ -220,6 +311,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             ++p.depth;
             buf.alive[k] = 1;
         }
+        flush_sample();
 
         // ---------------- Shadow rays of this vertex ----------------
         counters.shadow_rays += n_shadow;

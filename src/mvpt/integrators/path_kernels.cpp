@@ -1,0 +1,132 @@
+#include "path_kernels.h"
+
+#include <cmath>
+
+#include "../core/math.h"
+#include "../core/multi_isa.h"
+#include "../render/interaction.h"
+
+namespace mvpt {
+
+namespace {
+
+/// std::max(a, b) and std::min(a, b) as selects (same result for every input, NaN included).
+[[gnu::always_inline]] inline float max_of(float a, float b) { return select(a < b, b, a); }
+[[gnu::always_inline]] inline float min_of(float a, float b) { return select(b < a, b, a); }
+
+/// SurfaceInteraction::offset_p's offset along the geometric normal g, on the side of d.
+[[gnu::always_inline]] inline float offset_along(float px, float py, float pz, float gx, float gy, float gz, float dx,
+                                                float dy, float dz) {
+    // std::max({|x|, |y|, |z|}) keeps the first of equal values; all are non-negative here.
+    float m = max_of(max_of(std::abs(px), std::abs(py)), std::abs(pz));
+    float mag = (1.f + m) * RayEpsilon;
+    return std::copysign(mag, gx * dx + gy * dy + gz * dz);
+}
+
+} // namespace
+
+MVPT_MULTI_ISA void lambert_sample_kernel_impl(float *c, size_t s, size_t n) {
+    using namespace ls_col;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const float wiz = c[WiZ * s + i];
+        const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+        // Concentric disk [Shirley & Chiu 1997] and cosine-weighted hemisphere (warp.h).
+        float x = 2.f * c[Ux * s + i] - 1.f, y = 2.f * c[Uy * s + i] - 1.f;
+        bool centre = (x == 0.f) & (y == 0.f);
+        bool x_major = std::abs(x) > std::abs(y);
+        float r = select(x_major, x, y);
+        float a = (Pi / 4.f) * select(x_major, y / x, -(x / y));
+        float z = a * a;
+        float sn = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * a + a;
+        float cs = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.f;
+        float wox = select(centre, 0.f, r * select(x_major, cs, -sn));
+        float woy = select(centre, 0.f, r * select(x_major, sn, cs));
+        float woz = std::sqrt(max_of(1.f - wox * wox - woy * woy, 0.f));
+        float pdf = select(woz > 0.f, woz * InvPi, 0.f);
+        woz = select(back, -woz, woz); // twosided mirrors the back side's sample
+        const float rr = c[Rr * s + i], rg = c[Rg * s + i], rb = c[Rb * s + i];
+        bool weight_ok = (front | back) & !(pdf <= 0.f) & !((rr == 0.f) & (rg == 0.f) & (rb == 0.f));
+
+        // The next ray (Frame::to_world, SurfaceInteraction::spawn_ray).
+        float dx = (c[Sx * s + i] * wox + c[Tx * s + i] * woy) + c[Nx * s + i] * woz;
+        float dy = (c[Sy * s + i] * wox + c[Ty * s + i] * woy) + c[Ny * s + i] * woz;
+        float dz = (c[Sz * s + i] * wox + c[Tz * s + i] * woy) + c[Nz * s + i] * woz;
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+        float off = offset_along(px, py, pz, gx, gy, gz, dx, dy, dz);
+        c[Ox * s + i] = px + gx * off;
+        c[Oy * s + i] = py + gy * off;
+        c[Oz * s + i] = pz + gz * off;
+        c[Dx * s + i] = dx;
+        c[Dy * s + i] = dy;
+        c[Dz * s + i] = dz;
+        c[Pdf * s + i] = pdf;
+
+        // Throughput and Russian roulette [li's order: max_value, then q = min(t eta eta, 0.95)].
+        float br = c[Br * s + i] * rr, bg = c[Bg * s + i] * rg, bb = c[Bb * s + i] * rb;
+        float t_max = max_of(br, max_of(bg, bb));
+        const float eta = c[Eta * s + i];
+        float q = min_of(t_max * eta * eta, 0.95f);
+        bool rr_on = c[RrOn * s + i] > 0.f;
+        float inv_q = 1.f / q;
+        c[Br * s + i] = select(rr_on, br * inv_q, br);
+        c[Bg * s + i] = select(rr_on, bg * inv_q, bg);
+        c[Bb * s + i] = select(rr_on, bb * inv_q, bb);
+        bool alive = weight_ok & (t_max > 0.f) & !(rr_on & (c[URr * s + i] >= q));
+        c[Alive * s + i] = select(alive, 1.f, 0.f);
+    }
+}
+
+void lambert_sample_kernel(SoaColumns &c, size_t n) { lambert_sample_kernel_impl(c.data.data(), c.stride, n); }
+
+MVPT_MULTI_ISA void lambert_nee_kernel_impl(float *c, size_t s, size_t n, float light_count) {
+    using namespace ln_col;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const float wiz = c[WiZ * s + i];
+        const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+        const float ldx = c[Ldx * s + i], ldy = c[Ldy * s + i], ldz = c[Ldz * s + i];
+        // cos(wo) in the local frame (twosided mirrors the back side).
+        float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
+        float cos_o = select(back, -woz, woz);
+        bool f_ok = (front | back) & !(cos_o <= 0.f);
+        float scale = InvPi * cos_o;
+        float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
+        bool ok = f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
+        float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
+        // MIS: power heuristic (mis_power in path.h).
+        float a = c[LPdf * s + i] / light_count, a2 = a * a, b2 = pdf * pdf;
+        float mis = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+        float w = select(c[LDelta * s + i] > 0.f, 1.f, mis);
+        c[Cr * s + i] = ((c[Br * s + i] * fr) * (c[Wr * s + i] * light_count)) * w;
+        c[Cg * s + i] = ((c[Bg * s + i] * fg) * (c[Wg * s + i] * light_count)) * w;
+        c[Cb * s + i] = ((c[Bb * s + i] * fb) * (c[Wb * s + i] * light_count)) * w;
+        c[Ok * s + i] = select(ok, 1.f, 0.f);
+
+        // Shadow ray: spawn_ray(d) towards an infinitely distant emitter, else spawn_ray_to(p).
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        const float lpx = c[Lpx * s + i], lpy = c[Lpy * s + i], lpz = c[Lpz * s + i];
+        bool inf = std::abs(c[LDist * s + i]) == Infinity; // std::isinf
+        float ex = select(inf, ldx, lpx - px), ey = select(inf, ldy, lpy - py), ez = select(inf, ldz, lpz - pz);
+        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+        float off = offset_along(px, py, pz, gx, gy, gz, ex, ey, ez);
+        float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+        float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+        float dist = std::sqrt(tx * tx + ty * ty + tz * tz);
+        float inv = 1.f / dist;
+        c[Ox * s + i] = ox;
+        c[Oy * s + i] = oy;
+        c[Oz * s + i] = oz;
+        c[Dx * s + i] = select(inf, ldx, tx * inv);
+        c[Dy * s + i] = select(inf, ldy, ty * inv);
+        c[Dz * s + i] = select(inf, ldz, tz * inv);
+        c[TMax * s + i] = select(inf, Infinity, dist * (1.f - ShadowEpsilon));
+    }
+}
+
+void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count) {
+    lambert_nee_kernel_impl(c.data.data(), c.stride, n, light_count);
+}
+
+} // namespace mvpt
