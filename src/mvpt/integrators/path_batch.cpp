@@ -70,8 +70,10 @@ struct WaveBuffers {
     std::vector<uint64_t> u_hash;
     std::vector<uint32_t> u_dim;
     /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
-    SoaColumns lambert;
-    std::vector<uint32_t> lambert_index;
+    SoaColumns lambert, quad;
+    std::vector<uint32_t> lambert_index, quad_index;
+    /// Per light, its row in the QuadTable, or -1.
+    std::vector<int> quad_of_light;
 };
 } // namespace
 
@@ -104,6 +106,20 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     buf.u_hash.resize(n);
     buf.u_dim.resize(n);
     buf.lambert_index.resize(LambertChunk);
+    buf.quad_index.resize(LambertChunk);
+    // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
+    QuadTable quads;
+    std::vector<int> &quad_of_light = buf.quad_of_light;
+    quad_of_light.assign(lights.size(), -1);
+    for (size_t l = 0, nq = 0; l < lights.size() && nq < QuadTable::Max; ++l) {
+        QuadEmitter q;
+        if (!lights[l]->quad_emitter(q)) continue;
+        const float row[QuadTable::Params] = {q.origin.x, q.origin.y, q.origin.z, q.e1.x, q.e1.y, q.e1.z, q.e2.x, q.e2.y,
+                                              q.e2.z, q.n.x, q.n.y, q.n.z, q.inv_area, q.radiance.r, q.radiance.g,
+                                              q.radiance.b};
+        for (size_t r = 0; r < QuadTable::Params; ++r) quads.at(r, nq) = row[r];
+        quad_of_light[l] = int(nq++);
+    }
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
 
@@ -169,21 +185,62 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         if (independent) independent_vertex_draws(buf.u_hash.data(), buf.u_dim.data(), n_scatter, u);
 
         // ---------------- Next-event estimation: emitter samples ----------------
+        // A Lambertian vertex that chose a quad emitter is done whole (emitter sample, BSDF,
+        // MIS, shadow ray) by a vector kernel; the others sample their emitter here.
+        size_t n_shadow = 0, n_quad = 0;
+        SoaColumns &qc = buf.quad;
+        qc.resize(lq_col::Count, LambertChunk);
+        auto flush_quad = [&] {
+            if (n_quad == 0) return;
+            using namespace lq_col;
+            lambert_quad_nee_kernel(qc, n_quad, quads, float(lights.size()));
+            for (size_t m = 0; m < n_quad; ++m) {
+                if (!(qc[Ok][m] > 0.f)) continue;
+                const uint32_t k = buf.quad_index[m];
+                buf.shadow_rays[n_shadow] = Ray{{qc[Ox][m], qc[Oy][m], qc[Oz][m]}, {qc[Dx][m], qc[Dy][m], qc[Dz][m]},
+                                                0.f, qc[TMax][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(qc[Cr][m], qc[Cg][m], qc[Cb][m])};
+            }
+            n_quad = 0;
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             const SurfaceInteraction &si = buf.si[v.path];
-            v.nee = si.shape->bsdf->has_smooth() && !lights.empty();
+            const Bsdf &bsdf = *si.shape->bsdf;
+            v.nee = bsdf.has_smooth() && !lights.empty();
             if (!v.nee) continue;
             size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
+            const LambertInfo *lam = bsdf.lambert();
+            if (lam && quad_of_light[idx] >= 0) {
+                using namespace lq_col;
+                v.nee = false; // handled here
+                const size_t m = n_quad++;
+                buf.quad_index[m] = v.path;
+                const Spectrum &beta = paths[v.path].throughput;
+                float *col = qc.data.data() + m;
+                const size_t st = qc.stride;
+                col[WiZ * st] = si.wi.z;
+                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
+                col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+                col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
+                col[Quad * st] = float(quad_of_light[idx]);
+                if (n_quad == LambertChunk) flush_quad();
+                continue;
+            }
             const Light &light = *lights[idx];
             // Constructed in place (guaranteed copy elision): copying the returned pair with wide
             // loads right after the callee's narrow stores would stall on store forwarding.
             ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, {u[1][j], u[2][j]}, si.time));
         }
+        flush_quad();
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
         // Constant Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.
-        size_t n_shadow = 0, n_lam = 0;
+        size_t n_lam = 0;
         SoaColumns &lc = buf.lambert;
         lc.resize(ln_col::Count, LambertChunk);
         auto flush_nee = [&] {

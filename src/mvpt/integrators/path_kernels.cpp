@@ -129,4 +129,68 @@ void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count) {
     lambert_nee_kernel_impl(c.data.data(), c.stride, n, light_count);
 }
 
+MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
+    using namespace lq_col;
+    constexpr size_t M = QuadTable::Max;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const int k = int(c[Quad * s + i]);
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        // ---- Emitter sample: TriangleMesh::sample_point (parallelogram), area_to_solid_angle, AreaLight::sample_li.
+        const float ux = c[Ux * s + i], uy = c[Uy * s + i];
+        float lpx = (q[QuadTable::Ox * M + k] + q[QuadTable::E1x * M + k] * ux) + q[QuadTable::E2x * M + k] * uy;
+        float lpy = (q[QuadTable::Oy * M + k] + q[QuadTable::E1y * M + k] * ux) + q[QuadTable::E2y * M + k] * uy;
+        float lpz = (q[QuadTable::Oz * M + k] + q[QuadTable::E1z * M + k] * ux) + q[QuadTable::E2z * M + k] * uy;
+        const float qnx = q[QuadTable::Nx * M + k], qny = q[QuadTable::Ny * M + k], qnz = q[QuadTable::Nz * M + k];
+        float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
+        float dist2 = vx * vx + vy * vy + vz * vz;
+        float dist = std::sqrt(dist2);
+        float cos_t = std::abs(qnx * vx + qny * vy + qnz * vz) / dist;
+        float lpdf = select(cos_t > 0.f, q[QuadTable::InvArea * M + k] * dist2 / cos_t, 0.f);
+        float inv_dist = 1.f / dist;
+        const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
+        bool front_side = !(qnx * ldx + qny * ldy + qnz * ldz >= 0.f); // one-sided emitter
+        float inv_pdf = 1.f / lpdf;
+        float wr = q[QuadTable::Lr * M + k] * inv_pdf, wg = q[QuadTable::Lg * M + k] * inv_pdf,
+              wb = q[QuadTable::Lb * M + k] * inv_pdf;
+        bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
+
+        // ---- BSDF value and density, MIS, contribution (as lambert_nee_kernel).
+        const float wiz = c[WiZ * s + i];
+        const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+        float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
+        float cos_o = select(back, -woz, woz);
+        bool f_ok = (front | back) & !(cos_o <= 0.f);
+        float scale = InvPi * cos_o;
+        float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
+        bool ok = sampled & f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
+        float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
+        float a = lpdf / light_count, a2 = a * a, b2 = pdf * pdf;
+        float w = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+        c[Cr * s + i] = ((c[Br * s + i] * fr) * (wr * light_count)) * w;
+        c[Cg * s + i] = ((c[Bg * s + i] * fg) * (wg * light_count)) * w;
+        c[Cb * s + i] = ((c[Bb * s + i] * fb) * (wb * light_count)) * w;
+        c[Ok * s + i] = select(ok, 1.f, 0.f);
+
+        // ---- Shadow ray: spawn_ray_to(the sampled point).
+        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+        float off = offset_along(px, py, pz, gx, gy, gz, vx, vy, vz);
+        float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+        float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+        float tdist = std::sqrt(tx * tx + ty * ty + tz * tz);
+        float inv = 1.f / tdist;
+        c[Ox * s + i] = ox;
+        c[Oy * s + i] = oy;
+        c[Oz * s + i] = oz;
+        c[Dx * s + i] = tx * inv;
+        c[Dy * s + i] = ty * inv;
+        c[Dz * s + i] = tz * inv;
+        c[TMax * s + i] = tdist * (1.f - ShadowEpsilon);
+    }
+}
+
+void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count) {
+    lambert_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v, light_count);
+}
+
 } // namespace mvpt

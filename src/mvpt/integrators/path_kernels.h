@@ -61,4 +61,30 @@ enum : size_t {
 /// sample_li). `light_count` is the number of lights (uniform selection).
 void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count);
 
+/// Columns of `lambert_quad_nee_kernel`: inputs, then outputs.
+namespace lq_col {
+enum : size_t {
+    WiZ, TwoSided,
+    Nx, Ny, Nz,             // shading normal
+    Px, Py, Pz, Gx, Gy, Gz, // position, geometric normal
+    Rr, Rg, Rb,             // reflectance
+    Br, Bg, Bb,             // throughput
+    Ux, Uy, Quad,           // the emitter sample's numbers, the emitter's index in the QuadTable
+    Ox, Oy, Oz, Dx, Dy, Dz, TMax, Cr, Cg, Cb, Ok, // outputs: shadow ray, contribution, whether it counts
+    Count
+};
+}
+
+/// Parameters of up to `Max` quad emitters (QuadEmitter in light.h), one row per parameter.
+struct QuadTable {
+    static constexpr size_t Max = 16;
+    enum : size_t { Ox, Oy, Oz, E1x, E1y, E1z, E2x, E2y, E2z, Nx, Ny, Nz, InvArea, Lr, Lg, Lb, Params };
+    alignas(64) float v[Params * Max] = {};
+    float &at(size_t param, size_t quad) { return v[param * Max + quad]; }
+};
+
+/// Next-event estimation at n Lambertian vertices towards quad emitters, emitter sampling
+/// included (AreaLight::sample_li on a parallelogram mesh, then as lambert_nee_kernel).
+void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count);
+
 } // namespace mvpt
