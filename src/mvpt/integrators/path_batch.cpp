@@ -70,10 +70,10 @@ struct WaveBuffers {
     std::vector<uint64_t> u_hash;
     std::vector<uint32_t> u_dim;
     /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
-    SoaColumns lambert, quad;
-    std::vector<uint32_t> lambert_index, quad_index;
-    /// Per light, its row in the QuadTable, or -1.
-    std::vector<int> quad_of_light;
+    SoaColumns lambert, quad, sphere;
+    std::vector<uint32_t> lambert_index, quad_index, sphere_index;
+    /// Per light, its row in the QuadTable / SphereTable, or -1.
+    std::vector<int> quad_of_light, sphere_of_light;
 };
 } // namespace
 
@@ -107,6 +107,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
     buf.u_dim.resize(n);
     buf.lambert_index.resize(LambertChunk);
     buf.quad_index.resize(LambertChunk);
+    buf.sphere_index.resize(LambertChunk);
     // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
     QuadTable quads;
     std::vector<int> &quad_of_light = buf.quad_of_light;
@@ -119,6 +120,21 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
                                               q.radiance.b};
         for (size_t r = 0; r < QuadTable::Params; ++r) quads.at(r, nq) = row[r];
         quad_of_light[l] = int(nq++);
+    }
+    // Sphere emitters of constant radiance, likewise.
+    SphereTable spheres;
+    float sphere_radius_adj2[SphereTable::Max]; // squared radius below which a point counts as inside
+    std::vector<int> &sphere_of_light = buf.sphere_of_light;
+    sphere_of_light.assign(lights.size(), -1);
+    for (size_t l = 0, ns = 0; l < lights.size() && ns < SphereTable::Max; ++l) {
+        SphereEmitter e;
+        if (!lights[l]->sphere_emitter(e)) continue;
+        const float row[SphereTable::Params] = {e.center.x, e.center.y, e.center.z, e.radius, e.flip_normals ? 1.f : 0.f,
+                                                e.radiance.r, e.radiance.g, e.radiance.b};
+        for (size_t r = 0; r < SphereTable::Params; ++r) spheres.at(r, ns) = row[r];
+        float radius_adj = e.radius * (e.flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
+        sphere_radius_adj2[ns] = radius_adj * radius_adj;
+        sphere_of_light[l] = int(ns++);
     }
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
@@ -190,18 +206,47 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         size_t n_shadow = 0, n_quad = 0;
         SoaColumns &qc = buf.quad;
         qc.resize(lq_col::Count, LambertChunk);
+        size_t n_sph = 0;
+        SoaColumns &sc = buf.sphere;
+        sc.resize(lq_col::Count, LambertChunk);
+        // Shadow rays and contributions of a kernel's lanes whose estimate counts.
+        auto collect = [&](SoaColumns &c, const uint32_t *index, size_t count) {
+            using namespace lq_col;
+            for (size_t m = 0; m < count; ++m) {
+                if (!(c[Ok][m] > 0.f)) continue;
+                const uint32_t k = index[m];
+                buf.shadow_rays[n_shadow] = Ray{{c[Ox][m], c[Oy][m], c[Oz][m]}, {c[Dx][m], c[Dy][m], c[Dz][m]}, 0.f,
+                                                c[TMax][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(c[Cr][m], c[Cg][m], c[Cb][m])};
+            }
+        };
         auto flush_quad = [&] {
             if (n_quad == 0) return;
-            using namespace lq_col;
             lambert_quad_nee_kernel(qc, n_quad, quads, float(lights.size()));
-            for (size_t m = 0; m < n_quad; ++m) {
-                if (!(qc[Ok][m] > 0.f)) continue;
-                const uint32_t k = buf.quad_index[m];
-                buf.shadow_rays[n_shadow] = Ray{{qc[Ox][m], qc[Oy][m], qc[Oz][m]}, {qc[Dx][m], qc[Dy][m], qc[Dz][m]},
-                                                0.f, qc[TMax][m], buf.si[k].time};
-                buf.shadows[n_shadow++] = {k, Spectrum(qc[Cr][m], qc[Cg][m], qc[Cb][m])};
-            }
+            collect(qc, buf.quad_index.data(), n_quad);
             n_quad = 0;
+        };
+        auto flush_sphere = [&] {
+            if (n_sph == 0) return;
+            lambert_sphere_nee_kernel(sc, n_sph, spheres, float(lights.size()));
+            collect(sc, buf.sphere_index.data(), n_sph);
+            n_sph = 0;
+        };
+        // One lane of lq_col columns: the vertex, its throughput, the emitter's numbers and table row.
+        auto gather = [&](SoaColumns &c, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
+                          const Spectrum &beta, size_t j, int row) {
+            using namespace lq_col;
+            float *col = c.data.data() + m;
+            const size_t st = c.stride;
+            col[WiZ * st] = si.wi.z;
+            col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
+            col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
+            col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+            col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+            col[Rr * st] = lam.reflectance.r, col[Rg * st] = lam.reflectance.g, col[Rb * st] = lam.reflectance.b;
+            col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+            col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
+            col[Quad * st] = float(row);
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
@@ -210,26 +255,26 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             v.nee = bsdf.has_smooth() && !lights.empty();
             if (!v.nee) continue;
             size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
-            const LambertInfo *lam = bsdf.lambert();
-            if (lam && quad_of_light[idx] >= 0) {
-                using namespace lq_col;
-                v.nee = false; // handled here
-                const size_t m = n_quad++;
-                buf.quad_index[m] = v.path;
-                const Spectrum &beta = paths[v.path].throughput;
-                float *col = qc.data.data() + m;
-                const size_t st = qc.stride;
-                col[WiZ * st] = si.wi.z;
-                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
-                col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
-                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
-                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
-                col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
-                col[Quad * st] = float(quad_of_light[idx]);
-                if (n_quad == LambertChunk) flush_quad();
-                continue;
+            if (const LambertInfo *lam = bsdf.lambert()) {
+                if (quad_of_light[idx] >= 0) {
+                    v.nee = false; // handled by the kernel
+                    buf.quad_index[n_quad] = v.path;
+                    gather(qc, n_quad++, si, *lam, paths[v.path].throughput, j, quad_of_light[idx]);
+                    if (n_quad == LambertChunk) flush_quad();
+                    continue;
+                }
+                if (const int row = sphere_of_light[idx]; row >= 0) {
+                    // From outside the sphere only (Sphere::sample_solid_angle's test).
+                    Vec3f dc = Point3f(spheres.at(SphereTable::Cx, row), spheres.at(SphereTable::Cy, row),
+                                       spheres.at(SphereTable::Cz, row)) - si.p;
+                    if (squared_norm(dc) > sphere_radius_adj2[row]) {
+                        v.nee = false;
+                        buf.sphere_index[n_sph] = v.path;
+                        gather(sc, n_sph++, si, *lam, paths[v.path].throughput, j, row);
+                        if (n_sph == LambertChunk) flush_sphere();
+                        continue;
+                    }
+                }
             }
             const Light &light = *lights[idx];
             // Constructed in place (guaranteed copy elision): copying the returned pair with wide
@@ -237,6 +282,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, {u[1][j], u[2][j]}, si.time));
         }
         flush_quad();
+        flush_sphere();
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
         // Constant Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.

@@ -4,6 +4,7 @@
 
 #include "../core/math.h"
 #include "../core/multi_isa.h"
+#include "../core/warp.h"
 #include "../render/interaction.h"
 
 namespace mvpt {
@@ -129,6 +130,49 @@ void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count) {
     lambert_nee_kernel_impl(c.data.data(), c.stride, n, light_count);
 }
 
+namespace {
+
+/// The part of next-event estimation after sample_li, for lane i of lq_col columns: BSDF value
+/// and density, MIS, contribution (as lambert_nee_kernel) and the shadow ray spawn_ray_to(lp).
+/// v = lp - p; ld and lpdf: the emitter sample's direction and density; w: its weight L/pdf.
+[[gnu::always_inline]] inline void lambert_nee_tail(float *c, size_t s, size_t i, float px, float py, float pz,
+                                                    float lpx, float lpy, float lpz, float vx, float vy, float vz,
+                                                    float ldx, float ldy, float ldz, float lpdf, float wr, float wg,
+                                                    float wb, bool sampled, float light_count) {
+    using namespace lq_col;
+    const float wiz = c[WiZ * s + i];
+    const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+    float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
+    float cos_o = select(back, -woz, woz);
+    bool f_ok = (front | back) & !(cos_o <= 0.f);
+    float scale = InvPi * cos_o;
+    float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
+    bool ok = sampled & f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
+    float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
+    float a = lpdf / light_count, a2 = a * a, b2 = pdf * pdf;
+    float w = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+    c[Cr * s + i] = ((c[Br * s + i] * fr) * (wr * light_count)) * w;
+    c[Cg * s + i] = ((c[Bg * s + i] * fg) * (wg * light_count)) * w;
+    c[Cb * s + i] = ((c[Bb * s + i] * fb) * (wb * light_count)) * w;
+    c[Ok * s + i] = select(ok, 1.f, 0.f);
+
+    const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+    float off = offset_along(px, py, pz, gx, gy, gz, vx, vy, vz);
+    float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+    float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+    float tdist = std::sqrt(tx * tx + ty * ty + tz * tz);
+    float inv = 1.f / tdist;
+    c[Ox * s + i] = ox;
+    c[Oy * s + i] = oy;
+    c[Oz * s + i] = oz;
+    c[Dx * s + i] = tx * inv;
+    c[Dy * s + i] = ty * inv;
+    c[Dz * s + i] = tz * inv;
+    c[TMax * s + i] = tdist * (1.f - ShadowEpsilon);
+}
+
+} // namespace
+
 MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
     using namespace lq_col;
     constexpr size_t M = QuadTable::Max;
@@ -136,7 +180,7 @@ MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, c
     for (size_t i = 0; i < n; ++i) {
         const int k = int(c[Quad * s + i]);
         const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
-        // ---- Emitter sample: TriangleMesh::sample_point (parallelogram), area_to_solid_angle, AreaLight::sample_li.
+        // TriangleMesh::sample_point (parallelogram), area_to_solid_angle, AreaLight::sample_li.
         const float ux = c[Ux * s + i], uy = c[Uy * s + i];
         float lpx = (q[QuadTable::Ox * M + k] + q[QuadTable::E1x * M + k] * ux) + q[QuadTable::E2x * M + k] * uy;
         float lpy = (q[QuadTable::Oy * M + k] + q[QuadTable::E1y * M + k] * ux) + q[QuadTable::E2y * M + k] * uy;
@@ -154,43 +198,69 @@ MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, c
         float wr = q[QuadTable::Lr * M + k] * inv_pdf, wg = q[QuadTable::Lg * M + k] * inv_pdf,
               wb = q[QuadTable::Lb * M + k] * inv_pdf;
         bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
-
-        // ---- BSDF value and density, MIS, contribution (as lambert_nee_kernel).
-        const float wiz = c[WiZ * s + i];
-        const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
-        float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
-        float cos_o = select(back, -woz, woz);
-        bool f_ok = (front | back) & !(cos_o <= 0.f);
-        float scale = InvPi * cos_o;
-        float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
-        bool ok = sampled & f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
-        float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
-        float a = lpdf / light_count, a2 = a * a, b2 = pdf * pdf;
-        float w = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
-        c[Cr * s + i] = ((c[Br * s + i] * fr) * (wr * light_count)) * w;
-        c[Cg * s + i] = ((c[Bg * s + i] * fg) * (wg * light_count)) * w;
-        c[Cb * s + i] = ((c[Bb * s + i] * fb) * (wb * light_count)) * w;
-        c[Ok * s + i] = select(ok, 1.f, 0.f);
-
-        // ---- Shadow ray: spawn_ray_to(the sampled point).
-        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
-        float off = offset_along(px, py, pz, gx, gy, gz, vx, vy, vz);
-        float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
-        float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
-        float tdist = std::sqrt(tx * tx + ty * ty + tz * tz);
-        float inv = 1.f / tdist;
-        c[Ox * s + i] = ox;
-        c[Oy * s + i] = oy;
-        c[Oz * s + i] = oz;
-        c[Dx * s + i] = tx * inv;
-        c[Dy * s + i] = ty * inv;
-        c[Dz * s + i] = tz * inv;
-        c[TMax * s + i] = tdist * (1.f - ShadowEpsilon);
+        lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
+                         light_count);
     }
 }
 
 void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count) {
     lambert_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v, light_count);
+}
+
+MVPT_MULTI_ISA void lambert_sphere_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
+    using namespace lq_col;
+    constexpr size_t M = SphereTable::Max;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const int k = int(c[Quad * s + i]);
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        const float ux = c[Ux * s + i], uy = c[Uy * s + i];
+        const float cx = q[SphereTable::Cx * M + k], cy = q[SphereTable::Cy * M + k], cz = q[SphereTable::Cz * M + k];
+        const float radius = q[SphereTable::Radius * M + k];
+        // Sphere::sample_solid_angle from outside: a uniform direction in the subtended cone.
+        float dcx = cx - px, dcy = cy - py, dcz = cz - pz;
+        float dc2 = dcx * dcx + dcy * dcy + dcz * dcz;
+        float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
+              inv_sin_max = 1.f / sin_max, cos_max = std::sqrt(max_of(1.f - sin_max2, 0.f));
+        float tay = (cos_max - 1.f) * ux + 1.f;
+        float sin2 = select(sin_max2 > 0.00068523f, 1.f - tay * tay, sin_max2 * ux);
+        float cos_t = std::sqrt(max_of(1.f - sin2, 0.f));
+        float cos_alpha = sin2 * inv_sin_max + cos_t * std::sqrt(max_of(1.f - sin2 * inv_sin_max * inv_sin_max, 0.f));
+        float sin_alpha = std::sqrt(max_of(1.f - cos_alpha * cos_alpha, 0.f));
+        Vec2f sc_phi = warp::sincos_turn(uy);
+        float vlx = sc_phi.y * sin_alpha, vly = sc_phi.x * sin_alpha, vlz = cos_alpha;
+        // Frame(dc * -inv_dc) [Duff et al. 2017] and to_world.
+        float neg_inv = -inv_dc;
+        float fnx = dcx * neg_inv, fny = dcy * neg_inv, fnz = dcz * neg_inv;
+        float sign = std::copysign(1.f, fnz);
+        float fa = -1.f / (sign + fnz), fb = fnx * fny * fa;
+        float fsx = 1.f + sign * fnx * fnx * fa, fsy = sign * fb, fsz = -sign * fnx;
+        float ftx = fb, fty = sign + fny * fny * fa, ftz = -fny;
+        float dirx = (fsx * vlx + ftx * vly) + fnx * vlz;
+        float diry = (fsy * vlx + fty * vly) + fny * vlz;
+        float dirz = (fsz * vlx + ftz * vly) + fnz * vlz;
+        float lpx = cx + dirx * radius, lpy = cy + diry * radius, lpz = cz + dirz * radius;
+        bool flip = q[SphereTable::Flip * M + k] > 0.f;
+        float snx = select(flip, -dirx, dirx), sny = select(flip, -diry, diry), snz = select(flip, -dirz, dirz);
+        float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
+        float dist2 = vx * vx + vy * vy + vz * vz;
+        float lpdf = select(dist2 == 0.f, 0.f, 1.f / ((2.f * Pi) * (1.f - cos_max)));
+        // AreaLight::sample_li.
+        float dist = std::sqrt(dist2);
+        float inv_dist = 1.f / dist;
+        const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
+        bool front_side = !(snx * ldx + sny * ldy + snz * ldz >= 0.f);
+        float inv_pdf = 1.f / lpdf;
+        float wr = q[SphereTable::Lr * M + k] * inv_pdf, wg = q[SphereTable::Lg * M + k] * inv_pdf,
+              wb = q[SphereTable::Lb * M + k] * inv_pdf;
+        bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
+        lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
+                         light_count);
+    }
+}
+
+void lambert_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count) {
+    lambert_sphere_nee_kernel_impl(c.data.data(), c.stride, n, spheres.v, light_count);
 }
 
 } // namespace mvpt

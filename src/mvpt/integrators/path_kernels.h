@@ -87,4 +87,16 @@ struct QuadTable {
 /// included (AreaLight::sample_li on a parallelogram mesh, then as lambert_nee_kernel).
 void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count);
 
+/// Parameters of up to `Max` sphere emitters (SphereEmitter in light.h), one row per parameter.
+struct SphereTable {
+    static constexpr size_t Max = 16;
+    enum : size_t { Cx, Cy, Cz, Radius, Flip, Lr, Lg, Lb, Params };
+    alignas(64) float v[Params * Max] = {};
+    float &at(size_t param, size_t sphere) { return v[param * Max + sphere]; }
+};
+
+/// `lambert_quad_nee_kernel` towards sphere emitters seen from outside (the Quad column holds the
+/// SphereTable row): Sphere::sample_solid_angle's cone sampling, then AreaLight::sample_li.
+void lambert_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count);
+
 } // namespace mvpt

@@ -34,6 +34,14 @@ struct QuadEmitter {
     Color3f radiance;
 };
 
+/// A sphere emitter of constant radiance sampled by Sphere::sample_solid_angle.
+struct SphereEmitter {
+    Point3f center;
+    float radius = 0.f;
+    bool flip_normals = false;
+    Color3f radiance;
+};
+
 enum LightFlags : uint32_t {
     LightDeltaPosition = 1u << 0,
     LightDeltaDirection = 1u << 1,
@@ -69,6 +77,8 @@ public:
     virtual bool uniform_radiance() const { return false; }
     /// True, with `quad` filled, when sample_li is exactly QuadEmitter's sampling.
     virtual bool quad_emitter(QuadEmitter &quad) const { (void)quad; return false; }
+    /// True, with `sphere` filled, when sample_li is a constant-radiance sphere's.
+    virtual bool sphere_emitter(SphereEmitter &sphere) const { (void)sphere; return false; }
 
     uint32_t flags() const { return m_flags; }
     bool is_delta() const { return (m_flags & (LightDeltaPosition | LightDeltaDirection)) != 0; }

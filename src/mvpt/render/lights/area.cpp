@@ -31,6 +31,12 @@ public:
         q.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
         return true;
     }
+    bool sphere_emitter(SphereEmitter &s) const override {
+        if (!m_radiance->is_constant() || !m_shape || !m_shape->sphere(s.center, s.radius, s.flip_normals))
+            return false;
+        s.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
+        return true;
+    }
 
     // Mitsuba samples a spatially varying radiance texture by the texture's own
     // density mapped onto the shape; here the shape's solid-angle sampling is
