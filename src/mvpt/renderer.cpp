@@ -104,8 +104,13 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         thread_local std::vector<Spectrum> radiance;
         size_t n = size_t(tile.x1 - tile.x0) * size_t(tile.y1 - tile.y0);
         samplers.assign(n, Sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed));
+        thread_local std::vector<Vec2f> film_positions, lens_points;
+        thread_local std::vector<float> times;
         rays.resize(n);
         radiance.resize(n);
+        film_positions.resize(n);
+        lens_points.resize(n);
+        times.resize(n);
         for (int y = tile.y0, i = 0; y < tile.y1; ++y)
             for (int x = tile.x0; x < tile.x1; ++x, ++i) {
                 int px = x + film.crop_x, py = y + film.crop_y;
@@ -117,9 +122,11 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                 float u_time = sampler.next_1d();
                 Vec2f offset = film.filter->sample(u_film);
                 Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
-                Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
-                rays[i] = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
+                film_positions[i] = film_pos;
+                lens_points[i] = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
+                times[i] = cam.sample_time(u_time);
             }
+        cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
         rc.camera_rays += n;
         integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
         for (int y = tile.y0, i = 0; y < tile.y1; ++y)
