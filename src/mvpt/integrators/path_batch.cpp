@@ -39,6 +39,8 @@ struct WavePath {
 struct ScatterVertex {
     /// Index of the path among the active ones.
     uint32_t path;
+    /// The BSDF at the vertex (looked up once).
+    const Bsdf *bsdf;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
     std::pair<LightSample, Spectrum> emitter_sample;
@@ -184,6 +186,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
             const size_t j = n_scatter++;
             buf.scatter[j].path = uint32_t(k);
+            buf.scatter[j].bsdf = si.shape->bsdf.get();
             if (independent) {
                 buf.u_hash[j] = sampler.sample_hash();
                 buf.u_dim[j] = sampler.dimension();
@@ -251,7 +254,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             const SurfaceInteraction &si = buf.si[v.path];
-            const Bsdf &bsdf = *si.shape->bsdf;
+            const Bsdf &bsdf = *v.bsdf;
             v.nee = bsdf.has_smooth() && !lights.empty();
             if (!v.nee) continue;
             size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
@@ -306,7 +309,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             ScatterVertex &v = buf.scatter[j];
             if (!v.nee || v.emitter_sample.second.is_black()) continue;
             const SurfaceInteraction &si = buf.si[v.path];
-            const Bsdf &bsdf = *si.shape->bsdf;
+            const Bsdf &bsdf = *v.bsdf;
             const LightSample &ls = v.emitter_sample.first;
             if (const LambertInfo *lam = bsdf.lambert()) {
                 using namespace ln_col;
@@ -370,7 +373,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
             const size_t k = v.path;
             WavePath &p = paths[k];
             const SurfaceInteraction &si = buf.si[k];
-            const Bsdf &bsdf = *si.shape->bsdf;
+            const Bsdf &bsdf = *v.bsdf;
             if (const LambertInfo *lam = bsdf.lambert()) {
                 using namespace ls_col;
                 const size_t m = n_lam++;
