@@ -1,5 +1,7 @@
 #include "renderer.h"
 
+#include "core/sampler_batch.h"
+
 #include "core/warp.h"
 #include "integrators/mvpath.h"
 #include "render/camera.h"
@@ -104,22 +106,58 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         thread_local std::vector<Spectrum> radiance;
         size_t n = size_t(tile.x1 - tile.x0) * size_t(tile.y1 - tile.y0);
         samplers.assign(n, Sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed));
+        thread_local std::vector<Vec2f> film_positions, lens_points;
+        thread_local std::vector<float> times;
         rays.resize(n);
         radiance.resize(n);
-        for (int y = tile.y0, i = 0; y < tile.y1; ++y)
-            for (int x = tile.x0; x < tile.x1; ++x, ++i) {
-                int px = x + film.crop_x, py = y + film.crop_y;
+        film_positions.resize(n);
+        lens_points.resize(n);
+        times.resize(n);
+        static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
+                      "independent_start_draws draws the camera dimensions 0, 1, 2");
+        const bool independent = cam.sampler_kind == SamplerKind::Independent;
+        thread_local std::vector<uint32_t> row_px;
+        thread_local std::vector<uint64_t> pixel_hash, sample_hash;
+        thread_local std::vector<float> draws[5];
+        const size_t width = size_t(tile.x1 - tile.x0);
+        for (int y = tile.y0, i = 0; y < tile.y1; ++y) {
+            int py = y + film.crop_y;
+            if (independent) {
+                // The row's sampler starts and camera numbers in one vector loop (sampler_batch.h).
+                row_px.resize(width);
+                pixel_hash.resize(width);
+                sample_hash.resize(width);
+                for (auto &d : draws) d.resize(width);
+                for (size_t c = 0; c < width; ++c) row_px[c] = uint32_t(tile.x0 + int(c) + film.crop_x);
+                float *const out[5] = {draws[0].data(), draws[1].data(), draws[2].data(), draws[3].data(), draws[4].data()};
+                independent_start_draws(samplers[i].seed(), uint32_t(view), row_px.data(), uint32_t(py), uint32_t(pass),
+                                        width, pixel_hash.data(), sample_hash.data(), out);
+            }
+            for (int x = tile.x0, c = 0; x < tile.x1; ++x, ++i, ++c) {
+                int px = x + film.crop_x;
                 Sampler &sampler = samplers[i];
-                sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
-                sampler.set_dimension(DimFilm);
-                Vec2f u_film = sampler.next_2d();
-                Vec2f u_lens = sampler.next_2d();
-                float u_time = sampler.next_1d();
+                Vec2f u_film, u_lens;
+                float u_time;
+                if (independent) {
+                    sampler.start_from(pixel_hash[c], sample_hash[c], uint32_t(pass), DimCameraEnd);
+                    u_film = {draws[0][c], draws[1][c]};
+                    u_lens = {draws[2][c], draws[3][c]};
+                    u_time = draws[4][c];
+                } else {
+                    sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
+                    sampler.set_dimension(DimFilm);
+                    u_film = sampler.next_2d();
+                    u_lens = sampler.next_2d();
+                    u_time = sampler.next_1d();
+                }
                 Vec2f offset = film.filter->sample(u_film);
                 Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
-                Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
-                rays[i] = cam.generate_ray(film_pos, lens, cam.sample_time(u_time));
+                film_positions[i] = film_pos;
+                lens_points[i] = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
+                times[i] = cam.sample_time(u_time);
             }
+        }
+        cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
         rc.camera_rays += n;
         integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
         for (int y = tile.y0, i = 0; y < tile.y1; ++y)

@@ -66,6 +66,13 @@ public:
         m_index = sample_index;
         m_dim = dimension;
     }
+    /// `start` from hashes computed elsewhere (independent_start_draws), at dimension `dimension`.
+    void start_from(uint64_t pixel_hash, uint64_t sample_hash, uint32_t sample_index, uint32_t dimension) {
+        m_pixel_hash = pixel_hash;
+        m_sample_hash = sample_hash;
+        m_index = sample_index;
+        m_dim = dimension;
+    }
     void set_dimension(uint32_t d) { m_dim = d; }
     uint32_t dimension() const { return m_dim; }
     SamplerKind kind() const { return m_kind; }

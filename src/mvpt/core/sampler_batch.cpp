@@ -83,4 +83,68 @@ void independent_vertex_draws(const uint64_t *hash, const uint32_t *dim, size_t 
     draws_scalar(hash, dim, done, n, out);
 }
 
+
+namespace {
+
+/// independent_start_draws on lanes [begin, n) (any CPU).
+void start_draws_scalar(uint64_t h_view, const uint32_t *px, uint32_t py, uint32_t sample, size_t begin, size_t n,
+                        uint64_t *pixel_hash, uint64_t *sample_hash, float *const out[5]) {
+    for (size_t i = begin; i < n; ++i) {
+        uint64_t ph = hash_combine(hash_combine(h_view, px[i]), py);
+        uint64_t sh = hash_combine(ph, sample);
+        pixel_hash[i] = ph;
+        sample_hash[i] = sh;
+        uint64_t b0 = Sampler::independent_bits(sh, 0), b1 = Sampler::independent_bits(sh, 1),
+                 b2 = Sampler::independent_bits(sh, 2);
+        out[0][i] = bits_to_unit_float(uint32_t(b0));
+        out[1][i] = bits_to_unit_float(uint32_t(b0 >> 32));
+        out[2][i] = bits_to_unit_float(uint32_t(b1));
+        out[3][i] = bits_to_unit_float(uint32_t(b1 >> 32));
+        out[4][i] = bits_to_unit_float(uint32_t(b2));
+    }
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+/// hash_combine on 8 lanes.
+[[gnu::target("avx512f,avx512dq,avx512vl")]] inline U64x8 combine8(U64x8 h, U64x8 v) {
+    return mix8(h ^ (v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2)));
+}
+
+[[gnu::target("avx512f,avx512dq,avx512vl")]] size_t start_draws_avx512(uint64_t h_view, const uint32_t *px,
+                                                                        uint32_t py, uint32_t sample, size_t n,
+                                                                        uint64_t *pixel_hash, uint64_t *sample_hash,
+                                                                        float *const out[5]) {
+    const U64x8 hv = {h_view, h_view, h_view, h_view, h_view, h_view, h_view, h_view};
+    const U64x8 vy = {py, py, py, py, py, py, py, py};
+    const U64x8 vs = {sample, sample, sample, sample, sample, sample, sample, sample};
+    const uint64_t golden = 0x9e3779b97f4a7c15ULL;
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        U64x8 x;
+        for (int l = 0; l < 8; ++l) x[l] = px[i + l];
+        U64x8 ph = combine8(combine8(hv, x), vy);
+        U64x8 sh = combine8(ph, vs);
+        __builtin_memcpy(pixel_hash + i, &ph, sizeof(ph));
+        __builtin_memcpy(sample_hash + i, &sh, sizeof(sh));
+        U64x8 b0 = mix8(sh + golden * 1), b1 = mix8(sh + golden * 2), b2 = mix8(sh + golden * 3);
+        F32x8 f[5] = {unit8(b0, 0), unit8(b0, 32), unit8(b1, 0), unit8(b1, 32), unit8(b2, 0)};
+        for (int k = 0; k < 5; ++k) __builtin_memcpy(out[k] + i, &f[k], sizeof(F32x8));
+    }
+    return i;
+}
+#endif
+
+} // namespace
+
+void independent_start_draws(uint64_t seed, uint32_t view, const uint32_t *px, uint32_t py, uint32_t sample, size_t n,
+                             uint64_t *pixel_hash, uint64_t *sample_hash, float *const out[5]) {
+    // Sampler::start's hash_ints(seed, view, px, py), then the sample index.
+    const uint64_t h_view = hash_combine(mix_bits(seed + 0x9e3779b97f4a7c15ULL), view);
+    size_t done = 0;
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (has_avx512()) done = start_draws_avx512(h_view, px, py, sample, n, pixel_hash, sample_hash, out);
+#endif
+    start_draws_scalar(h_view, px, py, sample, done, n, pixel_hash, sample_hash, out);
+}
+
 } // namespace mvpt

@@ -14,6 +14,20 @@ inline Vec2f sincos_quarter_turn(float a) {
     return {s, c};
 }
 
+/// (sin 2πu, cos 2πu) for u in [0, 1) without libm: the nearest quarter turn q/4 is taken
+/// out exactly (u is a multiple of 2^-24), the rest (|angle| <= pi/4) goes to
+/// sincos_quarter_turn, and the quadrant rotates the pair. Branch-free, so vector loops
+/// (integrators/path_kernels.cpp) compute the same bits as scalar code.
+inline Vec2f sincos_turn(float u) {
+    int quadrant = int(4.f * u + 0.5f); // the nearest quarter turn (u >= 0)
+    Vec2f sc = sincos_quarter_turn((2.f * Pi) * (u - 0.25f * float(quadrant)));
+    quadrant &= 3;
+    // Rotation by quadrant * pi/2: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
+    bool odd = (quadrant & 1) != 0, neg_sin = quadrant >= 2, neg_cos = quadrant == 1 || quadrant == 2;
+    float s = select(odd, sc.y, sc.x), c = select(odd, sc.x, sc.y);
+    return {select(neg_sin, -s, s), select(neg_cos, -c, c)};
+}
+
 /// Concentric map to the unit disk [Shirley & Chiu 1997]; density 1/pi.
 inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
     float x = 2.f * u.x - 1.f, y = 2.f * u.y - 1.f;

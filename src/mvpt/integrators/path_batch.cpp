@@ -6,6 +6,7 @@
 // (tests/cpp/test_path_batch.cpp checks this). trace_batch starts the paths from given
 // states instead: multi-view path tracing's suffixes, bit-identical to `trace`.
 #include "path.h"
+#include "path_kernels.h"
 
 #include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
@@ -39,6 +40,8 @@ struct WavePath {
 struct ScatterVertex {
     /// Index of the path among the active ones.
     uint32_t path;
+    /// The BSDF at the vertex (looked up once).
+    const Bsdf *bsdf;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
     std::pair<LightSample, Spectrum> emitter_sample;
@@ -49,6 +52,9 @@ struct PendingShadow {
     uint32_t path;
     Spectrum contribution;
 };
+
+/// Lanes per call of a Lambertian vector kernel: its columns (about 40 × 64 floats) stay in L1.
+constexpr size_t LambertChunk = 64;
 
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
@@ -66,6 +72,11 @@ struct WaveBuffers {
     std::vector<float> u[7];
     std::vector<uint64_t> u_hash;
     std::vector<uint32_t> u_dim;
+    /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
+    SoaColumns lambert, quad, sphere;
+    std::vector<uint32_t> lambert_index, quad_index, sphere_index;
+    /// Per light, its row in the QuadTable / SphereTable, or -1.
+    std::vector<int> quad_of_light, sphere_of_light;
 };
 } // namespace
 
@@ -112,6 +123,37 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     for (auto &u : buf.u) u.resize(n);
     buf.u_hash.resize(n);
     buf.u_dim.resize(n);
+    buf.lambert_index.resize(LambertChunk);
+    buf.quad_index.resize(LambertChunk);
+    buf.sphere_index.resize(LambertChunk);
+    // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
+    QuadTable quads;
+    std::vector<int> &quad_of_light = buf.quad_of_light;
+    quad_of_light.assign(lights.size(), -1);
+    for (size_t l = 0, nq = 0; l < lights.size() && nq < QuadTable::Max; ++l) {
+        QuadEmitter q;
+        if (!lights[l]->quad_emitter(q)) continue;
+        const float row[QuadTable::Params] = {q.origin.x, q.origin.y, q.origin.z, q.e1.x, q.e1.y, q.e1.z, q.e2.x, q.e2.y,
+                                              q.e2.z, q.n.x, q.n.y, q.n.z, q.inv_area, q.radiance.r, q.radiance.g,
+                                              q.radiance.b};
+        for (size_t r = 0; r < QuadTable::Params; ++r) quads.at(r, nq) = row[r];
+        quad_of_light[l] = int(nq++);
+    }
+    // Sphere emitters of constant radiance, likewise.
+    SphereTable spheres;
+    float sphere_radius_adj2[SphereTable::Max]; // squared radius below which a point counts as inside
+    std::vector<int> &sphere_of_light = buf.sphere_of_light;
+    sphere_of_light.assign(lights.size(), -1);
+    for (size_t l = 0, ns = 0; l < lights.size() && ns < SphereTable::Max; ++l) {
+        SphereEmitter e;
+        if (!lights[l]->sphere_emitter(e)) continue;
+        const float row[SphereTable::Params] = {e.center.x, e.center.y, e.center.z, e.radius, e.flip_normals ? 1.f : 0.f,
+                                                e.radiance.r, e.radiance.g, e.radiance.b};
+        for (size_t r = 0; r < SphereTable::Params; ++r) spheres.at(r, ns) = row[r];
+        float radius_adj = e.radius * (e.flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
+        sphere_radius_adj2[ns] = radius_adj * radius_adj;
+        sphere_of_light[l] = int(ns++);
+    }
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
 
@@ -160,6 +202,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
             const size_t j = n_scatter++;
             buf.scatter[j].path = uint32_t(k);
+            buf.scatter[j].bsdf = si.shape->bsdf.get();
             if (independent) {
                 buf.u_hash[j] = sampler.sample_hash();
                 buf.u_dim[j] = sampler.dimension();
@@ -177,26 +220,134 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         if (independent) independent_vertex_draws(buf.u_hash.data(), buf.u_dim.data(), n_scatter, u);
 
         // ---------------- Next-event estimation: emitter samples ----------------
+        // A Lambertian vertex that chose a quad emitter is done whole (emitter sample, BSDF,
+        // MIS, shadow ray) by a vector kernel; the others sample their emitter here.
+        size_t n_shadow = 0, n_quad = 0;
+        SoaColumns &qc = buf.quad;
+        qc.resize(lq_col::Count, LambertChunk);
+        size_t n_sph = 0;
+        SoaColumns &sc = buf.sphere;
+        sc.resize(lq_col::Count, LambertChunk);
+        // Shadow rays and contributions of a kernel's lanes whose estimate counts.
+        auto collect = [&](SoaColumns &c, const uint32_t *index, size_t count) {
+            using namespace lq_col;
+            for (size_t m = 0; m < count; ++m) {
+                if (!(c[Ok][m] > 0.f)) continue;
+                const uint32_t k = index[m];
+                buf.shadow_rays[n_shadow] = Ray{{c[Ox][m], c[Oy][m], c[Oz][m]}, {c[Dx][m], c[Dy][m], c[Dz][m]}, 0.f,
+                                                c[TMax][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(c[Cr][m], c[Cg][m], c[Cb][m])};
+            }
+        };
+        auto flush_quad = [&] {
+            if (n_quad == 0) return;
+            lambert_quad_nee_kernel(qc, n_quad, quads, float(lights.size()));
+            collect(qc, buf.quad_index.data(), n_quad);
+            n_quad = 0;
+        };
+        auto flush_sphere = [&] {
+            if (n_sph == 0) return;
+            lambert_sphere_nee_kernel(sc, n_sph, spheres, float(lights.size()));
+            collect(sc, buf.sphere_index.data(), n_sph);
+            n_sph = 0;
+        };
+        // One lane of lq_col columns: the vertex, its throughput, the emitter's numbers and table row.
+        auto gather = [&](SoaColumns &c, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
+                          const Spectrum &beta, size_t j, int row) {
+            using namespace lq_col;
+            float *col = c.data.data() + m;
+            const size_t st = c.stride;
+            col[WiZ * st] = si.wi.z;
+            col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
+            col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
+            col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+            col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+            col[Rr * st] = lam.reflectance.r, col[Rg * st] = lam.reflectance.g, col[Rb * st] = lam.reflectance.b;
+            col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+            col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
+            col[Quad * st] = float(row);
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             const SurfaceInteraction &si = buf.si[v.path];
-            v.nee = si.shape->bsdf->has_smooth() && !lights.empty();
+            const Bsdf &bsdf = *v.bsdf;
+            v.nee = bsdf.has_smooth() && !lights.empty();
             if (!v.nee) continue;
             size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
+            if (const LambertInfo *lam = bsdf.lambert()) {
+                if (quad_of_light[idx] >= 0) {
+                    v.nee = false; // handled by the kernel
+                    buf.quad_index[n_quad] = v.path;
+                    gather(qc, n_quad++, si, *lam, paths[v.path].throughput, j, quad_of_light[idx]);
+                    if (n_quad == LambertChunk) flush_quad();
+                    continue;
+                }
+                if (const int row = sphere_of_light[idx]; row >= 0) {
+                    // From outside the sphere only (Sphere::sample_solid_angle's test).
+                    Vec3f dc = Point3f(spheres.at(SphereTable::Cx, row), spheres.at(SphereTable::Cy, row),
+                                       spheres.at(SphereTable::Cz, row)) - si.p;
+                    if (squared_norm(dc) > sphere_radius_adj2[row]) {
+                        v.nee = false;
+                        buf.sphere_index[n_sph] = v.path;
+                        gather(sc, n_sph++, si, *lam, paths[v.path].throughput, j, row);
+                        if (n_sph == LambertChunk) flush_sphere();
+                        continue;
+                    }
+                }
+            }
             const Light &light = *lights[idx];
             // Constructed in place (guaranteed copy elision): copying the returned pair with wide
             // loads right after the callee's narrow stores would stall on store forwarding.
             ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, {u[1][j], u[2][j]}, si.time));
         }
+        flush_quad();
+        flush_sphere();
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
-        size_t n_shadow = 0;
+        // Constant Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.
+        size_t n_lam = 0;
+        SoaColumns &lc = buf.lambert;
+        lc.resize(ln_col::Count, LambertChunk);
+        auto flush_nee = [&] {
+            if (n_lam == 0) return;
+            using namespace ln_col;
+            lambert_nee_kernel(lc, n_lam, float(lights.size()));
+            for (size_t m = 0; m < n_lam; ++m) {
+                if (!(lc[Ok][m] > 0.f)) continue;
+                const uint32_t k = buf.scatter[buf.lambert_index[m]].path;
+                buf.shadow_rays[n_shadow] = Ray{{lc[Ox][m], lc[Oy][m], lc[Oz][m]}, {lc[Dx][m], lc[Dy][m], lc[Dz][m]},
+                                                0.f, lc[TMax][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(lc[Cr][m], lc[Cg][m], lc[Cb][m])};
+            }
+            n_lam = 0;
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             if (!v.nee || v.emitter_sample.second.is_black()) continue;
             const SurfaceInteraction &si = buf.si[v.path];
-            const Bsdf &bsdf = *si.shape->bsdf;
+            const Bsdf &bsdf = *v.bsdf;
             const LightSample &ls = v.emitter_sample.first;
+            if (const LambertInfo *lam = bsdf.lambert()) {
+                using namespace ln_col;
+                const size_t m = n_lam++;
+                buf.lambert_index[m] = uint32_t(j);
+                const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
+                float *col = lc.data.data() + m;
+                const size_t st = lc.stride;
+                col[WiZ * st] = si.wi.z;
+                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
+                col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+                col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
+                col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
+                col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;
+                col[Wr * st] = weight.r, col[Wg * st] = weight.g, col[Wb * st] = weight.b;
+                if (n_lam == LambertChunk) flush_nee();
+                continue;
+            }
             Spectrum weight = v.emitter_sample.second;
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
@@ -207,14 +358,60 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 buf.shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
             }
         }
+        flush_nee();
 
         // ---------------- BSDF sampling and Russian roulette ----------------
+        lc.resize(ls_col::Count, LambertChunk);
+        // A Lambertian sample is never a null lobe (the path becomes valid), has eta 1 and is not a delta.
+        auto flush_sample = [&] {
+            if (n_lam == 0) return;
+            using namespace ls_col;
+            lambert_sample_kernel(lc, n_lam);
+            for (size_t m = 0; m < n_lam; ++m) {
+                const uint32_t k = buf.lambert_index[m];
+                WavePath &p = paths[k];
+                p.valid = true;
+                if (!(lc[Alive][m] > 0.f)) continue;
+                const SurfaceInteraction &si = buf.si[k];
+                buf.rays[k] = Ray{{lc[Ox][m], lc[Oy][m], lc[Oz][m]}, {lc[Dx][m], lc[Dy][m], lc[Dz][m]}, 0.f, Infinity,
+                                  si.time};
+                p.throughput = Spectrum(lc[Br][m], lc[Bg][m], lc[Bb][m]);
+                p.prev_p = si.p;
+                p.prev_bsdf_pdf = lc[Pdf][m];
+                p.prev_bsdf_delta = false;
+                ++p.depth;
+                buf.alive[k] = 1;
+            }
+            n_lam = 0;
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             const ScatterVertex &v = buf.scatter[j];
             const size_t k = v.path;
             WavePath &p = paths[k];
             const SurfaceInteraction &si = buf.si[k];
-            const Bsdf &bsdf = *si.shape->bsdf;
+            const Bsdf &bsdf = *v.bsdf;
+            if (const LambertInfo *lam = bsdf.lambert()) {
+                using namespace ls_col;
+                const size_t m = n_lam++;
+                buf.lambert_index[m] = uint32_t(k);
+                const Frame &f = si.sh_frame;
+                float *col = lc.data.data() + m;
+                const size_t st = lc.stride;
+                col[WiZ * st] = si.wi.z;
+                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
+                col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
+                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
+                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
+                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
+                col[Eta * st] = p.eta, col[URr * st] = u[6][j];
+                col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+                if (n_lam == LambertChunk) flush_sample();
+                continue;
+            }
             auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
@@ -236,6 +433,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             ++p.depth;
             buf.alive[k] = 1;
         }
+        flush_sample();
 
         // ---------------- Shadow rays of this vertex ----------------
         counters.shadow_rays += n_shadow;

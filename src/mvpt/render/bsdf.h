@@ -48,6 +48,14 @@ struct BsdfSample {
     uint32_t sampled_type = BsdfNone;
 };
 
+/// A constant Lambertian reflectance (diffuse with a constant texture, or twosided around
+/// such a BSDF): the wavefront path tracer samples and evaluates it in vector kernels.
+struct LambertInfo {
+    Color3f reflectance;
+    /// Reflects on both sides (twosided: the back side mirrors directions through the surface).
+    bool two_sided = false;
+};
+
 class Bsdf : public Object {
 public:
     /// Sample `wo` given `wi`; returns the sample and its weight f*|cos wo|/pdf
@@ -75,9 +83,13 @@ public:
     bool is_purely_delta() const { return m_flags != 0 && (m_flags & BsdfSmooth) == 0; }
     /// Roughness at `si` for path-reuse heuristics: GGX-equivalent alpha, 1 for diffuse.
     virtual float roughness(const SurfaceInteraction &) const { return 1.f; }
+    /// The constant Lambertian reflectance this BSDF amounts to, or nullptr.
+    const LambertInfo *lambert() const { return m_is_lambert ? &m_lambert : nullptr; }
 
 protected:
     uint32_t m_flags = BsdfNone;
+    LambertInfo m_lambert;
+    bool m_is_lambert = false;
 };
 
 } // namespace mvpt

@@ -54,6 +54,11 @@ public:
     /// (design doc §2): from the lens point towards the point of the focus plane that `film`
     /// maps to. Rays carry unit weight; [tmin, tmax] spans camera-space depths [near, far].
     virtual Ray generate_ray(Vec2f film, Vec2f lens, float time) const = 0;
+    /// `generate_ray` for n rays (a render tile's), bit-identical to it; cameras may override
+    /// it with a vector kernel.
+    virtual void generate_rays(const Vec2f *film, const Vec2f *lens, const float *time, size_t n, Ray *out) const {
+        for (size_t i = 0; i < n; ++i) out[i] = generate_ray(film[i], lens[i], time[i]);
+    }
 
     /// Inverse of `generate_ray` for a fixed lens point and time (design doc §3, the shift
     /// T_{l->k}): the film position where the ray from the lens point `u(time, lens)` towards

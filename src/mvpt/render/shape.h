@@ -82,6 +82,12 @@ public:
     /// Density of `sample_solid_angle` for the point `si` on this shape (the
     /// area-to-solid-angle factor uses the shading normal, as Mitsuba does).
     virtual float pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const;
+    /// True, with its centre, radius and normal orientation, for a sphere whose samples need
+    /// no uv (the wavefront path tracer samples it in a vector kernel).
+    virtual bool sphere(Point3f &center, float &radius, bool &flip_normals) const {
+        (void)center, (void)radius, (void)flip_normals;
+        return false;
+    }
 
     std::shared_ptr<Bsdf> bsdf;
     std::shared_ptr<Light> emitter;

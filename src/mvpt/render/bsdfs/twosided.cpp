@@ -4,6 +4,8 @@
 #include "../../scene/plugin.h"
 #include "../bsdf.h"
 
+#include <cstring>
+
 namespace mvpt {
 
 class TwoSidedBsdf final : public Bsdf {
@@ -18,6 +20,14 @@ public:
         m_flags = m_brdf[0]->flags() | m_brdf[1]->flags();
         if (m_flags & BsdfTransmission)
             props.fail("", "twosided: only materials without a transmission component can be nested");
+        // Both sides one constant Lambertian reflectance: sampled and evaluated as such by the
+        // wavefront path tracer's kernels.
+        const LambertInfo *front = m_brdf[0]->lambert(), *back = m_brdf[1]->lambert();
+        if (front && back && !front->two_sided && !back->two_sided &&
+            std::memcmp(&front->reflectance, &back->reflectance, sizeof(Color3f)) == 0) {
+            m_is_lambert = true;
+            m_lambert = {front->reflectance, true};
+        }
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,

@@ -1,6 +1,7 @@
 // Perspective (pinhole) and thin-lens cameras, Mitsuba's `perspective` and
 // `thinlens` sensors: camera space has +z forward, +x left, +y up. `to_world` may be
 // keyframed (<animation>): the pose is then evaluated at each ray's time.
+#include "../../core/multi_isa.h"
 #include "../../scene/plugin.h"
 #include "../camera.h"
 #include "../camera_projection.h"
@@ -11,6 +12,35 @@
 #include <cmath>
 
 namespace mvpt {
+
+namespace {
+
+/// PerspectiveCamera::ray_in_pose for a static pinhole camera over n film positions, as a
+/// vector loop (the same operations in the same order: bit-identical rays).
+MVPT_MULTI_ISA void pinhole_kernel(const CameraProjection &proj, float width, float height,
+                                   const float *__restrict fx, const float *__restrict fy, size_t n,
+                                   float *__restrict dx, float *__restrict dy, float *__restrict dz,
+                                   float *__restrict tmin, float *__restrict tmax) {
+    const CameraPose &pose = proj.pose;
+    for (size_t i = 0; i < n; ++i) {
+        float u = fx[i] / width + proj.ppo_x, v = fy[i] / height + proj.ppo_y;
+        float px = -(2.f * u - 1.f) * proj.tan_x, py = -(2.f * v - 1.f) * proj.tan_y, pz = 1.f;
+        float inv_n = 1.f / std::sqrt(px * px + py * py + pz * pz);
+        float cx = px * inv_n, cy = py * inv_n, cz = pz * inv_n;
+        float inv_z = 1.f / cz;
+        float wx = (pose.axis[0].x * cx + pose.axis[1].x * cy) + pose.axis[2].x * cz;
+        float wy = (pose.axis[0].y * cx + pose.axis[1].y * cy) + pose.axis[2].y * cz;
+        float wz = (pose.axis[0].z * cx + pose.axis[1].z * cy) + pose.axis[2].z * cz;
+        float inv_w = 1.f / std::sqrt(wx * wx + wy * wy + wz * wz);
+        dx[i] = wx * inv_w;
+        dy[i] = wy * inv_w;
+        dz[i] = wz * inv_w;
+        tmin[i] = proj.near_clip * inv_z;
+        tmax[i] = proj.far_clip * inv_z;
+    }
+}
+
+} // namespace
 
 class PerspectiveCamera final : public Camera {
 public:
@@ -56,6 +86,23 @@ public:
         // The static case uses the cached pose: no per-ray matrix evaluation.
         return m_animated ? ray_in_pose(CameraPose(m_to_world.eval(time)), film_pos, lens, time)
                           : ray_in_pose(m_proj.pose, film_pos, lens, time);
+    }
+
+    void generate_rays(const Vec2f *film_pos, const Vec2f *lens, const float *time, size_t n, Ray *out) const override {
+        if (m_animated || m_proj.aperture_radius > 0.f) {
+            Camera::generate_rays(film_pos, lens, time, n, out);
+            return;
+        }
+        // Static pinhole: ray_in_pose's arithmetic in a vector loop over chunks of the rays.
+        constexpr size_t Chunk = 64;
+        alignas(64) float fx[Chunk], fy[Chunk], dx[Chunk], dy[Chunk], dz[Chunk], tmin[Chunk], tmax[Chunk];
+        for (size_t b = 0; b < n; b += Chunk) {
+            size_t m = std::min(Chunk, n - b);
+            for (size_t i = 0; i < m; ++i) fx[i] = film_pos[b + i].x, fy[i] = film_pos[b + i].y;
+            pinhole_kernel(m_proj, float(film.width), float(film.height), fx, fy, m, dx, dy, dz, tmin, tmax);
+            for (size_t i = 0; i < m; ++i)
+                out[b + i] = Ray{m_proj.pose.origin, {dx[i], dy[i], dz[i]}, tmin[i], tmax[i], time[b + i]};
+        }
     }
 
     bool project(Point3f y, float time, Vec2f lens, Vec2f *film_pos) const override {

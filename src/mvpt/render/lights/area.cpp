@@ -3,6 +3,7 @@
 #include "../../scene/plugin.h"
 #include "../light.h"
 #include "../shape.h"
+#include "../shapes/mesh.h"
 #include "../texture.h"
 
 namespace mvpt {
@@ -22,6 +23,20 @@ public:
     void set_shape(const Shape *s) override { m_shape = s; }
     const Shape *shape() const override { return m_shape; }
     bool uniform_radiance() const override { return m_radiance->is_constant(); }
+    /// A constant-radiance parallelogram mesh: sample_li below reduces to QuadEmitter's sampling.
+    bool quad_emitter(QuadEmitter &q) const override {
+        auto *mesh = dynamic_cast<const TriangleMesh *>(m_shape);
+        if (!m_radiance->is_constant() || !mesh || !mesh->parallelogram(q.origin, q.e1, q.e2, q.n, q.inv_area))
+            return false;
+        q.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
+        return true;
+    }
+    bool sphere_emitter(SphereEmitter &s) const override {
+        if (!m_radiance->is_constant() || !m_shape || !m_shape->sphere(s.center, s.radius, s.flip_normals))
+            return false;
+        s.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
+        return true;
+    }
 
     // Mitsuba samples a spatially varying radiance texture by the texture's own
     // density mapped onto the shape; here the shape's solid-angle sampling is

@@ -26,6 +26,13 @@ public:
     std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const override;
 
     const MeshData &data() const { return m_data; }
+    /// True, with the parallelogram and its area density, when sample_area maps u to
+    /// origin + u.x e1 + u.y e2 with the constant normal n (see m_is_parallelogram).
+    bool parallelogram(Point3f &origin, Vec3f &e1, Vec3f &e2, Normal3f &n, float &inv_area) const {
+        if (!m_is_parallelogram || sample_uv) return false;
+        origin = m_quad_origin, e1 = m_quad_e1, e2 = m_quad_e2, n = m_quad_normal, inv_area = m_inv_area;
+        return true;
+    }
 
 private:
     /// Unit face normal of triangle `prim` (before flip_normals).

@@ -64,6 +64,12 @@ public:
     }
     void occluders(OccluderList &out) const override { out.spheres.emplace_back(m_center, m_radius); }
 
+    bool sphere(Point3f &center, float &radius, bool &flip_normals) const override {
+        if (sample_uv) return false;
+        center = m_center, radius = float(m_radius), flip_normals = m_flip_normals;
+        return true;
+    }
+
     ShapeSample sample_area(Vec2f u) const override {
         Normal3f n = warp::square_to_uniform_sphere(u);
         ShapeSample s;
@@ -92,8 +98,10 @@ public:
             float cos_t = safe_sqrt(1.f - sin2);
             // Angle alpha at the sphere's center between -dc and the sampled point.
             float cos_alpha = sin2 * inv_sin_max + cos_t * safe_sqrt(1.f - sin2 * inv_sin_max * inv_sin_max);
-            float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha), phi = 2.f * Pi * u.y;
-            Vec3f dir = Frame(dc * -inv_dc).to_world({std::cos(phi) * sin_alpha, std::sin(phi) * sin_alpha, cos_alpha});
+            // sin/cos of phi = 2 pi u.y without libm: the wavefront's vector kernel computes the same bits.
+            float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha);
+            Vec2f sc_phi = warp::sincos_turn(u.y);
+            Vec3f dir = Frame(dc * -inv_dc).to_world({sc_phi.y * sin_alpha, sc_phi.x * sin_alpha, cos_alpha});
             s.p = m_center + dir * radius;
             s.n = dir;
             pdf = warp::square_to_uniform_cone_pdf(cos_max);

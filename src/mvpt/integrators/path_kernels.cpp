@@ -1,0 +1,266 @@
+#include "path_kernels.h"
+
+#include <cmath>
+
+#include "../core/math.h"
+#include "../core/multi_isa.h"
+#include "../core/warp.h"
+#include "../render/interaction.h"
+
+namespace mvpt {
+
+namespace {
+
+/// std::max(a, b) and std::min(a, b) as selects (same result for every input, NaN included).
+[[gnu::always_inline]] inline float max_of(float a, float b) { return select(a < b, b, a); }
+[[gnu::always_inline]] inline float min_of(float a, float b) { return select(b < a, b, a); }
+
+/// SurfaceInteraction::offset_p's offset along the geometric normal g, on the side of d.
+[[gnu::always_inline]] inline float offset_along(float px, float py, float pz, float gx, float gy, float gz, float dx,
+                                                float dy, float dz) {
+    // std::max({|x|, |y|, |z|}) keeps the first of equal values; all are non-negative here.
+    float m = max_of(max_of(std::abs(px), std::abs(py)), std::abs(pz));
+    float mag = (1.f + m) * RayEpsilon;
+    return std::copysign(mag, gx * dx + gy * dy + gz * dz);
+}
+
+} // namespace
+
+MVPT_MULTI_ISA void lambert_sample_kernel_impl(float *c, size_t s, size_t n) {
+    using namespace ls_col;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const float wiz = c[WiZ * s + i];
+        const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+        // Concentric disk [Shirley & Chiu 1997] and cosine-weighted hemisphere (warp.h).
+        float x = 2.f * c[Ux * s + i] - 1.f, y = 2.f * c[Uy * s + i] - 1.f;
+        bool centre = (x == 0.f) & (y == 0.f);
+        bool x_major = std::abs(x) > std::abs(y);
+        float r = select(x_major, x, y);
+        float a = (Pi / 4.f) * select(x_major, y / x, -(x / y));
+        float z = a * a;
+        float sn = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * a + a;
+        float cs = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.f;
+        float wox = select(centre, 0.f, r * select(x_major, cs, -sn));
+        float woy = select(centre, 0.f, r * select(x_major, sn, cs));
+        float woz = std::sqrt(max_of(1.f - wox * wox - woy * woy, 0.f));
+        float pdf = select(woz > 0.f, woz * InvPi, 0.f);
+        woz = select(back, -woz, woz); // twosided mirrors the back side's sample
+        const float rr = c[Rr * s + i], rg = c[Rg * s + i], rb = c[Rb * s + i];
+        bool weight_ok = (front | back) & !(pdf <= 0.f) & !((rr == 0.f) & (rg == 0.f) & (rb == 0.f));
+
+        // The next ray (Frame::to_world, SurfaceInteraction::spawn_ray).
+        float dx = (c[Sx * s + i] * wox + c[Tx * s + i] * woy) + c[Nx * s + i] * woz;
+        float dy = (c[Sy * s + i] * wox + c[Ty * s + i] * woy) + c[Ny * s + i] * woz;
+        float dz = (c[Sz * s + i] * wox + c[Tz * s + i] * woy) + c[Nz * s + i] * woz;
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+        float off = offset_along(px, py, pz, gx, gy, gz, dx, dy, dz);
+        c[Ox * s + i] = px + gx * off;
+        c[Oy * s + i] = py + gy * off;
+        c[Oz * s + i] = pz + gz * off;
+        c[Dx * s + i] = dx;
+        c[Dy * s + i] = dy;
+        c[Dz * s + i] = dz;
+        c[Pdf * s + i] = pdf;
+
+        // Throughput and Russian roulette [li's order: max_value, then q = min(t eta eta, 0.95)].
+        float br = c[Br * s + i] * rr, bg = c[Bg * s + i] * rg, bb = c[Bb * s + i] * rb;
+        float t_max = max_of(br, max_of(bg, bb));
+        const float eta = c[Eta * s + i];
+        float q = min_of(t_max * eta * eta, 0.95f);
+        bool rr_on = c[RrOn * s + i] > 0.f;
+        float inv_q = 1.f / q;
+        c[Br * s + i] = select(rr_on, br * inv_q, br);
+        c[Bg * s + i] = select(rr_on, bg * inv_q, bg);
+        c[Bb * s + i] = select(rr_on, bb * inv_q, bb);
+        bool alive = weight_ok & (t_max > 0.f) & !(rr_on & (c[URr * s + i] >= q));
+        c[Alive * s + i] = select(alive, 1.f, 0.f);
+    }
+}
+
+void lambert_sample_kernel(SoaColumns &c, size_t n) { lambert_sample_kernel_impl(c.data.data(), c.stride, n); }
+
+MVPT_MULTI_ISA void lambert_nee_kernel_impl(float *c, size_t s, size_t n, float light_count) {
+    using namespace ln_col;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const float wiz = c[WiZ * s + i];
+        const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+        const float ldx = c[Ldx * s + i], ldy = c[Ldy * s + i], ldz = c[Ldz * s + i];
+        // cos(wo) in the local frame (twosided mirrors the back side).
+        float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
+        float cos_o = select(back, -woz, woz);
+        bool f_ok = (front | back) & !(cos_o <= 0.f);
+        float scale = InvPi * cos_o;
+        float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
+        bool ok = f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
+        float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
+        // MIS: power heuristic (mis_power in path.h).
+        float a = c[LPdf * s + i] / light_count, a2 = a * a, b2 = pdf * pdf;
+        float mis = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+        float w = select(c[LDelta * s + i] > 0.f, 1.f, mis);
+        c[Cr * s + i] = ((c[Br * s + i] * fr) * (c[Wr * s + i] * light_count)) * w;
+        c[Cg * s + i] = ((c[Bg * s + i] * fg) * (c[Wg * s + i] * light_count)) * w;
+        c[Cb * s + i] = ((c[Bb * s + i] * fb) * (c[Wb * s + i] * light_count)) * w;
+        c[Ok * s + i] = select(ok, 1.f, 0.f);
+
+        // Shadow ray: spawn_ray(d) towards an infinitely distant emitter, else spawn_ray_to(p).
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        const float lpx = c[Lpx * s + i], lpy = c[Lpy * s + i], lpz = c[Lpz * s + i];
+        bool inf = std::abs(c[LDist * s + i]) == Infinity; // std::isinf
+        float ex = select(inf, ldx, lpx - px), ey = select(inf, ldy, lpy - py), ez = select(inf, ldz, lpz - pz);
+        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+        float off = offset_along(px, py, pz, gx, gy, gz, ex, ey, ez);
+        float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+        float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+        float dist = std::sqrt(tx * tx + ty * ty + tz * tz);
+        float inv = 1.f / dist;
+        c[Ox * s + i] = ox;
+        c[Oy * s + i] = oy;
+        c[Oz * s + i] = oz;
+        c[Dx * s + i] = select(inf, ldx, tx * inv);
+        c[Dy * s + i] = select(inf, ldy, ty * inv);
+        c[Dz * s + i] = select(inf, ldz, tz * inv);
+        c[TMax * s + i] = select(inf, Infinity, dist * (1.f - ShadowEpsilon));
+    }
+}
+
+void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count) {
+    lambert_nee_kernel_impl(c.data.data(), c.stride, n, light_count);
+}
+
+namespace {
+
+/// The part of next-event estimation after sample_li, for lane i of lq_col columns: BSDF value
+/// and density, MIS, contribution (as lambert_nee_kernel) and the shadow ray spawn_ray_to(lp).
+/// v = lp - p; ld and lpdf: the emitter sample's direction and density; w: its weight L/pdf.
+[[gnu::always_inline]] inline void lambert_nee_tail(float *c, size_t s, size_t i, float px, float py, float pz,
+                                                    float lpx, float lpy, float lpz, float vx, float vy, float vz,
+                                                    float ldx, float ldy, float ldz, float lpdf, float wr, float wg,
+                                                    float wb, bool sampled, float light_count) {
+    using namespace lq_col;
+    const float wiz = c[WiZ * s + i];
+    const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
+    float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
+    float cos_o = select(back, -woz, woz);
+    bool f_ok = (front | back) & !(cos_o <= 0.f);
+    float scale = InvPi * cos_o;
+    float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
+    bool ok = sampled & f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
+    float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
+    float a = lpdf / light_count, a2 = a * a, b2 = pdf * pdf;
+    float w = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+    c[Cr * s + i] = ((c[Br * s + i] * fr) * (wr * light_count)) * w;
+    c[Cg * s + i] = ((c[Bg * s + i] * fg) * (wg * light_count)) * w;
+    c[Cb * s + i] = ((c[Bb * s + i] * fb) * (wb * light_count)) * w;
+    c[Ok * s + i] = select(ok, 1.f, 0.f);
+
+    const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+    float off = offset_along(px, py, pz, gx, gy, gz, vx, vy, vz);
+    float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+    float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+    float tdist = std::sqrt(tx * tx + ty * ty + tz * tz);
+    float inv = 1.f / tdist;
+    c[Ox * s + i] = ox;
+    c[Oy * s + i] = oy;
+    c[Oz * s + i] = oz;
+    c[Dx * s + i] = tx * inv;
+    c[Dy * s + i] = ty * inv;
+    c[Dz * s + i] = tz * inv;
+    c[TMax * s + i] = tdist * (1.f - ShadowEpsilon);
+}
+
+} // namespace
+
+MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
+    using namespace lq_col;
+    constexpr size_t M = QuadTable::Max;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const int k = int(c[Quad * s + i]);
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        // TriangleMesh::sample_point (parallelogram), area_to_solid_angle, AreaLight::sample_li.
+        const float ux = c[Ux * s + i], uy = c[Uy * s + i];
+        float lpx = (q[QuadTable::Ox * M + k] + q[QuadTable::E1x * M + k] * ux) + q[QuadTable::E2x * M + k] * uy;
+        float lpy = (q[QuadTable::Oy * M + k] + q[QuadTable::E1y * M + k] * ux) + q[QuadTable::E2y * M + k] * uy;
+        float lpz = (q[QuadTable::Oz * M + k] + q[QuadTable::E1z * M + k] * ux) + q[QuadTable::E2z * M + k] * uy;
+        const float qnx = q[QuadTable::Nx * M + k], qny = q[QuadTable::Ny * M + k], qnz = q[QuadTable::Nz * M + k];
+        float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
+        float dist2 = vx * vx + vy * vy + vz * vz;
+        float dist = std::sqrt(dist2);
+        float cos_t = std::abs(qnx * vx + qny * vy + qnz * vz) / dist;
+        float lpdf = select(cos_t > 0.f, q[QuadTable::InvArea * M + k] * dist2 / cos_t, 0.f);
+        float inv_dist = 1.f / dist;
+        const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
+        bool front_side = !(qnx * ldx + qny * ldy + qnz * ldz >= 0.f); // one-sided emitter
+        float inv_pdf = 1.f / lpdf;
+        float wr = q[QuadTable::Lr * M + k] * inv_pdf, wg = q[QuadTable::Lg * M + k] * inv_pdf,
+              wb = q[QuadTable::Lb * M + k] * inv_pdf;
+        bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
+        lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
+                         light_count);
+    }
+}
+
+void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count) {
+    lambert_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v, light_count);
+}
+
+MVPT_MULTI_ISA void lambert_sphere_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
+    using namespace lq_col;
+    constexpr size_t M = SphereTable::Max;
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) {
+        const int k = int(c[Quad * s + i]);
+        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+        const float ux = c[Ux * s + i], uy = c[Uy * s + i];
+        const float cx = q[SphereTable::Cx * M + k], cy = q[SphereTable::Cy * M + k], cz = q[SphereTable::Cz * M + k];
+        const float radius = q[SphereTable::Radius * M + k];
+        // Sphere::sample_solid_angle from outside: a uniform direction in the subtended cone.
+        float dcx = cx - px, dcy = cy - py, dcz = cz - pz;
+        float dc2 = dcx * dcx + dcy * dcy + dcz * dcz;
+        float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
+              inv_sin_max = 1.f / sin_max, cos_max = std::sqrt(max_of(1.f - sin_max2, 0.f));
+        float tay = (cos_max - 1.f) * ux + 1.f;
+        float sin2 = select(sin_max2 > 0.00068523f, 1.f - tay * tay, sin_max2 * ux);
+        float cos_t = std::sqrt(max_of(1.f - sin2, 0.f));
+        float cos_alpha = sin2 * inv_sin_max + cos_t * std::sqrt(max_of(1.f - sin2 * inv_sin_max * inv_sin_max, 0.f));
+        float sin_alpha = std::sqrt(max_of(1.f - cos_alpha * cos_alpha, 0.f));
+        Vec2f sc_phi = warp::sincos_turn(uy);
+        float vlx = sc_phi.y * sin_alpha, vly = sc_phi.x * sin_alpha, vlz = cos_alpha;
+        // Frame(dc * -inv_dc) [Duff et al. 2017] and to_world.
+        float neg_inv = -inv_dc;
+        float fnx = dcx * neg_inv, fny = dcy * neg_inv, fnz = dcz * neg_inv;
+        float sign = std::copysign(1.f, fnz);
+        float fa = -1.f / (sign + fnz), fb = fnx * fny * fa;
+        float fsx = 1.f + sign * fnx * fnx * fa, fsy = sign * fb, fsz = -sign * fnx;
+        float ftx = fb, fty = sign + fny * fny * fa, ftz = -fny;
+        float dirx = (fsx * vlx + ftx * vly) + fnx * vlz;
+        float diry = (fsy * vlx + fty * vly) + fny * vlz;
+        float dirz = (fsz * vlx + ftz * vly) + fnz * vlz;
+        float lpx = cx + dirx * radius, lpy = cy + diry * radius, lpz = cz + dirz * radius;
+        bool flip = q[SphereTable::Flip * M + k] > 0.f;
+        float snx = select(flip, -dirx, dirx), sny = select(flip, -diry, diry), snz = select(flip, -dirz, dirz);
+        float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
+        float dist2 = vx * vx + vy * vy + vz * vz;
+        float lpdf = select(dist2 == 0.f, 0.f, 1.f / ((2.f * Pi) * (1.f - cos_max)));
+        // AreaLight::sample_li.
+        float dist = std::sqrt(dist2);
+        float inv_dist = 1.f / dist;
+        const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
+        bool front_side = !(snx * ldx + sny * ldy + snz * ldz >= 0.f);
+        float inv_pdf = 1.f / lpdf;
+        float wr = q[SphereTable::Lr * M + k] * inv_pdf, wg = q[SphereTable::Lg * M + k] * inv_pdf,
+              wb = q[SphereTable::Lb * M + k] * inv_pdf;
+        bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
+        lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
+                         light_count);
+    }
+}
+
+void lambert_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count) {
+    lambert_sphere_nee_kernel_impl(c.data.data(), c.stride, n, spheres.v, light_count);
+}
+
+} // namespace mvpt

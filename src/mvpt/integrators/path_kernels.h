@@ -1,0 +1,102 @@
+// Vector kernels of the wavefront path tracer (path_batch.cpp) for its most common vertex:
+// a constant Lambertian BSDF (diffuse, or twosided around it). The vertices of a bounce are
+// gathered into structure-of-arrays columns, one lane per vertex, and processed by loops
+// compiled per instruction set (core/multi_isa.h). Each lane performs PathIntegrator::li's
+// scalar operations in li's order (the build has no FMA contraction, and selects replace
+// branches), so the results are bit-identical to li's.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace mvpt {
+
+/// Structure-of-arrays storage: `cols` columns of `stride` floats (a multiple of 16).
+struct SoaColumns {
+    std::vector<float> data;
+    size_t stride = 0;
+    void resize(size_t cols, size_t n) {
+        stride = (n + 15) & ~size_t(15);
+        if (data.size() < cols * stride) data.resize(cols * stride);
+    }
+    float *operator[](size_t c) { return data.data() + c * stride; }
+};
+
+/// Columns of `lambert_sample_kernel`: inputs, then outputs (flags are 0 or 1).
+namespace ls_col {
+enum : size_t {
+    WiZ, TwoSided, Ux, Uy,
+    Sx, Sy, Sz, Tx, Ty, Tz, Nx, Ny, Nz, // shading frame
+    Px, Py, Pz, Gx, Gy, Gz,             // position, geometric normal
+    Rr, Rg, Rb,                         // reflectance
+    Br, Bg, Bb,                         // throughput (updated in place)
+    Eta, URr, RrOn,                     // Russian roulette: eta, its number, whether it applies
+    Ox, Oy, Oz, Dx, Dy, Dz, Pdf, Alive, // outputs: the next ray, its density, whether the path continues
+    Count
+};
+}
+
+/// BSDF sampling (cosine-weighted hemisphere), the next ray (spawn_ray), the throughput update
+/// and Russian roulette of n Lambertian vertices: li's "BSDF sampling" and "Russian roulette".
+void lambert_sample_kernel(SoaColumns &c, size_t n);
+
+/// Columns of `lambert_nee_kernel`: inputs, then outputs.
+namespace ln_col {
+enum : size_t {
+    WiZ, TwoSided,
+    Nx, Ny, Nz,                 // shading normal
+    Px, Py, Pz, Gx, Gy, Gz,     // position, geometric normal
+    Rr, Rg, Rb,                 // reflectance
+    Br, Bg, Bb,                 // throughput
+    Ldx, Ldy, Ldz, Lpx, Lpy, Lpz, LDist, LPdf, LDelta, // emitter sample (direction, point, distance, density)
+    Wr, Wg, Wb,                 // emitter weight L/pdf
+    Ox, Oy, Oz, Dx, Dy, Dz, TMax, Cr, Cg, Cb, Ok, // outputs: shadow ray, contribution, whether f > 0
+    Count
+};
+}
+
+/// Next-event estimation at n Lambertian vertices given their emitter samples: BSDF value and
+/// density, MIS weight, contribution and shadow ray (li's "Next-event estimation" after
+/// sample_li). `light_count` is the number of lights (uniform selection).
+void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count);
+
+/// Columns of `lambert_quad_nee_kernel`: inputs, then outputs.
+namespace lq_col {
+enum : size_t {
+    WiZ, TwoSided,
+    Nx, Ny, Nz,             // shading normal
+    Px, Py, Pz, Gx, Gy, Gz, // position, geometric normal
+    Rr, Rg, Rb,             // reflectance
+    Br, Bg, Bb,             // throughput
+    Ux, Uy, Quad,           // the emitter sample's numbers, the emitter's index in the QuadTable
+    Ox, Oy, Oz, Dx, Dy, Dz, TMax, Cr, Cg, Cb, Ok, // outputs: shadow ray, contribution, whether it counts
+    Count
+};
+}
+
+/// Parameters of up to `Max` quad emitters (QuadEmitter in light.h), one row per parameter.
+struct QuadTable {
+    static constexpr size_t Max = 16;
+    enum : size_t { Ox, Oy, Oz, E1x, E1y, E1z, E2x, E2y, E2z, Nx, Ny, Nz, InvArea, Lr, Lg, Lb, Params };
+    alignas(64) float v[Params * Max] = {};
+    float &at(size_t param, size_t quad) { return v[param * Max + quad]; }
+};
+
+/// Next-event estimation at n Lambertian vertices towards quad emitters, emitter sampling
+/// included (AreaLight::sample_li on a parallelogram mesh, then as lambert_nee_kernel).
+void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count);
+
+/// Parameters of up to `Max` sphere emitters (SphereEmitter in light.h), one row per parameter.
+struct SphereTable {
+    static constexpr size_t Max = 16;
+    enum : size_t { Cx, Cy, Cz, Radius, Flip, Lr, Lg, Lb, Params };
+    alignas(64) float v[Params * Max] = {};
+    float &at(size_t param, size_t sphere) { return v[param * Max + sphere]; }
+};
+
+/// `lambert_quad_nee_kernel` towards sphere emitters seen from outside (the Quad column holds the
+/// SphereTable row): Sphere::sample_solid_angle's cone sampling, then AreaLight::sample_li.
+void lambert_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count);
+
+} // namespace mvpt

@@ -1,0 +1,117 @@
+// The wavefront's vector kernels for Lambertian vertices (integrators/path_kernels.cpp) against
+// PathIntegrator::li, bit for bit, in the cases that pick their branches: both sides of a
+// twosided diffuse, one-sided diffuse seen from behind, quad and sphere emitters (flipped
+// normals, a reference point inside a sphere, a back-facing quad), several emitters of each kind.
+#include "mvpt/core/warp.h"
+#include "mvpt/integrators/path.h"
+#include "mvpt/render/camera.h"
+#include "mvpt/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+using namespace mvpt;
+
+namespace {
+
+const char *KernelScene = R"(<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="6"/><integer name="rr_depth" value="2"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="70"/>
+        <transform name="to_world"><lookat origin="0.3, 0.4, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film>
+    </sensor>
+    <!-- floor: twosided diffuse, tilted so that both sides are seen and lit -->
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="2"/><rotate x="1" angle="-70"/><translate y="-0.8"/></transform>
+        <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.5, 0.3"/></bsdf></bsdf>
+    </shape>
+    <!-- one-sided diffuse wall whose back faces the camera -->
+    <shape type="rectangle">
+        <transform name="to_world"><rotate y="1" angle="150"/><translate x="-1" z="-0.5"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.4, 0.8, 0.2"/></bsdf>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.4, -0.2, 0"/><float name="radius" value="0.4"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.9, 0.9, 0.9"/></bsdf>
+    </shape>
+    <!-- emitters: two quads (one facing away), a sphere, a small sphere with flipped normals
+         (dark from outside), a sphere with flipped normals around the scene (sampled from inside) -->
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/><translate y="1.2"/></transform>
+        <emitter type="area"><rgb name="radiance" value="6, 5, 4"/></emitter>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.4"/><rotate x="1" angle="-90"/><translate x="1" y="0.9"/></transform>
+        <emitter type="area"><rgb name="radiance" value="3, 3, 3"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="-0.7, 0.6, 0.5"/><float name="radius" value="0.15"/>
+        <emitter type="area"><rgb name="radiance" value="20, 10, 5"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.8, 0.5, -0.6"/><float name="radius" value="0.2"/><boolean name="flip_normals" value="true"/>
+        <emitter type="area"><rgb name="radiance" value="9, 9, 9"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0, 0, 0"/><float name="radius" value="5"/><boolean name="flip_normals" value="true"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.2, 0.2"/></bsdf>
+        <emitter type="area"><rgb name="radiance" value="0.3, 0.4, 0.5"/></emitter>
+    </shape>
+</scene>)";
+
+} // namespace
+
+TEST(PathKernels, LambertKernelsBitIdenticalToLi) {
+    auto scene = load_scene_string(KernelScene, ".");
+    auto *path = dynamic_cast<const PathIntegrator *>(&scene->integrator());
+    ASSERT_NE(path, nullptr);
+    const Camera &cam = *scene->cameras()[0];
+    std::vector<Ray> rays;
+    std::vector<Sampler> samplers;
+    const int res = 24, spp = 4;
+    for (int s = 0; s < spp; ++s)
+        for (int y = 0; y < res; ++y)
+            for (int x = 0; x < res; ++x) {
+                Sampler sampler(cam.sampler_kind, 3);
+                sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(s));
+                sampler.set_dimension(DimFilm);
+                Vec2f u_film = sampler.next_2d();
+                sampler.next_2d();
+                sampler.next_1d();
+                rays.push_back(cam.generate_ray(Vec2f(x + u_film.x, y + u_film.y), Vec2f(0.f, 0.f), 0.f));
+                samplers.push_back(sampler);
+            }
+    std::vector<Sampler> batch_samplers = samplers;
+    std::vector<Spectrum> batch(rays.size());
+    RayCounters counters;
+    path->li_batch(*scene, rays.data(), batch_samplers.data(), batch.data(), rays.size(), counters);
+    size_t nonzero = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        Spectrum ref = path->li(*scene, rays[i], samplers[i], counters);
+        nonzero += !ref.is_black();
+        ASSERT_EQ(std::memcmp(&batch[i], &ref, sizeof(Spectrum)), 0)
+            << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " " << batch[i].b << ", li " << ref.r
+            << " " << ref.g << " " << ref.b;
+    }
+    EXPECT_GT(nonzero, rays.size() / 2);
+}
+
+TEST(PathKernels, SincosTurnMatchesLibm) {
+    // sin/cos of 2 pi u on a fine grid and at the quadrant boundaries.
+    float worst = 0.f;
+    for (uint32_t k = 0; k < (1u << 16); ++k) {
+        float u = float(k) * 0x1p-16f;
+        Vec2f sc = warp::sincos_turn(u);
+        double a = 2.0 * 3.14159265358979323846 * double(u);
+        worst = std::max({worst, float(std::abs(sc.x - std::sin(a))), float(std::abs(sc.y - std::cos(a)))});
+    }
+    EXPECT_LT(worst, 4e-7f);
+    EXPECT_EQ(warp::sincos_turn(0.f).x, 0.f);
+    EXPECT_EQ(warp::sincos_turn(0.f).y, 1.f);
+    EXPECT_EQ(warp::sincos_turn(0.25f).y, 0.f);
+    EXPECT_EQ(warp::sincos_turn(0.5f).x, 0.f);
+}
