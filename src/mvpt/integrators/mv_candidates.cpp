@@ -42,7 +42,8 @@ namespace {
     cx = cx < fx1 - 1.f ? cx : fx1 - 1.f;
     cy = cy < fy1 - 1.f ? cy : fy1 - 1.f;
     *pixel = uint32_t(int32_t(cy) - y0) * uint32_t(x1 - x0) + uint32_t(int32_t(cx) - x0);
-    return (depth ? 0u : ShiftDepth) | (facing ? 0u : ShiftFacing) | (inside ? 0u : ShiftOutside);
+    return (depth ? 0u : uint32_t(ShiftDepth)) | (facing ? 0u : uint32_t(ShiftFacing)) |
+           (inside ? 0u : uint32_t(ShiftOutside));
 }
 
 MVPT_MULTI_ISA void shift_kernel(const float *__restrict proj, const int32_t *__restrict wx0,
