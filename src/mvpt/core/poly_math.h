@@ -16,7 +16,9 @@ namespace mvpt {
 
 /// e^x for finite x; 0 below -87.3 (no denormals).
 [[gnu::always_inline]] inline float exp_poly(float x) {
-    float xc = std::min(std::max(x, -87.33654f), 88.3762626f);
+    // std::min(std::max(x, lo), hi) as selects (branches would stop vectorisation).
+    float lo = select(x < -87.33654f, -87.33654f, x);
+    float xc = select(88.3762626f < lo, 88.3762626f, lo);
     // x = n ln2 + r with |r| <= ln2 / 2; ln2 split in two for an exact n ln2 (Cody-Waite).
     float t = xc * 1.44269504088896341f;
     int32_t n = int32_t(t + select(t < 0.f, -0.5f, 0.5f));
@@ -70,7 +72,8 @@ namespace mvpt {
 /// The inverse error function on (-1, 1) [Giles, "Approximating the erfinv function", GPU
 /// Computing Gems, 2010]: both of its polynomials (Estrin's scheme), then a select.
 [[gnu::always_inline]] inline float erfinv_poly(float x) {
-    float w = -log_poly(std::max((1.f - x) * (1.f + x), 1e-30f));
+    float v = (1.f - x) * (1.f + x);
+    float w = -log_poly(select(v < 1e-30f, 1e-30f, v)); // std::max(v, 1e-30f)
     auto poly8 = [](float v, float c0, float c1, float c2, float c3, float c4, float c5, float c6, float c7, float c8) {
         float v2 = v * v, v4 = v2 * v2;
         float p01 = c0 + c1 * v, p23 = c2 + c3 * v, p45 = c4 + c5 * v, p67 = c6 + c7 * v;

@@ -99,6 +99,7 @@ namespace {
         float u2 = select(uy < 1e-6f, 1e-6f, select(1.f - 1e-6f < uy, 1.f - 1e-6f, uy));
         float x = max_val - (max_val + 1.f) * erf_poly(std::sqrt(-log_poly(u1)));
         float target = u1 * (1.f + max_val + InvSqrtPi * tan_i * exp_poly(-cot_i * cot_i));
+#pragma GCC unroll 3
         for (int it = 0; it < 3; ++it) {
             float slope = erfinv_poly(x);
             float value = 1.f + x + InvSqrtPi * tan_i * exp_poly(-slope * slope) - target;
