@@ -95,7 +95,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     const BsdfContext ctx;
     const bool valid0 = !m_cfg.hide_emitters && scene.environment() != nullptr;
 
-    thread_local WaveBuffers buf;
+    // Through a reference: every access to a thread_local by name (in the lambdas below too) is a
+    // __tls_get_addr call in a shared library.
+    thread_local WaveBuffers tls_buffers;
+    WaveBuffers &buf = tls_buffers;
     auto &paths = buf.paths;
     paths.resize(n);
     buf.rays.assign(start_rays, start_rays + n);
