@@ -95,10 +95,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     const BsdfContext ctx;
     const bool valid0 = !m_cfg.hide_emitters && scene.environment() != nullptr;
 
-    // Through a reference: every access to a thread_local by name (in the lambdas below too) is a
-    // __tls_get_addr call in a shared library.
+    // Through a pointer the compiler cannot see through (an empty asm): otherwise GCC recomputes
+    // the thread_local's address, a __tls_get_addr call in a shared library, at every use.
     thread_local WaveBuffers tls_buffers;
-    WaveBuffers &buf = tls_buffers;
+    WaveBuffers *buf_ptr = &tls_buffers;
+    asm("" : "+r"(buf_ptr));
+    WaveBuffers &buf = *buf_ptr;
     auto &paths = buf.paths;
     paths.resize(n);
     buf.rays.assign(start_rays, start_rays + n);
