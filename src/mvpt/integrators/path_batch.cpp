@@ -75,6 +75,9 @@ struct WaveBuffers {
     /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
     SoaColumns lambert, quad, sphere;
     std::vector<uint32_t> lambert_index, quad_index, sphere_index;
+    /// Constant rough conductor vertices, likewise.
+    SoaColumns conductor;
+    std::vector<uint32_t> conductor_index;
     /// Per light, its row in the QuadTable / SphereTable, or -1.
     std::vector<int> quad_of_light, sphere_of_light;
 };
@@ -92,7 +95,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     const BsdfContext ctx;
     const bool valid0 = !m_cfg.hide_emitters && scene.environment() != nullptr;
 
-    thread_local WaveBuffers buf;
+    // Through a pointer the compiler cannot see through (an empty asm): otherwise GCC recomputes
+    // the thread_local's address, a __tls_get_addr call in a shared library, at every use.
+    thread_local WaveBuffers tls_buffers;
+    WaveBuffers *buf_ptr = &tls_buffers;
+    asm("" : "+r"(buf_ptr));
+    WaveBuffers &buf = *buf_ptr;
     auto &paths = buf.paths;
     paths.resize(n);
     buf.rays.assign(start_rays, start_rays + n);
@@ -126,6 +134,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     buf.lambert_index.resize(LambertChunk);
     buf.quad_index.resize(LambertChunk);
     buf.sphere_index.resize(LambertChunk);
+    buf.conductor_index.resize(LambertChunk);
     // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
     QuadTable quads;
     std::vector<int> &quad_of_light = buf.quad_of_light;
@@ -154,6 +163,18 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         sphere_radius_adj2[ns] = radius_adj * radius_adj;
         sphere_of_light[l] = int(ns++);
     }
+    // The parameter and frame columns shared by both rough conductor kernels (rs_col and rn_col agree up to Nz).
+    static_assert(size_t(rs_col::Alpha) == size_t(rn_col::Alpha) && size_t(rs_col::SpB) == size_t(rn_col::SpB));
+    auto gather_conductor = [](float *col, size_t st, const SurfaceInteraction &si, const RoughConductorInfo &rc) {
+        using namespace rn_col;
+        col[WiX * st] = si.wi.x, col[WiY * st] = si.wi.y, col[WiZ * st] = si.wi.z;
+        col[TwoSided * st] = rc.two_sided ? 1.f : 0.f;
+        col[Beckmann * st] = rc.beckmann ? 1.f : 0.f;
+        col[Alpha * st] = rc.alpha;
+        col[EtaR * st] = rc.eta.r, col[EtaG * st] = rc.eta.g, col[EtaB * st] = rc.eta.b;
+        col[KR * st] = rc.k.r, col[KG * st] = rc.k.g, col[KB * st] = rc.k.b;
+        col[SpR * st] = rc.specular.r, col[SpG * st] = rc.specular.g, col[SpB * st] = rc.specular.b;
+    };
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
 
@@ -321,6 +342,22 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             }
             n_lam = 0;
         };
+        size_t n_rc = 0;
+        SoaColumns &rc = buf.conductor;
+        rc.resize(std::max<size_t>(rn_col::Count, rs_col::Count), LambertChunk);
+        auto flush_rc_nee = [&] {
+            if (n_rc == 0) return;
+            using namespace rn_col;
+            rough_conductor_nee_kernel(rc, n_rc, float(lights.size()));
+            for (size_t m = 0; m < n_rc; ++m) {
+                if (!(rc[Ok][m] > 0.f)) continue;
+                const uint32_t k = buf.scatter[buf.conductor_index[m]].path;
+                buf.shadow_rays[n_shadow] = Ray{{rc[Ox][m], rc[Oy][m], rc[Oz][m]}, {rc[Dx][m], rc[Dy][m], rc[Dz][m]},
+                                                0.f, rc[TMax][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(rc[Cr][m], rc[Cg][m], rc[Cb][m])};
+            }
+            n_rc = 0;
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             if (!v.nee || v.emitter_sample.second.is_black()) continue;
@@ -348,6 +385,28 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 if (n_lam == LambertChunk) flush_nee();
                 continue;
             }
+            if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
+                using namespace rn_col;
+                const size_t m = n_rc++;
+                buf.conductor_index[m] = uint32_t(j);
+                const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
+                float *col = rc.data.data() + m;
+                const size_t st = rc.stride;
+                gather_conductor(col, st, si, *cond);
+                const Frame &f = si.sh_frame;
+                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
+                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
+                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+                col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
+                col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
+                col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;
+                col[Wr * st] = weight.r, col[Wg * st] = weight.g, col[Wb * st] = weight.b;
+                if (n_rc == LambertChunk) flush_rc_nee();
+                continue;
+            }
             Spectrum weight = v.emitter_sample.second;
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
@@ -359,6 +418,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             }
         }
         flush_nee();
+        flush_rc_nee();
 
         // ---------------- BSDF sampling and Russian roulette ----------------
         lc.resize(ls_col::Count, LambertChunk);
@@ -383,6 +443,28 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 buf.alive[k] = 1;
             }
             n_lam = 0;
+        };
+        // A rough conductor sample is never a null lobe, has eta 1 and is glossy.
+        auto flush_rc_sample = [&] {
+            if (n_rc == 0) return;
+            using namespace rs_col;
+            rough_conductor_sample_kernel(rc, n_rc);
+            for (size_t m = 0; m < n_rc; ++m) {
+                const uint32_t k = buf.conductor_index[m];
+                WavePath &p = paths[k];
+                p.valid = true;
+                if (!(rc[Alive][m] > 0.f)) continue;
+                const SurfaceInteraction &si = buf.si[k];
+                buf.rays[k] = Ray{{rc[Ox][m], rc[Oy][m], rc[Oz][m]}, {rc[Dx][m], rc[Dy][m], rc[Dz][m]}, 0.f, Infinity,
+                                  si.time};
+                p.throughput = Spectrum(rc[Br][m], rc[Bg][m], rc[Bb][m]);
+                p.prev_p = si.p;
+                p.prev_bsdf_pdf = rc[Pdf][m];
+                p.prev_bsdf_delta = false;
+                ++p.depth;
+                buf.alive[k] = 1;
+            }
+            n_rc = 0;
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             const ScatterVertex &v = buf.scatter[j];
@@ -412,6 +494,26 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 if (n_lam == LambertChunk) flush_sample();
                 continue;
             }
+            if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
+                using namespace rs_col;
+                const size_t m = n_rc++;
+                buf.conductor_index[m] = uint32_t(k);
+                float *col = rc.data.data() + m;
+                const size_t st = rc.stride;
+                gather_conductor(col, st, si, *cond);
+                const Frame &f = si.sh_frame;
+                col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
+                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
+                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
+                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
+                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+                col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
+                col[Eta * st] = p.eta, col[URr * st] = u[6][j];
+                col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+                if (n_rc == LambertChunk) flush_rc_sample();
+                continue;
+            }
             auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
@@ -434,6 +536,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             buf.alive[k] = 1;
         }
         flush_sample();
+        flush_rc_sample();
 
         // ---------------- Shadow rays of this vertex ----------------
         counters.shadow_rays += n_shadow;

@@ -99,4 +99,43 @@ struct SphereTable {
 /// SphereTable row): Sphere::sample_solid_angle's cone sampling, then AreaLight::sample_li.
 void lambert_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count);
 
+/// Columns of `rough_conductor_sample_kernel`: inputs, then outputs (flags are 0 or 1).
+namespace rs_col {
+enum : size_t {
+    WiX, WiY, WiZ, TwoSided, Beckmann, Alpha, // local wi; RoughConductorInfo
+    EtaR, EtaG, EtaB, KR, KG, KB, SpR, SpG, SpB,
+    Ux, Uy,
+    Sx, Sy, Sz, Tx, Ty, Tz, Nx, Ny, Nz, // shading frame
+    Px, Py, Pz, Gx, Gy, Gz,             // position, geometric normal
+    Br, Bg, Bb,                         // throughput (updated in place)
+    Eta, URr, RrOn,                     // Russian roulette: eta, its number, whether it applies
+    Ox, Oy, Oz, Dx, Dy, Dz, Pdf, Alive, // outputs: the next ray, its density, whether the path continues
+    Count
+};
+}
+
+/// BSDF sampling (visible normals), the next ray, the throughput update and Russian roulette
+/// of n constant rough conductor vertices (RoughConductorInfo): li's "BSDF sampling" and
+/// "Russian roulette" through RoughConductor::sample (and TwoSidedBsdf's mirroring).
+void rough_conductor_sample_kernel(SoaColumns &c, size_t n);
+
+/// Columns of `rough_conductor_nee_kernel`: inputs, then outputs.
+namespace rn_col {
+enum : size_t {
+    WiX, WiY, WiZ, TwoSided, Beckmann, Alpha,
+    EtaR, EtaG, EtaB, KR, KG, KB, SpR, SpG, SpB,
+    Sx, Sy, Sz, Tx, Ty, Tz, Nx, Ny, Nz,
+    Px, Py, Pz, Gx, Gy, Gz,
+    Br, Bg, Bb,
+    Ldx, Ldy, Ldz, Lpx, Lpy, Lpz, LDist, LPdf, LDelta, // emitter sample (direction, point, distance, density)
+    Wr, Wg, Wb,                                        // emitter weight L/pdf
+    Ox, Oy, Oz, Dx, Dy, Dz, TMax, Cr, Cg, Cb, Ok,      // outputs: shadow ray, contribution, whether f > 0
+    Count
+};
+}
+
+/// Next-event estimation at n constant rough conductor vertices given their emitter samples
+/// (as lambert_nee_kernel): RoughConductor::eval and ::pdf, MIS, contribution and shadow ray.
+void rough_conductor_nee_kernel(SoaColumns &c, size_t n, float light_count);
+
 } // namespace mvpt

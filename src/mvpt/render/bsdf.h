@@ -56,6 +56,21 @@ struct LambertInfo {
     bool two_sided = false;
 };
 
+/// A rough conductor of constant parameters (roughconductor with constant textures, one alpha,
+/// visible-normal sampling; or twosided around one): sampled and evaluated by the wavefront
+/// path tracer's vector kernels.
+struct RoughConductorInfo {
+    /// Beckmann, else GGX.
+    bool beckmann = true;
+    /// The roughness as MicrofacetDistribution holds it (at least 1e-4).
+    float alpha = 0.1f;
+    Color3f eta, k;
+    /// The specular reflectance (1 when absent).
+    Color3f specular{1.f};
+    /// Reflects on both sides (twosided: the back side mirrors directions through the surface).
+    bool two_sided = false;
+};
+
 class Bsdf : public Object {
 public:
     /// Sample `wo` given `wi`; returns the sample and its weight f*|cos wo|/pdf
@@ -85,11 +100,15 @@ public:
     virtual float roughness(const SurfaceInteraction &) const { return 1.f; }
     /// The constant Lambertian reflectance this BSDF amounts to, or nullptr.
     const LambertInfo *lambert() const { return m_is_lambert ? &m_lambert : nullptr; }
+    /// The constant rough conductor this BSDF amounts to, or nullptr.
+    const RoughConductorInfo *rough_conductor() const { return m_is_rough_conductor ? &m_rough_conductor : nullptr; }
 
 protected:
     uint32_t m_flags = BsdfNone;
     LambertInfo m_lambert;
     bool m_is_lambert = false;
+    RoughConductorInfo m_rough_conductor;
+    bool m_is_rough_conductor = false;
 };
 
 } // namespace mvpt

@@ -1,32 +1,13 @@
 #include "microfacet.h"
 
+#include "../core/poly_math.h"
 #include "../core/warp.h"
 
 #include <cmath>
 
 namespace mvpt {
 
-namespace {
-/// c[0] + c[1] w + ... + c[8] w^8 in Estrin's scheme: the same polynomial as Horner's rule
-/// (to float rounding) with a dependency chain of four multiply-adds instead of eight, which
-/// matters in the serial Newton iteration of Beckmann sampling.
-inline float poly8(float w, const float c[9]) {
-    float w2 = w * w, w4 = w2 * w2;
-    float p01 = c[0] + c[1] * w, p23 = c[2] + c[3] * w, p45 = c[4] + c[5] * w, p67 = c[6] + c[7] * w;
-    return (p01 + p23 * w2) + (p45 + p67 * w2) * w4 + c[8] * (w4 * w4);
-}
-} // namespace
-
-float erfinv(float x) {
-    // Giles, "Approximating the erfinv function", GPU Computing Gems (2010).
-    static constexpr float Central[9] = {1.50140941f,     0.246640727f,  -0.00417768164f, -0.00125372503f, 0.00021858087f,
-                                         -4.39150654e-06f, -3.5233877e-06f, 3.43273939e-07f, 2.81022636e-08f};
-    static constexpr float Tail[9] = {2.83297682f,    1.00167406f,     0.00943887047f, -0.0076224613f, 0.00573950773f,
-                                      -0.00367342844f, 0.00134934322f, 0.000100950558f, -0.000200214257f};
-    float w = -std::log(std::max((1.f - x) * (1.f + x), 1e-30f));
-    float p = w < 5.f ? poly8(w - 2.5f, Central) : poly8(std::sqrt(w) - 3.f, Tail);
-    return p * x;
-}
+float erfinv(float x) { return erfinv_poly(x); }
 
 float MicrofacetDistribution::eval(Vec3f m) const {
     float cos2 = Frame::cos2_theta(m);
@@ -36,7 +17,7 @@ float MicrofacetDistribution::eval(Vec3f m) const {
     float e = (m.x * m.x / ax2 + m.y * m.y / ay2) / cos2;
     float r;
     if (m_type == MicrofacetType::Beckmann)
-        r = std::exp(-e) / (Pi * m_alpha_u * m_alpha_v * cos2 * cos2);
+        r = exp_poly(-e) / (Pi * m_alpha_u * m_alpha_v * cos2 * cos2);
     else
         r = 1.f / (Pi * m_alpha_u * m_alpha_v * cos2 * cos2 * (1.f + e) * (1.f + e));
     // As Mitsuba: drop negligible values to avoid numerical trouble downstream.
@@ -91,14 +72,14 @@ Vec2f MicrofacetDistribution::sample_visible_11(float cos_theta_i, Vec2f u) cons
     constexpr float InvSqrtPi = 0.56418958354775628695f;
     float tan_theta_i = safe_sqrt(1.f - cos_theta_i * cos_theta_i) / cos_theta_i;
     float cot_theta_i = 1.f / tan_theta_i;
-    float max_val = std::erf(cot_theta_i);
+    float max_val = erf_poly(cot_theta_i);
     u.x = std::clamp(u.x, 1e-6f, 1.f - 1e-6f);
     u.y = std::clamp(u.y, 1e-6f, 1.f - 1e-6f);
-    float x = max_val - (max_val + 1.f) * std::erf(std::sqrt(-std::log(u.x)));
-    float target = u.x * (1.f + max_val + InvSqrtPi * tan_theta_i * std::exp(-cot_theta_i * cot_theta_i));
+    float x = max_val - (max_val + 1.f) * erf_poly(std::sqrt(-log_poly(u.x)));
+    float target = u.x * (1.f + max_val + InvSqrtPi * tan_theta_i * exp_poly(-cot_theta_i * cot_theta_i));
     for (int it = 0; it < 3; ++it) {
         float slope = erfinv(x);
-        float value = 1.f + x + InvSqrtPi * tan_theta_i * std::exp(-slope * slope) - target;
+        float value = 1.f + x + InvSqrtPi * tan_theta_i * exp_poly(-slope * slope) - target;
         float derivative = 1.f - slope * tan_theta_i;
         x -= value / derivative;
     }
@@ -121,7 +102,7 @@ Vec3f MicrofacetDistribution::sample(Vec3f wi, Vec2f u, float *pdf_out) const {
             sin_phi = cos_phi * t;
             alpha2 = 1.f / (sqr(cos_phi / m_alpha_u) + sqr(sin_phi / m_alpha_v));
         }
-        if (m_type == MicrofacetType::Beckmann) tan2 = -alpha2 * std::log(std::max(1.f - u.x, 1e-12f));
+        if (m_type == MicrofacetType::Beckmann) tan2 = -alpha2 * log_poly(std::max(1.f - u.x, 1e-12f));
         else tan2 = alpha2 * u.x / std::max(1.f - u.x, 1e-12f);
         float cos_t = 1.f / std::sqrt(1.f + tan2), sin_t = safe_sqrt(1.f - cos_t * cos_t);
         Vec3f m(sin_t * cos_phi, sin_t * sin_phi, cos_t);

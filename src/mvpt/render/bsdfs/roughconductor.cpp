@@ -17,6 +17,21 @@ public:
         if (props.has_texture("specular_reflectance"))
             m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
         m_flags = BsdfGlossyReflection;
+        // Constant and isotropic with visible-normal sampling: the wavefront's vector kernels.
+        auto constant = [](const std::shared_ptr<Texture> &t) { return !t || t->is_constant(); };
+        if (constant(m_ior.eta) && constant(m_ior.k) && constant(m_specular_reflectance) && constant(m_distr.alpha_u) &&
+            !m_distr.anisotropic() && m_distr.sample_visible) {
+            const Vec2f uv(0.f, 0.f);
+            RoughConductorInfo &info = m_rough_conductor;
+            info = RoughConductorInfo{};
+            info.beckmann = m_distr.type == MicrofacetType::Beckmann;
+            info.alpha = MicrofacetDistribution(m_distr.type, m_distr.alpha_u->eval_1(uv), m_distr.alpha_v->eval_1(uv))
+                             .alpha_u();
+            info.eta = m_ior.eta->eval(uv);
+            info.k = m_ior.k->eval(uv);
+            if (m_specular_reflectance) info.specular = m_specular_reflectance->eval(uv);
+            m_is_rough_conductor = true;
+        }
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, float,

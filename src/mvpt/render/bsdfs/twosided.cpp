@@ -28,6 +28,12 @@ public:
             m_is_lambert = true;
             m_lambert = {front->reflectance, true};
         }
+        const RoughConductorInfo *fc = m_brdf[0]->rough_conductor(), *bc = m_brdf[1]->rough_conductor();
+        if (fc && bc && !fc->two_sided && !bc->two_sided && same_conductor(*fc, *bc)) {
+            m_is_rough_conductor = true;
+            m_rough_conductor = *fc;
+            m_rough_conductor.two_sided = true;
+        }
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
@@ -58,6 +64,13 @@ public:
     }
 
 private:
+    /// Bitwise-equal parameters.
+    static bool same_conductor(const RoughConductorInfo &a, const RoughConductorInfo &b) {
+        auto same = [](const void *x, const void *y, size_t n) { return std::memcmp(x, y, n) == 0; };
+        return a.beckmann == b.beckmann && same(&a.alpha, &b.alpha, sizeof(float)) &&
+               same(&a.eta, &b.eta, sizeof(Color3f)) && same(&a.k, &b.k, sizeof(Color3f)) &&
+               same(&a.specular, &b.specular, sizeof(Color3f));
+    }
     static Vec3f flip(Vec3f v) { return {v.x, v.y, -v.z}; }
     std::shared_ptr<Bsdf> m_brdf[2];
 };

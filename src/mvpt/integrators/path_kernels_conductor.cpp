@@ -1,0 +1,299 @@
+// Vector kernels of the wavefront path tracer for constant rough conductor vertices
+// (RoughConductorInfo: roughconductor, or twosided around one): visible-normal sampling and
+// next-event evaluation. Each lane performs the scalar operations of RoughConductor,
+// MicrofacetDistribution (microfacet.cpp) and TwoSidedBsdf in their order, with selects for
+// branches and the shared polynomial exp/log/erf/erfinv (core/poly_math.h), so the results are
+// bit-identical to PathIntegrator::li's (tests/cpp/test_path_kernels.cpp).
+#include "path_kernels.h"
+
+#include <cmath>
+
+#include "../core/math.h"
+#include "../core/multi_isa.h"
+#include "../core/poly_math.h"
+#include "../render/fresnel.h"
+#include "kernel_helpers.h"
+
+namespace mvpt {
+
+using kernel::max_of;
+using kernel::min_of;
+using kernel::offset_along;
+
+namespace {
+
+/// sqrt(max(x, 0)): safe_sqrt.
+[[gnu::always_inline]] inline float safe_root(float x) { return std::sqrt(max_of(x, 0.f)); }
+
+/// MicrofacetDistribution::eval(m) for an isotropic roughness a.
+[[gnu::always_inline]] inline float distr_eval(float mx, float my, float mz, float a, bool beckmann) {
+    float cos2 = mz * mz;
+    float a2 = a * a;
+    float e = (mx * mx / a2 + my * my / a2) / cos2;
+    float rb = exp_poly(-e) / (Pi * a * a * cos2 * cos2);
+    float rg = 1.f / (Pi * a * a * cos2 * cos2 * (1.f + e) * (1.f + e));
+    float r = select(beckmann, rb, rg);
+    return select(!(cos2 <= 0.f) & (r * mz > 1e-20f), r, 0.f);
+}
+
+/// MicrofacetDistribution::smith_g1(v, m) for an isotropic roughness a.
+[[gnu::always_inline]] inline float distr_g1(float vx, float vy, float vz, float mx, float my, float mz, float a,
+                                             bool beckmann) {
+    float xy2 = vx * vx + vy * vy;
+    float tan2 = xy2 / (vz * vz);
+    float alpha2 = select(xy2 <= 0.f, a * a, (vx * vx * a * a + vy * vy * a * a) / xy2);
+    float t = 1.f / std::sqrt(alpha2 * tan2);
+    float gb = select(t >= 1.6f, 1.f, (3.535f * t + 2.181f * t * t) / (1.f + 2.276f * t + 2.577f * t * t));
+    float gg = 2.f / (1.f + std::sqrt(1.f + alpha2 * tan2));
+    float g = select(beckmann, gb, gg);
+    g = select(xy2 == 0.f, 1.f, g);
+    return select((vx * mx + vy * my + vz * mz) * vz <= 0.f, 0.f, g);
+}
+
+/// Conductor Fresnel reflectance (fresnel.h) times the specular reflectance, per channel.
+[[gnu::always_inline]] inline float conductor_f(float cos_i, float eta, float k) {
+    float c2 = cos_i * cos_i, s2 = 1.f - c2, s4 = s2 * s2;
+    float t1 = eta * eta - k * k - s2;
+    float a2pb2 = safe_root(t1 * t1 + 4.f * k * k * eta * eta);
+    float a = safe_root(0.5f * (a2pb2 + t1));
+    float term1 = a2pb2 + c2, term2 = 2.f * cos_i * a;
+    float r_s = (term1 - term2) / (term1 + term2);
+    float term3 = a2pb2 * c2 + s4, term4 = term2 * s2;
+    float r_p = r_s * (term3 - term4) / (term3 + term4);
+    return 0.5f * (r_s + r_p);
+}
+
+/// MicrofacetDistribution::sample_visible_11 (both distributions, one selected).
+[[gnu::always_inline]] inline void visible_slopes(float cos_i, float ux, float uy, bool beckmann, bool do_beckmann,
+                                                  bool do_ggx, float &sx, float &sy) {
+    float gx = 0.f, gy = 0.f, bx = 0.f, by = 0.f;
+    if (do_ggx) {
+        // Heitz 2018: a concentric disk sample (warp.h) projected onto the visible hemisphere.
+        float x = 2.f * ux - 1.f, y = 2.f * uy - 1.f;
+        bool centre = (x == 0.f) & (y == 0.f);
+        bool x_major = std::abs(x) > std::abs(y);
+        float r = select(x_major, x, y);
+        float a = (Pi / 4.f) * select(x_major, y / x, -(x / y));
+        float z = a * a;
+        float sn = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * a + a;
+        float cs = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z -
+                   0.5f * z + 1.f;
+        float px = select(centre, 0.f, r * select(x_major, cs, -sn));
+        float py = select(centre, 0.f, r * select(x_major, sn, cs));
+        float s = 0.5f * (1.f + cos_i);
+        float root = safe_root(1.f - px * px);
+        py = root + s * (py - root);
+        float pz = safe_root(1.f - px * px - py * py);
+        float sin_i = safe_root(1.f - cos_i * cos_i);
+        float inv_norm = 1.f / (sin_i * py + cos_i * pz);
+        gx = (cos_i * py - sin_i * pz) * inv_norm;
+        gy = px * inv_norm;
+    }
+    if (do_beckmann) {
+        // Jakob 2014: Newton iteration on the visible x-slopes' CDF in the erf domain.
+        constexpr float InvSqrtPi = 0.56418958354775628695f;
+        float tan_i = safe_root(1.f - cos_i * cos_i) / cos_i;
+        float cot_i = 1.f / tan_i;
+        float max_val = erf_poly(cot_i);
+        float u1 = select(ux < 1e-6f, 1e-6f, select(1.f - 1e-6f < ux, 1.f - 1e-6f, ux));
+        float u2 = select(uy < 1e-6f, 1e-6f, select(1.f - 1e-6f < uy, 1.f - 1e-6f, uy));
+        float x = max_val - (max_val + 1.f) * erf_poly(std::sqrt(-log_poly(u1)));
+        float target = u1 * (1.f + max_val + InvSqrtPi * tan_i * exp_poly(-cot_i * cot_i));
+#pragma GCC unroll 3
+        for (int it = 0; it < 3; ++it) {
+            float slope = erfinv_poly(x);
+            float value = 1.f + x + InvSqrtPi * tan_i * exp_poly(-slope * slope) - target;
+            float derivative = 1.f - slope * tan_i;
+            x -= value / derivative;
+        }
+        bx = erfinv_poly(x);
+        by = erfinv_poly(2.f * u2 - 1.f);
+    }
+    sx = select(beckmann, bx, gx);
+    sy = select(beckmann, by, gy);
+}
+
+/// One lane of rough_conductor_sample_kernel; `Mode`: 0 all GGX, 1 all Beckmann, 2 mixed.
+template <int Mode> [[gnu::always_inline]] inline void conductor_sample_lane(float *c, size_t s, size_t i) {
+    using namespace rs_col;
+    const bool beckmann = Mode == 1 || (Mode == 2 && c[Beckmann * s + i] > 0.f);
+    const float wx = c[WiX * s + i], wy = c[WiY * s + i], wz0 = c[WiZ * s + i];
+    const bool flipped = (wz0 < 0.f) & (c[TwoSided * s + i] > 0.f); // TwoSidedBsdf mirrors the back side
+    const float wz = select(flipped, -wz0, wz0);
+    const float a = c[Alpha * s + i];
+    // MicrofacetDistribution::sample: stretch, sample the alpha = 1 slopes, rotate, unstretch.
+    float qx = a * wx, qy = a * wy, qz = wz;
+    float inv_len = 1.f / std::sqrt(qx * qx + qy * qy + qz * qz);
+    float wpx = qx * inv_len, wpy = qy * inv_len, wpz = qz * inv_len;
+    float sin_t = std::sqrt(max_of(0.f, 1.f - wpz * wpz));
+    float cos_phi = select(sin_t > 0.f, wpx / sin_t, 1.f), sin_phi = select(sin_t > 0.f, wpy / sin_t, 0.f);
+    float s11x, s11y;
+    visible_slopes(wpz, c[Ux * s + i], c[Uy * s + i], beckmann, Mode != 0, Mode != 1, s11x, s11y);
+    float slx = cos_phi * s11x - sin_phi * s11y, sly = sin_phi * s11x + cos_phi * s11y;
+    slx *= a;
+    sly *= a;
+    float nx = -slx, ny = -sly;
+    float inv_m = 1.f / std::sqrt(nx * nx + ny * ny + 1.f * 1.f);
+    float mx = nx * inv_m, my = ny * inv_m, mz = 1.f * inv_m;
+    bool finite = (std::abs(mx) < Infinity) & (std::abs(my) < Infinity) & (std::abs(mz) < Infinity);
+    mx = select(finite, mx, 0.f);
+    my = select(finite, my, 0.f);
+    mz = select(finite, mz, 1.f);
+    // MicrofacetDistribution::pdf(wi, m).
+    float d = distr_eval(mx, my, mz, a, beckmann);
+    float dot_im = wx * mx + wy * my + wz * mz;
+    float pdf_m = distr_g1(wx, wy, wz, mx, my, mz, a, beckmann) * std::abs(dot_im) * d / std::abs(wz);
+    pdf_m = select(wz == 0.f, 0.f, pdf_m);
+    // RoughConductor::sample: reflect, density, weight G1(wo) F.
+    float two_dot = 2.f * dot_im;
+    float wox = two_dot * mx - wx, woy = two_dot * my - wy, woz = two_dot * mz - wz;
+    float pdf = pdf_m / (4.f * (wox * mx + woy * my + woz * mz));
+    float g1 = distr_g1(wox, woy, woz, mx, my, mz, a, beckmann);
+    float wr = conductor_f(dot_im, c[EtaR * s + i], c[KR * s + i]) * g1 * c[SpR * s + i];
+    float wg = conductor_f(dot_im, c[EtaG * s + i], c[KG * s + i]) * g1 * c[SpG * s + i];
+    float wb = conductor_f(dot_im, c[EtaB * s + i], c[KB * s + i]) * g1 * c[SpB * s + i];
+    bool sampled = (wz > 0.f) & !(pdf_m == 0.f) & !(woz <= 0.f);
+    bool weight_ok = sampled & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
+    woz = select(flipped, -woz, woz);
+
+    // The next ray (Frame::to_world, SurfaceInteraction::spawn_ray).
+    float dx = (c[Sx * s + i] * wox + c[Tx * s + i] * woy) + c[Nx * s + i] * woz;
+    float dy = (c[Sy * s + i] * wox + c[Ty * s + i] * woy) + c[Ny * s + i] * woz;
+    float dz = (c[Sz * s + i] * wox + c[Tz * s + i] * woy) + c[Nz * s + i] * woz;
+    const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+    const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+    float off = offset_along(px, py, pz, gx, gy, gz, dx, dy, dz);
+    c[Ox * s + i] = px + gx * off;
+    c[Oy * s + i] = py + gy * off;
+    c[Oz * s + i] = pz + gz * off;
+    c[Dx * s + i] = dx;
+    c[Dy * s + i] = dy;
+    c[Dz * s + i] = dz;
+    c[Pdf * s + i] = pdf;
+
+    // Throughput and Russian roulette (li's order).
+    float br = c[Br * s + i] * wr, bg = c[Bg * s + i] * wg, bb = c[Bb * s + i] * wb;
+    float t_max = max_of(br, max_of(bg, bb));
+    const float eta = c[Eta * s + i];
+    float q = min_of(t_max * eta * eta, 0.95f);
+    bool rr_on = c[RrOn * s + i] > 0.f;
+    float inv_q = 1.f / q;
+    c[Br * s + i] = select(rr_on, br * inv_q, br);
+    c[Bg * s + i] = select(rr_on, bg * inv_q, bg);
+    c[Bb * s + i] = select(rr_on, bb * inv_q, bb);
+    bool alive = weight_ok & (t_max > 0.f) & !(rr_on & (c[URr * s + i] >= q));
+    c[Alive * s + i] = select(alive, 1.f, 0.f);
+}
+
+/// One lane of rough_conductor_nee_kernel.
+template <int Mode> [[gnu::always_inline]] inline void conductor_nee_lane(float *c, size_t s, size_t i, float light_count) {
+    using namespace rn_col;
+    const bool beckmann = Mode == 1 || (Mode == 2 && c[Beckmann * s + i] > 0.f);
+    const float wx = c[WiX * s + i], wy = c[WiY * s + i], wz0 = c[WiZ * s + i];
+    const bool two = c[TwoSided * s + i] > 0.f;
+    const bool flipped = (wz0 < 0.f) & two;
+    const bool side_ok = (wz0 > 0.f) | flipped; // TwoSidedBsdf: zero at wi.z == 0
+    const float wz = select(flipped, -wz0, wz0);
+    const float a = c[Alpha * s + i];
+    // wo = si.to_local(ls.d), mirrored with wi.
+    const float ldx = c[Ldx * s + i], ldy = c[Ldy * s + i], ldz = c[Ldz * s + i];
+    float wox = ldx * c[Sx * s + i] + ldy * c[Sy * s + i] + ldz * c[Sz * s + i];
+    float woy = ldx * c[Tx * s + i] + ldy * c[Ty * s + i] + ldz * c[Tz * s + i];
+    float woz = ldx * c[Nx * s + i] + ldy * c[Ny * s + i] + ldz * c[Nz * s + i];
+    woz = select(flipped, -woz, woz);
+    // RoughConductor::eval and ::pdf at the half vector.
+    bool cos_ok = side_ok & !(wz <= 0.f) & !(woz <= 0.f);
+    float hx = wx + wox, hy = wy + woy, hz = wz + woz;
+    float inv_h = 1.f / std::sqrt(hx * hx + hy * hy + hz * hz);
+    hx *= inv_h, hy *= inv_h, hz *= inv_h;
+    float d = distr_eval(hx, hy, hz, a, beckmann);
+    float g1_i = distr_g1(wx, wy, wz, hx, hy, hz, a, beckmann);
+    float value = d * (g1_i * distr_g1(wox, woy, woz, hx, hy, hz, a, beckmann)) / (4.f * wz);
+    float dot_ih = wx * hx + wy * hy + wz * hz;
+    float fr = conductor_f(dot_ih, c[EtaR * s + i], c[KR * s + i]) * value * c[SpR * s + i];
+    float fg = conductor_f(dot_ih, c[EtaG * s + i], c[KG * s + i]) * value * c[SpG * s + i];
+    float fb = conductor_f(dot_ih, c[EtaB * s + i], c[KB * s + i]) * value * c[SpB * s + i];
+    bool f_ok = cos_ok & !(d == 0.f) & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
+    bool pdf_ok = cos_ok & !(dot_ih <= 0.f) & !(wox * hx + woy * hy + woz * hz <= 0.f);
+    float pdf = select(pdf_ok, d * g1_i / (4.f * wz), 0.f);
+    // MIS: power heuristic (mis_power in path.h).
+    float la = c[LPdf * s + i] / light_count, a2 = la * la, b2 = pdf * pdf;
+    float mis = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+    float w = select(c[LDelta * s + i] > 0.f, 1.f, mis);
+    c[Cr * s + i] = ((c[Br * s + i] * fr) * (c[Wr * s + i] * light_count)) * w;
+    c[Cg * s + i] = ((c[Bg * s + i] * fg) * (c[Wg * s + i] * light_count)) * w;
+    c[Cb * s + i] = ((c[Bb * s + i] * fb) * (c[Wb * s + i] * light_count)) * w;
+    c[Ok * s + i] = select(f_ok, 1.f, 0.f);
+
+    // Shadow ray: spawn_ray(d) towards an infinitely distant emitter, else spawn_ray_to(p).
+    const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+    const float lpx = c[Lpx * s + i], lpy = c[Lpy * s + i], lpz = c[Lpz * s + i];
+    bool inf = std::abs(c[LDist * s + i]) == Infinity;
+    float ex = select(inf, ldx, lpx - px), ey = select(inf, ldy, lpy - py), ez = select(inf, ldz, lpz - pz);
+    const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
+    float off = offset_along(px, py, pz, gx, gy, gz, ex, ey, ez);
+    float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+    float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+    float dist = std::sqrt(tx * tx + ty * ty + tz * tz);
+    float inv = 1.f / dist;
+    c[Ox * s + i] = ox;
+    c[Oy * s + i] = oy;
+    c[Oz * s + i] = oz;
+    c[Dx * s + i] = select(inf, ldx, tx * inv);
+    c[Dy * s + i] = select(inf, ldy, ty * inv);
+    c[Dz * s + i] = select(inf, ldz, tz * inv);
+    c[TMax * s + i] = select(inf, Infinity, dist * (1.f - ShadowEpsilon));
+}
+
+/// 0 if every lane is GGX, 1 if every lane is Beckmann, else 2.
+int distribution_mode(const float *beckmann, size_t n) {
+    size_t count = 0;
+    for (size_t i = 0; i < n; ++i) count += beckmann[i] > 0.f;
+    return count == 0 ? 0 : count == n ? 1 : 2;
+}
+
+} // namespace
+
+MVPT_MULTI_ISA void rough_conductor_sample_ggx(float *c, size_t s, size_t n) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) conductor_sample_lane<0>(c, s, i);
+}
+MVPT_MULTI_ISA void rough_conductor_sample_beckmann(float *c, size_t s, size_t n) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) conductor_sample_lane<1>(c, s, i);
+}
+MVPT_MULTI_ISA void rough_conductor_sample_mixed(float *c, size_t s, size_t n) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) conductor_sample_lane<2>(c, s, i);
+}
+
+void rough_conductor_sample_kernel(SoaColumns &c, size_t n) {
+    switch (distribution_mode(c[rs_col::Beckmann], n)) {
+    case 0: rough_conductor_sample_ggx(c.data.data(), c.stride, n); break;
+    case 1: rough_conductor_sample_beckmann(c.data.data(), c.stride, n); break;
+    default: rough_conductor_sample_mixed(c.data.data(), c.stride, n); break;
+    }
+}
+
+MVPT_MULTI_ISA void rough_conductor_nee_ggx(float *c, size_t s, size_t n, float light_count) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) conductor_nee_lane<0>(c, s, i, light_count);
+}
+MVPT_MULTI_ISA void rough_conductor_nee_beckmann(float *c, size_t s, size_t n, float light_count) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) conductor_nee_lane<1>(c, s, i, light_count);
+}
+MVPT_MULTI_ISA void rough_conductor_nee_mixed(float *c, size_t s, size_t n, float light_count) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) conductor_nee_lane<2>(c, s, i, light_count);
+}
+
+void rough_conductor_nee_kernel(SoaColumns &c, size_t n, float light_count) {
+    switch (distribution_mode(c[rn_col::Beckmann], n)) {
+    case 0: rough_conductor_nee_ggx(c.data.data(), c.stride, n, light_count); break;
+    case 1: rough_conductor_nee_beckmann(c.data.data(), c.stride, n, light_count); break;
+    default: rough_conductor_nee_mixed(c.data.data(), c.stride, n, light_count); break;
+    }
+}
+
+} // namespace mvpt
