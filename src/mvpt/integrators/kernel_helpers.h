@@ -22,4 +22,80 @@ namespace mvpt::kernel {
     return std::copysign(mag, gx * dx + gy * dy + gz * dz);
 }
 
+/// The end of a BSDF-sampling kernel, li's steps after Bsdf::sample: the next ray
+/// (Frame::to_world of the local direction wo, SurfaceInteraction::spawn_ray), the throughput
+/// times the sample's weight (wr, wg, wb), then Russian roulette in li's order (max_value, then
+/// q = min(t eta^2, 0.95)). Column blocks of lane i: the shading frame s, t, n from S0, the
+/// position and geometric normal from P0, throughput, eta, u_rr and whether roulette applies
+/// from B0; outputs ray origin, direction, density and whether the path continues from O0.
+template <size_t S0, size_t P0, size_t B0, size_t O0>
+[[gnu::always_inline]] inline void next_ray_and_roulette(float *c, size_t s, size_t i, float wox, float woy, float woz,
+                                                         float pdf, float wr, float wg, float wb, bool weight_ok) {
+    auto col = [c, s, i](size_t k) -> float & { return c[k * s + i]; };
+    float dx = (col(S0 + 0) * wox + col(S0 + 3) * woy) + col(S0 + 6) * woz;
+    float dy = (col(S0 + 1) * wox + col(S0 + 4) * woy) + col(S0 + 7) * woz;
+    float dz = (col(S0 + 2) * wox + col(S0 + 5) * woy) + col(S0 + 8) * woz;
+    const float px = col(P0), py = col(P0 + 1), pz = col(P0 + 2);
+    const float gx = col(P0 + 3), gy = col(P0 + 4), gz = col(P0 + 5);
+    float off = offset_along(px, py, pz, gx, gy, gz, dx, dy, dz);
+    col(O0) = px + gx * off;
+    col(O0 + 1) = py + gy * off;
+    col(O0 + 2) = pz + gz * off;
+    col(O0 + 3) = dx;
+    col(O0 + 4) = dy;
+    col(O0 + 5) = dz;
+    col(O0 + 6) = pdf;
+    float br = col(B0) * wr, bg = col(B0 + 1) * wg, bb = col(B0 + 2) * wb;
+    float t_max = max_of(br, max_of(bg, bb));
+    const float eta = col(B0 + 3);
+    float q = min_of(t_max * eta * eta, 0.95f);
+    bool rr_on = col(B0 + 5) > 0.f;
+    float inv_q = 1.f / q;
+    col(B0) = select(rr_on, br * inv_q, br);
+    col(B0 + 1) = select(rr_on, bg * inv_q, bg);
+    col(B0 + 2) = select(rr_on, bb * inv_q, bb);
+    bool alive = weight_ok & (t_max > 0.f) & !(rr_on & (col(B0 + 4) >= q));
+    col(O0 + 7) = select(alive, 1.f, 0.f);
+}
+
+/// The end of a next-event kernel, li's steps after the BSDF value f and density `pdf` at the
+/// emitter sample: the power-heuristic MIS weight, the contribution throughput f (L/pdf)
+/// (light count) w, and the shadow ray (spawn_ray(d) towards an infinitely distant emitter,
+/// else spawn_ray_to(p)). Column blocks of lane i: position and geometric normal from P0; the
+/// emitter sample (direction, point, distance, density, delta) from L0; its weight from W0;
+/// the throughput from B0; outputs shadow ray (origin, direction, t_max), contribution and
+/// whether it counts from O0.
+template <size_t P0, size_t L0, size_t W0, size_t B0, size_t O0>
+[[gnu::always_inline]] inline void nee_contribution_and_shadow_ray(float *c, size_t s, size_t i, float fr, float fg,
+                                                                   float fb, float pdf, bool ok, float light_count) {
+    auto col = [c, s, i](size_t k) -> float & { return c[k * s + i]; };
+    // MIS: power heuristic (mis_power in path.h).
+    float a = col(L0 + 7) / light_count, a2 = a * a, b2 = pdf * pdf;
+    float mis = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+    float w = select(col(L0 + 8) > 0.f, 1.f, mis);
+    col(O0 + 7) = ((col(B0) * fr) * (col(W0) * light_count)) * w;
+    col(O0 + 8) = ((col(B0 + 1) * fg) * (col(W0 + 1) * light_count)) * w;
+    col(O0 + 9) = ((col(B0 + 2) * fb) * (col(W0 + 2) * light_count)) * w;
+    col(O0 + 10) = select(ok, 1.f, 0.f);
+
+    const float px = col(P0), py = col(P0 + 1), pz = col(P0 + 2);
+    const float ldx = col(L0), ldy = col(L0 + 1), ldz = col(L0 + 2);
+    const float lpx = col(L0 + 3), lpy = col(L0 + 4), lpz = col(L0 + 5);
+    bool inf = std::abs(col(L0 + 6)) == Infinity; // std::isinf
+    float ex = select(inf, ldx, lpx - px), ey = select(inf, ldy, lpy - py), ez = select(inf, ldz, lpz - pz);
+    const float gx = col(P0 + 3), gy = col(P0 + 4), gz = col(P0 + 5);
+    float off = offset_along(px, py, pz, gx, gy, gz, ex, ey, ez);
+    float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
+    float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
+    float dist = std::sqrt(tx * tx + ty * ty + tz * tz);
+    float inv = 1.f / dist;
+    col(O0) = ox;
+    col(O0 + 1) = oy;
+    col(O0 + 2) = oz;
+    col(O0 + 3) = select(inf, ldx, tx * inv);
+    col(O0 + 4) = select(inf, ldy, ty * inv);
+    col(O0 + 5) = select(inf, ldz, tz * inv);
+    col(O0 + 6) = select(inf, Infinity, dist * (1.f - ShadowEpsilon));
+}
+
 } // namespace mvpt::kernel

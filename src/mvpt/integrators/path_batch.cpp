@@ -16,6 +16,7 @@
 
 #include <climits>
 #include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -329,34 +330,32 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         size_t n_lam = 0;
         SoaColumns &lc = buf.lambert;
         lc.resize(ln_col::Count, LambertChunk);
+        // The next-event estimates of a kernel's lanes wait for their shadow rays (columns from
+        // O0: origin, direction, t_max, contribution, whether it counts).
+        auto take_shadow_rays = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0) {
+            constexpr size_t O0 = decltype(o0)::value;
+            for (size_t m = 0; m < count; ++m) {
+                if (!(cols[O0 + 10][m] > 0.f)) continue;
+                const uint32_t k = buf.scatter[index[m]].path;
+                buf.shadow_rays[n_shadow] = Ray{{cols[O0][m], cols[O0 + 1][m], cols[O0 + 2][m]},
+                                                {cols[O0 + 3][m], cols[O0 + 4][m], cols[O0 + 5][m]}, 0.f,
+                                                cols[O0 + 6][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(cols[O0 + 7][m], cols[O0 + 8][m], cols[O0 + 9][m])};
+            }
+            count = 0;
+        };
         auto flush_nee = [&] {
             if (n_lam == 0) return;
-            using namespace ln_col;
             lambert_nee_kernel(lc, n_lam, float(lights.size()));
-            for (size_t m = 0; m < n_lam; ++m) {
-                if (!(lc[Ok][m] > 0.f)) continue;
-                const uint32_t k = buf.scatter[buf.lambert_index[m]].path;
-                buf.shadow_rays[n_shadow] = Ray{{lc[Ox][m], lc[Oy][m], lc[Oz][m]}, {lc[Dx][m], lc[Dy][m], lc[Dz][m]},
-                                                0.f, lc[TMax][m], buf.si[k].time};
-                buf.shadows[n_shadow++] = {k, Spectrum(lc[Cr][m], lc[Cg][m], lc[Cb][m])};
-            }
-            n_lam = 0;
+            take_shadow_rays(lc, buf.lambert_index, n_lam, std::integral_constant<size_t, ln_col::Ox>{});
         };
         size_t n_rc = 0;
         SoaColumns &rc = buf.conductor;
         rc.resize(std::max<size_t>(rn_col::Count, rs_col::Count), LambertChunk);
         auto flush_rc_nee = [&] {
             if (n_rc == 0) return;
-            using namespace rn_col;
             rough_conductor_nee_kernel(rc, n_rc, float(lights.size()));
-            for (size_t m = 0; m < n_rc; ++m) {
-                if (!(rc[Ok][m] > 0.f)) continue;
-                const uint32_t k = buf.scatter[buf.conductor_index[m]].path;
-                buf.shadow_rays[n_shadow] = Ray{{rc[Ox][m], rc[Oy][m], rc[Oz][m]}, {rc[Dx][m], rc[Dy][m], rc[Dz][m]},
-                                                0.f, rc[TMax][m], buf.si[k].time};
-                buf.shadows[n_shadow++] = {k, Spectrum(rc[Cr][m], rc[Cg][m], rc[Cb][m])};
-            }
-            n_rc = 0;
+            take_shadow_rays(rc, buf.conductor_index, n_rc, std::integral_constant<size_t, rn_col::Ox>{});
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
@@ -422,49 +421,39 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
 
         // ---------------- BSDF sampling and Russian roulette ----------------
         lc.resize(ls_col::Count, LambertChunk);
-        // A Lambertian sample is never a null lobe (the path becomes valid), has eta 1 and is not a delta.
+        // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
+        // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
+        // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
+        auto take_samples = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0, auto b0) {
+            constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
+            for (size_t m = 0; m < count; ++m) {
+                const uint32_t k = index[m];
+                WavePath &p = paths[k];
+                p.valid = true;
+                if (!(cols[O0 + 7][m] > 0.f)) continue;
+                const SurfaceInteraction &si = buf.si[k];
+                buf.rays[k] = Ray{{cols[O0][m], cols[O0 + 1][m], cols[O0 + 2][m]},
+                                  {cols[O0 + 3][m], cols[O0 + 4][m], cols[O0 + 5][m]}, 0.f, Infinity, si.time};
+                p.throughput = Spectrum(cols[B0][m], cols[B0 + 1][m], cols[B0 + 2][m]);
+                p.prev_p = si.p;
+                p.prev_bsdf_pdf = cols[O0 + 6][m];
+                p.prev_bsdf_delta = false;
+                ++p.depth;
+                buf.alive[k] = 1;
+            }
+            count = 0;
+        };
         auto flush_sample = [&] {
             if (n_lam == 0) return;
-            using namespace ls_col;
             lambert_sample_kernel(lc, n_lam);
-            for (size_t m = 0; m < n_lam; ++m) {
-                const uint32_t k = buf.lambert_index[m];
-                WavePath &p = paths[k];
-                p.valid = true;
-                if (!(lc[Alive][m] > 0.f)) continue;
-                const SurfaceInteraction &si = buf.si[k];
-                buf.rays[k] = Ray{{lc[Ox][m], lc[Oy][m], lc[Oz][m]}, {lc[Dx][m], lc[Dy][m], lc[Dz][m]}, 0.f, Infinity,
-                                  si.time};
-                p.throughput = Spectrum(lc[Br][m], lc[Bg][m], lc[Bb][m]);
-                p.prev_p = si.p;
-                p.prev_bsdf_pdf = lc[Pdf][m];
-                p.prev_bsdf_delta = false;
-                ++p.depth;
-                buf.alive[k] = 1;
-            }
-            n_lam = 0;
+            take_samples(lc, buf.lambert_index, n_lam, std::integral_constant<size_t, ls_col::Ox>{},
+                         std::integral_constant<size_t, ls_col::Br>{});
         };
-        // A rough conductor sample is never a null lobe, has eta 1 and is glossy.
         auto flush_rc_sample = [&] {
             if (n_rc == 0) return;
-            using namespace rs_col;
             rough_conductor_sample_kernel(rc, n_rc);
-            for (size_t m = 0; m < n_rc; ++m) {
-                const uint32_t k = buf.conductor_index[m];
-                WavePath &p = paths[k];
-                p.valid = true;
-                if (!(rc[Alive][m] > 0.f)) continue;
-                const SurfaceInteraction &si = buf.si[k];
-                buf.rays[k] = Ray{{rc[Ox][m], rc[Oy][m], rc[Oz][m]}, {rc[Dx][m], rc[Dy][m], rc[Dz][m]}, 0.f, Infinity,
-                                  si.time};
-                p.throughput = Spectrum(rc[Br][m], rc[Bg][m], rc[Bb][m]);
-                p.prev_p = si.p;
-                p.prev_bsdf_pdf = rc[Pdf][m];
-                p.prev_bsdf_delta = false;
-                ++p.depth;
-                buf.alive[k] = 1;
-            }
-            n_rc = 0;
+            take_samples(rc, buf.conductor_index, n_rc, std::integral_constant<size_t, rs_col::Ox>{},
+                         std::integral_constant<size_t, rs_col::Br>{});
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             const ScatterVertex &v = buf.scatter[j];

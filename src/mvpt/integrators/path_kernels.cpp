@@ -12,6 +12,8 @@ namespace mvpt {
 
 using kernel::max_of;
 using kernel::min_of;
+using kernel::nee_contribution_and_shadow_ray;
+using kernel::next_ray_and_roulette;
 using kernel::offset_along;
 
 MVPT_MULTI_ISA void lambert_sample_kernel_impl(float *c, size_t s, size_t n) {
@@ -37,33 +39,7 @@ MVPT_MULTI_ISA void lambert_sample_kernel_impl(float *c, size_t s, size_t n) {
         const float rr = c[Rr * s + i], rg = c[Rg * s + i], rb = c[Rb * s + i];
         bool weight_ok = (front | back) & !(pdf <= 0.f) & !((rr == 0.f) & (rg == 0.f) & (rb == 0.f));
 
-        // The next ray (Frame::to_world, SurfaceInteraction::spawn_ray).
-        float dx = (c[Sx * s + i] * wox + c[Tx * s + i] * woy) + c[Nx * s + i] * woz;
-        float dy = (c[Sy * s + i] * wox + c[Ty * s + i] * woy) + c[Ny * s + i] * woz;
-        float dz = (c[Sz * s + i] * wox + c[Tz * s + i] * woy) + c[Nz * s + i] * woz;
-        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
-        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
-        float off = offset_along(px, py, pz, gx, gy, gz, dx, dy, dz);
-        c[Ox * s + i] = px + gx * off;
-        c[Oy * s + i] = py + gy * off;
-        c[Oz * s + i] = pz + gz * off;
-        c[Dx * s + i] = dx;
-        c[Dy * s + i] = dy;
-        c[Dz * s + i] = dz;
-        c[Pdf * s + i] = pdf;
-
-        // Throughput and Russian roulette [li's order: max_value, then q = min(t eta eta, 0.95)].
-        float br = c[Br * s + i] * rr, bg = c[Bg * s + i] * rg, bb = c[Bb * s + i] * rb;
-        float t_max = max_of(br, max_of(bg, bb));
-        const float eta = c[Eta * s + i];
-        float q = min_of(t_max * eta * eta, 0.95f);
-        bool rr_on = c[RrOn * s + i] > 0.f;
-        float inv_q = 1.f / q;
-        c[Br * s + i] = select(rr_on, br * inv_q, br);
-        c[Bg * s + i] = select(rr_on, bg * inv_q, bg);
-        c[Bb * s + i] = select(rr_on, bb * inv_q, bb);
-        bool alive = weight_ok & (t_max > 0.f) & !(rr_on & (c[URr * s + i] >= q));
-        c[Alive * s + i] = select(alive, 1.f, 0.f);
+        next_ray_and_roulette<Sx, Px, Br, Ox>(c, s, i, wox, woy, woz, pdf, rr, rg, rb, weight_ok);
     }
 }
 
@@ -84,33 +60,7 @@ MVPT_MULTI_ISA void lambert_nee_kernel_impl(float *c, size_t s, size_t n, float 
         float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
         bool ok = f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
         float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
-        // MIS: power heuristic (mis_power in path.h).
-        float a = c[LPdf * s + i] / light_count, a2 = a * a, b2 = pdf * pdf;
-        float mis = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
-        float w = select(c[LDelta * s + i] > 0.f, 1.f, mis);
-        c[Cr * s + i] = ((c[Br * s + i] * fr) * (c[Wr * s + i] * light_count)) * w;
-        c[Cg * s + i] = ((c[Bg * s + i] * fg) * (c[Wg * s + i] * light_count)) * w;
-        c[Cb * s + i] = ((c[Bb * s + i] * fb) * (c[Wb * s + i] * light_count)) * w;
-        c[Ok * s + i] = select(ok, 1.f, 0.f);
-
-        // Shadow ray: spawn_ray(d) towards an infinitely distant emitter, else spawn_ray_to(p).
-        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
-        const float lpx = c[Lpx * s + i], lpy = c[Lpy * s + i], lpz = c[Lpz * s + i];
-        bool inf = std::abs(c[LDist * s + i]) == Infinity; // std::isinf
-        float ex = select(inf, ldx, lpx - px), ey = select(inf, ldy, lpy - py), ez = select(inf, ldz, lpz - pz);
-        const float gx = c[Gx * s + i], gy = c[Gy * s + i], gz = c[Gz * s + i];
-        float off = offset_along(px, py, pz, gx, gy, gz, ex, ey, ez);
-        float ox = px + gx * off, oy = py + gy * off, oz = pz + gz * off;
-        float tx = lpx - ox, ty = lpy - oy, tz = lpz - oz;
-        float dist = std::sqrt(tx * tx + ty * ty + tz * tz);
-        float inv = 1.f / dist;
-        c[Ox * s + i] = ox;
-        c[Oy * s + i] = oy;
-        c[Oz * s + i] = oz;
-        c[Dx * s + i] = select(inf, ldx, tx * inv);
-        c[Dy * s + i] = select(inf, ldy, ty * inv);
-        c[Dz * s + i] = select(inf, ldz, tz * inv);
-        c[TMax * s + i] = select(inf, Infinity, dist * (1.f - ShadowEpsilon));
+        nee_contribution_and_shadow_ray<Px, Ldx, Wr, Br, Ox>(c, s, i, fr, fg, fb, pdf, ok, light_count);
     }
 }
 

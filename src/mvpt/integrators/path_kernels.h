@@ -37,6 +37,10 @@ enum : size_t {
 };
 }
 
+// Blocks that kernel::next_ray_and_roulette reads and writes.
+static_assert(ls_col::Nz == ls_col::Sx + 8 && ls_col::Gz == ls_col::Px + 5 && ls_col::RrOn == ls_col::Br + 5 &&
+              ls_col::Alive == ls_col::Ox + 7);
+
 /// BSDF sampling (cosine-weighted hemisphere), the next ray (spawn_ray), the throughput update
 /// and Russian roulette of n Lambertian vertices: li's "BSDF sampling" and "Russian roulette".
 void lambert_sample_kernel(SoaColumns &c, size_t n);
@@ -55,6 +59,10 @@ enum : size_t {
     Count
 };
 }
+
+// Blocks that kernel::nee_contribution_and_shadow_ray reads and writes.
+static_assert(ln_col::Gz == ln_col::Px + 5 && ln_col::LDelta == ln_col::Ldx + 8 && ln_col::Wb == ln_col::Wr + 2 &&
+              ln_col::Bb == ln_col::Br + 2 && ln_col::Ok == ln_col::Ox + 10 && ln_col::Cr == ln_col::Ox + 7);
 
 /// Next-event estimation at n Lambertian vertices given their emitter samples: BSDF value and
 /// density, MIS weight, contribution and shadow ray (li's "Next-event estimation" after
@@ -114,6 +122,9 @@ enum : size_t {
 };
 }
 
+static_assert(rs_col::Nz == rs_col::Sx + 8 && rs_col::Gz == rs_col::Px + 5 && rs_col::RrOn == rs_col::Br + 5 &&
+              rs_col::Alive == rs_col::Ox + 7);
+
 /// BSDF sampling (visible normals), the next ray, the throughput update and Russian roulette
 /// of n constant rough conductor vertices (RoughConductorInfo): li's "BSDF sampling" and
 /// "Russian roulette" through RoughConductor::sample (and TwoSidedBsdf's mirroring).
@@ -133,6 +144,9 @@ enum : size_t {
     Count
 };
 }
+
+static_assert(rn_col::Gz == rn_col::Px + 5 && rn_col::LDelta == rn_col::Ldx + 8 && rn_col::Wb == rn_col::Wr + 2 &&
+              rn_col::Bb == rn_col::Br + 2 && rn_col::Ok == rn_col::Ox + 10 && rn_col::Cr == rn_col::Ox + 7);
 
 /// Next-event estimation at n constant rough conductor vertices given their emitter samples
 /// (as lambert_nee_kernel): RoughConductor::eval and ::pdf, MIS, contribution and shadow ray.
