@@ -28,7 +28,9 @@ inline float select(bool mask, float a, float b) {
     std::memcpy(&out, &r, 4);
     return out;
 }
-inline float safe_sqrt(float x) { return std::sqrt(std::max(x, 0.f)); }
+/// sqrt(max(x, 0)) with the maximum as a bit select (std::max's result for every input, NaN
+/// included), so that loops using it vectorise.
+inline float safe_sqrt(float x) { return std::sqrt(select(x < 0.f, 0.f, x)); }
 inline float safe_acos(float x) { return std::acos(std::clamp(x, -1.f, 1.f)); }
 inline float lerp(float t, float a, float b) { return a + t * (b - a); }
 inline float deg_to_rad(float d) { return d * (Pi / 180.f); }

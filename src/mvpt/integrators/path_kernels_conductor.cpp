@@ -24,9 +24,6 @@ using kernel::offset_along;
 
 namespace {
 
-/// sqrt(max(x, 0)): safe_sqrt.
-[[gnu::always_inline]] inline float safe_root(float x) { return std::sqrt(max_of(x, 0.f)); }
-
 /// MicrofacetDistribution::eval(m) for an isotropic roughness a.
 [[gnu::always_inline]] inline float distr_eval(float mx, float my, float mz, float a, bool beckmann) {
     float cos2 = mz * mz;
@@ -52,19 +49,6 @@ namespace {
     return select((vx * mx + vy * my + vz * mz) * vz <= 0.f, 0.f, g);
 }
 
-/// Conductor Fresnel reflectance (fresnel.h) times the specular reflectance, per channel.
-[[gnu::always_inline]] inline float conductor_f(float cos_i, float eta, float k) {
-    float c2 = cos_i * cos_i, s2 = 1.f - c2, s4 = s2 * s2;
-    float t1 = eta * eta - k * k - s2;
-    float a2pb2 = safe_root(t1 * t1 + 4.f * k * k * eta * eta);
-    float a = safe_root(0.5f * (a2pb2 + t1));
-    float term1 = a2pb2 + c2, term2 = 2.f * cos_i * a;
-    float r_s = (term1 - term2) / (term1 + term2);
-    float term3 = a2pb2 * c2 + s4, term4 = term2 * s2;
-    float r_p = r_s * (term3 - term4) / (term3 + term4);
-    return 0.5f * (r_s + r_p);
-}
-
 /// MicrofacetDistribution::sample_visible_11 (both distributions, one selected).
 [[gnu::always_inline]] inline void visible_slopes(float cos_i, float ux, float uy, bool beckmann, bool do_beckmann,
                                                   bool do_ggx, float &sx, float &sy) {
@@ -83,10 +67,10 @@ namespace {
         float px = select(centre, 0.f, r * select(x_major, cs, -sn));
         float py = select(centre, 0.f, r * select(x_major, sn, cs));
         float s = 0.5f * (1.f + cos_i);
-        float root = safe_root(1.f - px * px);
+        float root = safe_sqrt(1.f - px * px);
         py = root + s * (py - root);
-        float pz = safe_root(1.f - px * px - py * py);
-        float sin_i = safe_root(1.f - cos_i * cos_i);
+        float pz = safe_sqrt(1.f - px * px - py * py);
+        float sin_i = safe_sqrt(1.f - cos_i * cos_i);
         float inv_norm = 1.f / (sin_i * py + cos_i * pz);
         gx = (cos_i * py - sin_i * pz) * inv_norm;
         gy = px * inv_norm;
@@ -94,7 +78,7 @@ namespace {
     if (do_beckmann) {
         // Jakob 2014: Newton iteration on the visible x-slopes' CDF in the erf domain.
         constexpr float InvSqrtPi = 0.56418958354775628695f;
-        float tan_i = safe_root(1.f - cos_i * cos_i) / cos_i;
+        float tan_i = safe_sqrt(1.f - cos_i * cos_i) / cos_i;
         float cot_i = 1.f / tan_i;
         float max_val = erf_poly(cot_i);
         float u1 = select(ux < 1e-6f, 1e-6f, select(1.f - 1e-6f < ux, 1.f - 1e-6f, ux));
@@ -151,9 +135,9 @@ template <int Mode> [[gnu::always_inline]] inline void conductor_sample_lane(flo
     float wox = two_dot * mx - wx, woy = two_dot * my - wy, woz = two_dot * mz - wz;
     float pdf = pdf_m / (4.f * (wox * mx + woy * my + woz * mz));
     float g1 = distr_g1(wox, woy, woz, mx, my, mz, a, beckmann);
-    float wr = conductor_f(dot_im, c[EtaR * s + i], c[KR * s + i]) * g1 * c[SpR * s + i];
-    float wg = conductor_f(dot_im, c[EtaG * s + i], c[KG * s + i]) * g1 * c[SpG * s + i];
-    float wb = conductor_f(dot_im, c[EtaB * s + i], c[KB * s + i]) * g1 * c[SpB * s + i];
+    float wr = fresnel_conductor(dot_im, c[EtaR * s + i], c[KR * s + i]) * g1 * c[SpR * s + i];
+    float wg = fresnel_conductor(dot_im, c[EtaG * s + i], c[KG * s + i]) * g1 * c[SpG * s + i];
+    float wb = fresnel_conductor(dot_im, c[EtaB * s + i], c[KB * s + i]) * g1 * c[SpB * s + i];
     bool sampled = (wz > 0.f) & !(pdf_m == 0.f) & !(woz <= 0.f);
     bool weight_ok = sampled & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
     woz = select(flipped, -woz, woz);
@@ -186,9 +170,9 @@ template <int Mode> [[gnu::always_inline]] inline void conductor_nee_lane(float 
     float g1_i = distr_g1(wx, wy, wz, hx, hy, hz, a, beckmann);
     float value = d * (g1_i * distr_g1(wox, woy, woz, hx, hy, hz, a, beckmann)) / (4.f * wz);
     float dot_ih = wx * hx + wy * hy + wz * hz;
-    float fr = conductor_f(dot_ih, c[EtaR * s + i], c[KR * s + i]) * value * c[SpR * s + i];
-    float fg = conductor_f(dot_ih, c[EtaG * s + i], c[KG * s + i]) * value * c[SpG * s + i];
-    float fb = conductor_f(dot_ih, c[EtaB * s + i], c[KB * s + i]) * value * c[SpB * s + i];
+    float fr = fresnel_conductor(dot_ih, c[EtaR * s + i], c[KR * s + i]) * value * c[SpR * s + i];
+    float fg = fresnel_conductor(dot_ih, c[EtaG * s + i], c[KG * s + i]) * value * c[SpG * s + i];
+    float fb = fresnel_conductor(dot_ih, c[EtaB * s + i], c[KB * s + i]) * value * c[SpB * s + i];
     bool f_ok = cos_ok & !(d == 0.f) & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
     bool pdf_ok = cos_ok & !(dot_ih <= 0.f) & !(wox * hx + woy * hy + woz * hz <= 0.f);
     float pdf = select(pdf_ok, d * g1_i / (4.f * wz), 0.f);

@@ -41,8 +41,8 @@ inline FresnelDielectric fresnel_dielectric(float cos_theta_i, float eta) {
     return r;
 }
 
-/// Conductor reflectance for complex IOR eta + i k, per channel.
-inline float fresnel_conductor(float cos_theta_i, float eta, float k) {
+/// Conductor reflectance for complex IOR eta + i k, per channel (also in the vector kernels).
+[[gnu::always_inline]] inline float fresnel_conductor(float cos_theta_i, float eta, float k) {
     float c2 = cos_theta_i * cos_theta_i, s2 = 1.f - c2, s4 = s2 * s2;
     float t1 = eta * eta - k * k - s2;
     float a2pb2 = safe_sqrt(t1 * t1 + 4.f * k * k * eta * eta);
