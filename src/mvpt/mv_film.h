@@ -76,6 +76,7 @@ struct MvFilm {
     std::vector<uint32_t> native;  ///< native samples taken so far (the next sample index)
     std::vector<uint64_t> received;///< contributions received
     std::vector<uint16_t> map;     ///< n_k(i) of the current pass
+    double level = 0.0;            ///< the level c the adaptive map was last solved for
 
     explicit MvFilm(size_t n = 0) : lw(3 * n, 0.0), e(3 * n, 0.0), w(n, 0.0), e_sum(n, 0.0), e_sq(n, 0.0), s_sum(n, 0.0), s_sq(n, 0.0), native(n, 0), received(n, 0), map(n, 1) {}
 };

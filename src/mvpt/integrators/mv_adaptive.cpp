@@ -1,5 +1,7 @@
 #include "mv_adaptive.h"
 
+#include "../core/multi_isa.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -24,18 +26,37 @@ std::vector<double> blur3(const std::vector<double> &v, int w, int h) {
         }
     return out;
 }
+
+/// The native count of one pixel at level c: the positive root n of
+/// c n^2 + (c r - u) n - a r = 0 (a/n + b/(n + r) = c, u = a + b), rounded to nearest and
+/// clamped to [1, max_n]; not finite: max_n. Written without floor and with the clamp
+/// before the truncation (the same result for every input), so that loops over it
+/// vectorise; the discriminant needs no clamp, as c, a, r >= 0.
+inline int32_t native_count(double c, double a, double u, double r, double top) {
+    double q = c * r - u;
+    double v = (std::sqrt(q * q + 4.0 * c * a * r) - q) / (2.0 * c) + 0.5;
+    v = v < top + 0.5 ? v : top + 0.5; // NaN and inf fail the test: max_n
+    v = v < 1.0 ? 1.0 : v;
+    return int32_t(v); // truncation = floor for v >= 1
+}
+
+/// The native counts of n pixels at level c, into `out` (run once per bisection step).
+MVPT_MULTI_ISA void native_counts(double c, double top, const double *__restrict a, const double *__restrict u,
+                                  const double *__restrict r, int32_t *__restrict out, size_t n) {
+    for (size_t i = 0; i < n; ++i) out[i] = native_count(c, a[i], u[i], r[i], top);
+}
 } // namespace
 
-void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::vector<uint16_t> &map) {
+double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::vector<uint16_t> &map) {
     const size_t n = size_t(in.width) * in.height;
     map.assign(n, 1);
-    if (n == 0) return;
+    if (n == 0) return 0.0;
     budget = std::clamp(budget, double(n), double(n) * max_n);
     if (in.passes < 2) {
         // Even spread of the budget, the remainder to the first pixels.
         size_t each = size_t(budget / double(n)), extra = size_t(budget) - each * n;
         for (size_t i = 0; i < n; ++i) map[i] = uint16_t(each + (i < extra ? 1 : 0));
-        return;
+        return 0.0;
     }
     const double k = in.passes;
     std::vector<double> mean(n), a(n), b(n), others(n);
@@ -63,20 +84,13 @@ void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::ve
     std::vector<double> unit(n);
     for (size_t i = 0; i < n; ++i) unit[i] = a[i] + b[i]; // relative variance of one more native sample
 
-    // The n solving a/n + b/(n + r) = c: the positive root of c n^2 + (c r - a - b) n - a r = 0.
-    auto solve = [&](double c, size_t i) {
-        double r = others[i], q = c * r - a[i] - b[i];
-        double disc = q * q + 4.0 * c * a[i] * r;
-        return (-q + std::sqrt(std::max(0.0, disc))) / (2.0 * c);
-    };
-    auto count = [&](double c, size_t i) {
-        double v = std::floor(solve(c, i) + 0.5);
-        return std::clamp(std::isfinite(v) ? v : double(max_n), 1.0, double(max_n));
-    };
+    const double top = double(max_n);
+    std::vector<int32_t> counts(n);
     auto total = [&](double c) {
-        double s = 0.0;
-        for (size_t i = 0; i < n; ++i) s += count(c, i);
-        return s;
+        native_counts(c, top, a.data(), unit.data(), others.data(), counts.data(), n);
+        int64_t s = 0;
+        for (int32_t v : counts) s += v;
+        return double(s);
     };
     double hi = 0.0;
     for (double u : unit) hi = std::max(hi, u);
@@ -84,25 +98,30 @@ void adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::ve
         AdaptiveInput none = in;
         none.passes = 0;
         adapt_native_map(none, max_n, budget, map);
-        return;
+        return 0.0;
     }
     // total(c) decreases in c: bisect on log c for the smallest c with total(c) <= budget, to
     // 1% (finer changes a count only where its rounding is a coin toss; each step costs a pass
-    // over the pixels). The bracket starts around the c of a/n = c with every n free, widened
+    // over the pixels). The bracket starts around the last pass's c (the statistics change
+    // little between passes), else around the c of a/n = c with every n free, and is widened
     // until it holds the answer.
     double sum_unit = 0.0;
     for (double u : unit) sum_unit += u;
-    const double guess = std::clamp(sum_unit / budget, hi * 1e-12, hi * 2.0);
-    double lo_c = guess / 16.0, hi_c = guess * 16.0;
-    while (lo_c > hi * 1e-12 && total(lo_c) <= budget) lo_c = std::max(lo_c / 256.0, hi * 1e-12);
-    while (hi_c < hi * 2.0 && total(hi_c) > budget) hi_c = std::min(hi_c * 256.0, hi * 2.0); // total(2 hi) = n
+    const double lowest = hi * 1e-12, highest = hi * 2.0; // total(2 hi) = n
+    const bool warm = in.previous_level >= lowest && in.previous_level <= highest;
+    const double guess = warm ? in.previous_level : std::clamp(sum_unit / budget, lowest, highest);
+    const double spread = warm ? 1.1 : 16.0;
+    double lo_c = guess / spread, hi_c = guess * spread;
+    while (lo_c > lowest && total(lo_c) <= budget) lo_c = std::max(lo_c / 256.0, lowest);
+    while (hi_c < highest && total(hi_c) > budget) hi_c = std::min(hi_c * 256.0, highest);
     if (total(lo_c) <= budget) hi_c = lo_c;
     for (int it = 0; it < 60 && hi_c > lo_c * (1.0 + 1e-2); ++it) {
         double mid = std::sqrt(lo_c * hi_c);
         if (total(mid) <= budget) hi_c = mid;
         else lo_c = mid;
     }
-    for (size_t i = 0; i < n; ++i) map[i] = uint16_t(count(hi_c, i));
+    for (size_t i = 0; i < n; ++i) map[i] = uint16_t(native_count(hi_c, a[i], unit[i], others[i], top));
+    return hi_c;
 }
 
 } // namespace mvpt
