@@ -35,33 +35,56 @@ class SplatBuffer {
 public:
     explicit SplatBuffer(const std::vector<size_t> &pixels_per_view) : m_pixels(pixels_per_view), m_data(pixels_per_view.size()) {}
 
-    /// Add one contribution; false (nothing added) when a value is not finite or too large.
-    /// E is nonzero only in the native view's own pixel, so it is added only when `has_e`.
-    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e, bool has_e) {
-        float big = std::max({std::abs(lw[0]), std::abs(lw[1]), std::abs(lw[2]), std::abs(w), std::abs(e[0]),
-                              std::abs(e[1]), std::abs(e[2])});
+    /// Add one shared contribution W*L, W; false (nothing added) when a value is not finite
+    /// or too large.
+    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w) {
+        float big = std::max({std::abs(lw[0]), std::abs(lw[1]), std::abs(lw[2]), std::abs(w)});
         if (!(double(big) < SplatMax)) return false; // also catches NaN
-        std::vector<SplatPixel> &buf = m_data[slot];
-        if (buf.empty()) buf.resize(m_pixels[slot]);
-        int64_t *p = buf[pixel].c;
+        int64_t *p = pixel_of(slot, pixel);
         p[0] += to_fixed(lw[0]);
         p[1] += to_fixed(lw[1]);
         p[2] += to_fixed(lw[2]);
-        if (has_e) {
-            p[3] += to_fixed(e[0]);
-            p[4] += to_fixed(e[1]);
-            p[5] += to_fixed(e[2]);
-        }
         p[6] += to_fixed(w);
         p[7] += 1;
+        return true;
+    }
+    /// The same for the native view's own pixel, with the radiance E only it estimates.
+    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
+        float big = std::max({std::abs(e[0]), std::abs(e[1]), std::abs(e[2])});
+        if (!(double(big) < SplatMax) || !add(slot, pixel, lw, w)) return false;
+        int64_t *p = pixel_of(slot, pixel);
+        p[3] += to_fixed(e[0]);
+        p[4] += to_fixed(e[1]);
+        p[5] += to_fixed(e[2]);
         return true;
     }
     /// The buffer of view `slot` (empty if nothing was splatted there).
     std::vector<SplatPixel> &view(int slot) { return m_data[slot]; }
 
 private:
+    int64_t *pixel_of(int slot, uint32_t pixel) {
+        std::vector<SplatPixel> &buf = m_data[slot];
+        if (buf.empty()) buf.resize(m_pixels[slot]);
+        return buf[pixel].c;
+    }
     std::vector<size_t> m_pixels;
     std::vector<std::vector<SplatPixel>> m_data;
+};
+
+/// Where one thread's contributions go: its splat buffer, and per view a count of the
+/// contributions dropped as not finite (or beyond SplatMax).
+struct MvSplatSink {
+    SplatBuffer &buffer;
+    uint64_t *dropped;
+    /// A contribution W*L, W to a view that shares the sample.
+    void shared(int slot, uint32_t pixel, const Spectrum &lw, float w) {
+        if (!buffer.add(slot, pixel, lw, w)) ++dropped[slot];
+    }
+    /// The contribution to the native view's own pixel, with its native-only radiance E
+    /// (emission seen directly, paths through purely specular first vertices) divided by n_l.
+    void native(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
+        if (!buffer.add(slot, pixel, lw, w, e)) ++dropped[slot];
+    }
 };
 
 /// Accumulators of one view over all passes.

@@ -19,28 +19,13 @@
 namespace mvpt {
 
 namespace {
-/// Sends contributions to a thread's splat buffer, counting those that cannot be stored.
-class BufferSink final : public MvSplatSink {
-public:
-    BufferSink(SplatBuffer &buf, std::vector<uint64_t> &dropped) : m_buf(buf), m_dropped(dropped) {}
-    void splat(const MvSplat *splats, size_t n) override {
-        for (size_t i = 0; i < n; ++i) {
-            const MvSplat &s = splats[i];
-            if (!m_buf.add(s.slot, s.pixel, s.lw, s.w, s.e, s.has_e)) ++m_dropped[s.slot];
-        }
-    }
-
-private:
-    SplatBuffer &m_buf;
-    std::vector<uint64_t> &m_dropped;
-};
-
 /// Per-thread state of the pass loop.
 struct MvThreadState {
     SplatBuffer buffer;
     std::vector<MvViewStats> stats;
     std::vector<uint64_t> dropped;
     MvScratch scratch;
+    MvPrimaries primaries;
     MvPendingSamples pending;
     RayCounters counters;
     MvThreadState(const std::vector<size_t> &pixels) : buffer(pixels), stats(pixels.size()), dropped(pixels.size(), 0) {}
@@ -124,18 +109,23 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         arena.execute([&] {
             tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
                 MvThreadState &ts = state.local();
-                BufferSink sink(ts.buffer, ts.dropped);
+                MvSplatSink sink{ts.buffer, ts.dropped.data()};
                 for (size_t ti = r.begin(); ti != r.end(); ++ti) {
                     const Tile &tile = tiles[ti];
                     const FilmDesc &film = m_mv.views[tile.view_slot].camera->film;
                     const MvFilm &mf = m_mv_films[tile.view_slot];
+                    MvPrimaries &prim = ts.primaries;
+                    prim.clear();
                     for (int y = tile.y0; y < tile.y1; ++y)
                         for (int x = tile.x0; x < tile.x1; ++x) {
                             size_t p = size_t(y) * film.crop_width + x;
-                            for (uint32_t j = 0; j < mf.map[p]; ++j)
-                                mv_native_sample(m_mv, tile.view_slot, x + film.crop_x, y + film.crop_y, mf.native[p] + j,
-                                                 ts.scratch, ts.pending, sink, ts.counters, ts.stats.data());
+                            for (uint32_t j = 0; j < mf.map[p]; ++j) prim.push(x + film.crop_x, y + film.crop_y, mf.native[p] + j);
                         }
+                    // The tile's camera rays as one stream, then each native sample.
+                    mv_trace_primaries(m_mv, tile.view_slot, prim);
+                    for (size_t i = 0; i < prim.size(); ++i)
+                        mv_native_sample(m_mv, tile.view_slot, prim, i, ts.scratch, ts.pending, sink, ts.counters,
+                                         ts.stats.data());
                     // The tile's suffixes as one wavefront of the path tracer.
                     mv_finish_samples(m_mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
                 }
@@ -211,6 +201,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                     in.native = m_mv_films[slot].native.data();
                     in.received = m_mv_films[slot].received.data();
                     in.previous_level = m_mv_films[slot].level;
+                    in.eps = cfg.adaptive_eps;
                     m_mv_films[slot].level =
                         adapt_native_map(in, cfg.adaptive_max, per_pixel * double(pixels[slot]), m_mv_films[slot].map);
                 });

@@ -142,3 +142,34 @@ TEST(MvAdaptive, WithoutStatisticsTheBudgetIsSpreadEvenly) {
     EXPECT_EQ(total(map), 250);
     for (uint16_t v : map) EXPECT_TRUE(v == 2 || v == 3);
 }
+
+TEST(MvAdaptive, EpsJudgesDarkPixelsByAbsoluteError) {
+    // Left half 3x darker than the right (pixel means ~0.36 and ~1.2), with the same relative
+    // spread: with eps = (view mean / 10)^2 ~ 0.006 alone both halves look alike; with
+    // eps = 0.5 the dark half's error counts as absolute and small, and it gets fewer samples.
+    Stats st(32, 16, 6, 9);
+    for (int y = 0; y < st.h; ++y)
+        for (int x = 0; x < st.w; ++x) {
+            const size_t i = size_t(y) * st.w + x, j = size_t(y) * st.w + (x % 4); // same spread pattern
+            const double k = x < st.w / 2 ? 0.3 : 1.0;
+            st.e_sum[i] = k * st.e_sum[j], st.e_sq[i] = k * k * st.e_sq[j];
+            st.s_sum[i] = k * st.s_sum[j], st.s_sq[i] = k * k * st.s_sq[j];
+            st.received[i] = st.received[j];
+        }
+    auto halves = [&](double eps) {
+        std::vector<uint16_t> map;
+        AdaptiveInput in = st.input();
+        in.eps = eps;
+        adapt_native_map(in, 16, 2.0 * st.w * st.h, map);
+        double dark = 0.0, bright = 0.0;
+        for (int y = 0; y < st.h; ++y)
+            for (int x = 0; x < st.w; ++x) (x < st.w / 2 ? dark : bright) += map[size_t(y) * st.w + x];
+        return std::pair{dark, bright};
+    };
+    auto [dark0, bright0] = halves(0.0);
+    auto [dark1, bright1] = halves(0.5);
+    // (Alike is not equal: the view-mean term already lowers the dark half's relative
+    // variance by ~4 %, and a nearly flat map turns that into many 2 -> 1 roundings.)
+    EXPECT_GT(dark0, 0.75 * bright0) << dark0 << " " << bright0;
+    EXPECT_LT(dark1 / bright1, 0.75 * dark0 / bright0) << dark1 << " " << bright1;
+}

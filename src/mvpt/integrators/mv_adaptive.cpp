@@ -72,7 +72,7 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
         others[i] = std::max(0.0, received - own);
     }
     view_mean /= double(n);
-    const double eps = std::max(0.01 * view_mean * view_mean, 1e-12); // (view mean / 10)^2
+    const double eps = std::max({0.01 * view_mean * view_mean, in.eps, 1e-12}); // (view mean / 10)^2, in.eps
     for (size_t i = 0; i < n; ++i) {
         double scale = 1.0 / (mean[i] * mean[i] + eps);
         a[i] = std::isfinite(a[i] * scale) ? a[i] * scale : 0.0;

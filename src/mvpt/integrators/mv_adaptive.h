@@ -18,6 +18,7 @@ struct AdaptiveInput {
     const uint32_t *native = nullptr;               ///< native samples taken so far
     const uint64_t *received = nullptr;             ///< contributions received so far
     double previous_level = 0.0;                    ///< the level c of the last map (0: none)
+    double eps = 0.0;                               ///< lower bound of the eps below
 };
 
 /// Set the native counts of the next pass so that the expected relative variance of a pass
@@ -27,7 +28,7 @@ struct AdaptiveInput {
 /// passes times the counts of the passes); n_i solves (a/n + b/(n + r)) / (m^2 + eps) = c,
 /// rounded and clamped to [1, max_n], with c chosen so that the map's total is at most
 /// `budget` (>= the pixel count). a, b and r are smoothed over 3x3 pixels; eps =
-/// (view mean / 10)^2 judges pixels much darker than the view by absolute error. Without
+/// max(in.eps, (view mean / 10)^2) judges dark pixels by absolute error. Without
 /// statistics (fewer than 2 passes, a black image) the budget is spread evenly. Returns the
 /// level c (0 without statistics); passed back as `previous_level`, it brackets the next
 /// pass's search, whose statistics change little from pass to pass.

@@ -186,9 +186,13 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
     //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
     // over the strategies j whose shift to k is valid (visibility included).
     auto &valid_set = sc.valid_set;
-    valid_set.clear();
-    for (size_t j = 0; j < m; ++j)
-        if (sc.visible[j]) valid_set.push_back(uint32_t(j));
+    valid_set.resize(m);
+    size_t n_valid = 0;
+    for (size_t j = 0; j < m; ++j) { // branch-free compaction
+        valid_set[n_valid] = uint32_t(j);
+        n_valid += sc.visible[j];
+    }
+    valid_set.resize(n_valid);
     sc.d.assign(m, 0.f);
     const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
     if (!sc.material && uniform_time && ctx.all_time_compatible) {
@@ -267,7 +271,29 @@ void MvPendingSamples::clear() {
     rays.clear(), states.clear(), samplers.clear();
 }
 
-void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t sample_index, MvScratch &sc,
+void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
+    const MvView &l = ctx.views[slot];
+    const Camera &cam = *l.camera;
+    const size_t n = prim.size();
+    prim.film.resize(n), prim.xi.resize(n), prim.time.resize(n), prim.rays.resize(n), prim.si.resize(n), prim.hit.resize(n);
+    // Native sample z_l = (t, x_l, xi) (§2). Box filter: x_l uniform in the pixel. xi is drawn
+    // for pinholes too: other views may have a lens.
+    for (size_t i = 0; i < n; ++i) {
+        Sampler sampler(cam.sampler_kind, ctx.seeds[slot]);
+        sampler.start(l.scene_index, uint32_t(prim.px[i]), uint32_t(prim.py[i]), prim.sample_index[i]);
+        sampler.set_dimension(DimFilm);
+        Vec2f u_film = sampler.next_2d();
+        Vec2f u_lens = sampler.next_2d();
+        float u_time = sampler.next_1d();
+        prim.film[i] = Vec2f(float(prim.px[i]) + u_film.x, float(prim.py[i]) + u_film.y);
+        prim.xi[i] = warp::square_to_uniform_disk_concentric(u_lens);
+        prim.time[i] = cam.sample_time(u_time);
+    }
+    cam.generate_rays(prim.film.data(), prim.xi.data(), prim.time.data(), n, prim.rays.data());
+    ctx.scene->intersect(prim.rays.data(), n, prim.si.data(), prim.hit.data(), true);
+}
+
+void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_t i_prim, MvScratch &sc,
                       MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
     const Scene &scene = *ctx.scene;
     const PathConfig &pc = ctx.path->config();
@@ -275,34 +301,28 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     const MvView &l = ctx.views[slot_l];
     const Camera &cam = *l.camera;
     const FilmDesc &film = cam.film;
+    const int px = prim.px[i_prim], py = prim.py[i_prim];
     const uint32_t pixel_l = uint32_t(py - film.crop_y) * uint32_t(film.crop_width) + uint32_t(px - film.crop_x);
     const float n_l = float(ctx.native_map[slot_l][pixel_l]);
     MvViewStats &st_l = stats[slot_l];
     const uint64_t rays_before = counters.rays + counters.shadow_rays;
     ++st_l.native;
 
-    // ---------------- Native sample z_l = (t, x_l, xi) (§2) ----------------
+    // The native sample's stream (its camera dimensions were drawn by mv_trace_primaries).
     Sampler sampler(cam.sampler_kind, ctx.seeds[slot_l]);
-    sampler.start(l.scene_index, uint32_t(px), uint32_t(py), sample_index);
-    sampler.set_dimension(DimFilm);
-    Vec2f u_film = sampler.next_2d();
-    Vec2f u_lens = sampler.next_2d();
-    float u_time = sampler.next_1d();
-    // Box filter: x_l uniform in the pixel. xi is drawn for pinholes too: other views may have a lens.
-    Vec2f film_pos(float(px) + u_film.x, float(py) + u_film.y);
-    Vec2f xi = warp::square_to_uniform_disk_concentric(u_lens);
-    float t = cam.sample_time(u_time);
-    Ray ray = cam.generate_ray(film_pos, xi, t);
+    sampler.start(l.scene_index, uint32_t(px), uint32_t(py), prim.sample_index[i_prim]);
+    const Vec2f xi = prim.xi[i_prim];
+    const float t = prim.time[i_prim];
+    const Ray &ray = prim.rays[i_prim];
     ++counters.camera_rays;
     ++counters.rays;
-    SurfaceInteraction si;
-    bool hit = scene.intersect(ray, si);
+    SurfaceInteraction &si = prim.si[i_prim];
+    const bool hit = prim.hit[i_prim] != 0;
 
     // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
     // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
     auto native_only = [&](const Spectrum &L) {
-        MvSplat own{slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l), true};
-        sink.splat(&own, 1);
+        sink.native(slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
         ++st_l.sharing;
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
     };
@@ -348,10 +368,13 @@ void mv_native_sample(const MvContext &ctx, int slot_l, int px, int py, uint32_t
     trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
     auto &sharing = sc.sharing;
-    sharing.clear();
-    for (size_t i = 0; i < m; ++i)
-        if (sc.visible[i] && sc.selected[i]) sharing.push_back(int(i));
-    const size_t ns = sharing.size();
+    sharing.resize(m);
+    size_t ns = 0;
+    for (size_t i = 0; i < m; ++i) { // branch-free compaction
+        sharing[ns] = int(i);
+        ns += sc.visible[i] & sc.selected[i];
+    }
+    sharing.resize(ns);
     balance_densities(ctx, sc, bsdf, si, sharing);
 
     // ---------------- Shared next-event estimation (§7) ----------------
@@ -471,25 +494,18 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
         ctx.path->trace_batch(*ctx.scene, pending.rays.data(), pending.states.data(), pending.samplers.data(),
                               pending.radiance.data(), pending.valid.data(), n_suffix, counters);
     stats[slot].rays += counters.rays + counters.shadow_rays - rays_before;
-    std::vector<MvSplat> &splats = pending.splats;
     for (const MvPendingSamples::Sample &rec : pending.samples) {
         const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
         const bool final_valid = rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid;
         const bool bounce = !suffix.is_black();
-        splats.resize(rec.count);
         for (uint32_t i = 0; i < rec.count; ++i) {
             const uint32_t j = rec.first + i;
             Spectrum L = pending.nee[j];
             if (bounce && (rec.delta_view < 0 || int32_t(i) == rec.delta_view)) L += pending.bounce[j] * suffix;
-            MvSplat &s = splats[i];
-            s.slot = pending.slot[j];
-            s.pixel = pending.pixel[j];
-            s.lw = final_valid ? L * pending.w[j] : Spectrum(0.f);
-            s.w = pending.w[j];
-            s.has_e = i == 0;
-            s.e = i == 0 ? rec.e : Spectrum(0.f);
+            const Spectrum lw = final_valid ? L * pending.w[j] : Spectrum(0.f);
+            if (i == 0) sink.native(pending.slot[j], pending.pixel[j], lw, pending.w[j], rec.e);
+            else sink.shared(pending.slot[j], pending.pixel[j], lw, pending.w[j]);
         }
-        sink.splat(splats.data(), rec.count);
     }
     pending.clear();
 }

@@ -9,6 +9,7 @@
 #include "mv_shift.h"
 #include "mvpath.h"
 
+#include "../mv_film.h"
 #include "../render/camera_projection.h"
 
 #include <cstdint>
@@ -61,26 +62,6 @@ struct MvContext {
     void prepare();
 };
 
-/// One contribution of a native sample to a view's pixel: `lw` = W * L with W = 1/D_k (the part
-/// shared by MIS), `w` = W, and `e` = radiance that only the native strategy produces (emission
-/// seen directly, paths through purely specular first vertices), already divided by n_l, nonzero
-/// only when `has_e`.
-struct MvSplat {
-    int slot = 0;
-    uint32_t pixel = 0;
-    Spectrum lw{0.f};
-    float w = 0.f;
-    Spectrum e{0.f};
-    bool has_e = false;
-};
-
-/// Receives the contributions of one native sample at once.
-class MvSplatSink {
-public:
-    virtual void splat(const MvSplat *splats, size_t n) = 0;
-    virtual ~MvSplatSink() = default;
-};
-
 /// Per-thread scratch space (kept between samples to avoid allocations).
 struct MvScratch {
     ViewShifts shifts;  ///< the shift of y to every view
@@ -98,6 +79,21 @@ struct MvScratch {
     std::vector<Vec3f> sharing_wi;
     std::vector<Spectrum> mixture_f, nee_f;
     std::vector<float> view_pdf;
+};
+
+/// The camera samples of a tile's native samples (§2) and their first hits: the camera rays
+/// are traced together as one coherent stream (mv_trace_primaries), as the path tracer does.
+struct MvPrimaries {
+    std::vector<int> px, py;              ///< pixel (full-film coordinates)
+    std::vector<uint32_t> sample_index;   ///< the pixel's native-sample index
+    std::vector<Vec2f> film, xi;          ///< film position, unit-disk lens point
+    std::vector<float> time;
+    std::vector<Ray> rays;
+    std::vector<SurfaceInteraction> si;
+    std::vector<uint8_t> hit;
+    size_t size() const { return px.size(); }
+    void clear() { px.clear(), py.clear(), sample_index.clear(); }
+    void push(int x, int y, uint32_t index) { px.push_back(x), py.push_back(y), sample_index.push_back(index); }
 };
 
 /// Native samples whose suffix (the path continuing from the shared bounce, §7) waits to
@@ -127,7 +123,6 @@ struct MvPendingSamples {
     std::vector<Sampler> samplers;
     std::vector<Spectrum> radiance;
     std::vector<uint8_t> valid;
-    std::vector<MvSplat> splats;
     void clear();
 };
 
@@ -139,9 +134,13 @@ struct MvPendingSamples {
 std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, int slot, const SurfaceInteraction &hit,
                                                         Point3f lens_point, float time, Vec2f lens, MvScratch &sc);
 
-/// Take native sample `sample_index` of pixel (px, py) (full-film coordinates) of the view in
-/// `slot`: contributions that need no suffix are splatted now, the others join `pending`.
-void mv_native_sample(const MvContext &ctx, int slot, int px, int py, uint32_t sample_index, MvScratch &scratch,
+/// Draw the camera samples of the native samples queued in `prim` (pixels and sample
+/// indices, of the view in `slot`) and trace their camera rays as one stream.
+void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim);
+
+/// Take native sample `i` of `prim` (traced by mv_trace_primaries) of the view in `slot`:
+/// contributions that need no suffix are splatted now, the others join `pending`.
+void mv_native_sample(const MvContext &ctx, int slot, MvPrimaries &prim, size_t i, MvScratch &scratch,
                       MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the

@@ -11,6 +11,7 @@
 //     <boolean name="adaptive" value="true"/>                 native-sample maps (§8)
 //     <integer name="adaptive_warmup" value="4"/> <integer name="adaptive_max" value="16"/>
 //     <float name="adaptive_budget" value="1.25"/>           mean native samples per pixel and pass
+//     <float name="adaptive_eps" value="0.01"/>              eps of the relative error the maps even out
 //   </integrator>
 #include "mvpath.h"
 
@@ -52,6 +53,9 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     cfg.adaptive_budget = props.get_float("adaptive_budget", 1.25f);
     if (!(cfg.adaptive_budget >= 1.f && cfg.adaptive_budget <= float(cfg.adaptive_max)))
         props.fail("adaptive_budget", "'adaptive_budget' must lie in [1, adaptive_max]");
+    cfg.adaptive_eps = props.get_float("adaptive_eps", 0.01f);
+    if (!(cfg.adaptive_eps >= 0.f && cfg.adaptive_eps < INFINITY))
+        props.fail("adaptive_eps", "'adaptive_eps' must be a finite number >= 0");
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
 }
 
