@@ -1,5 +1,6 @@
 // Base of the analytic shapes (sphere, disk, cylinder): one Embree user
-// geometry primitive whose intersect/occluded callbacks call `intersect_t`.
+// geometry primitive whose intersect/occluded callbacks pass Embree's ray
+// packets to `intersect_t_n` (by default `intersect_t` lane by lane).
 #pragma once
 
 #include "../../scene/plugin.h"
