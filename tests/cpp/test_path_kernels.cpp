@@ -108,7 +108,8 @@ namespace {
 
 /// Rough conductors: twosided Beckmann (both sides lit), one-sided GGX whose back faces the
 /// camera, GGX with a specular reflectance, a nearly smooth Beckmann sphere, an anisotropic one
-/// (scalar path), lit by a quad, a sphere and an environment-like enclosing sphere.
+/// (scalar path), lit by a quad, a sphere, a sphere with flipped normals (dark from outside; both
+/// sampled by rough_conductor_sphere_nee_kernel) and an environment-like enclosing sphere.
 std::string conductor_scene(const char *floor_distr, const char *wall_distr, const char *ball_distr) {
     std::string xml = R"(<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="6"/><integer name="rr_depth" value="2"/></integrator>
@@ -145,6 +146,10 @@ std::string conductor_scene(const char *floor_distr, const char *wall_distr, con
     <shape type="sphere">
         <point name="center" value="-0.7, 0.6, 0.5"/><float name="radius" value="0.15"/>
         <emitter type="area"><rgb name="radiance" value="20, 10, 5"/></emitter>
+    </shape>
+    <shape type="sphere">
+        <point name="center" value="0.6, 0.7, 0.2"/><float name="radius" value="0.1"/><boolean name="flip_normals" value="true"/>
+        <emitter type="area"><rgb name="radiance" value="9, 9, 9"/></emitter>
     </shape>
     <shape type="sphere">
         <point name="center" value="0, 0, 0"/><float name="radius" value="5"/><boolean name="flip_normals" value="true"/>

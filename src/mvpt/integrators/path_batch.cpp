@@ -76,9 +76,9 @@ struct WaveBuffers {
     /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
     SoaColumns lambert, quad, sphere;
     std::vector<uint32_t> lambert_index, quad_index, sphere_index;
-    /// Constant rough conductor vertices, likewise.
-    SoaColumns conductor;
-    std::vector<uint32_t> conductor_index;
+    /// Constant rough conductor vertices, likewise (those sampling a sphere emitter apart).
+    SoaColumns conductor, conductor_sphere;
+    std::vector<uint32_t> conductor_index, conductor_sphere_index;
     /// Per light, its row in the QuadTable / SphereTable, or -1.
     std::vector<int> quad_of_light, sphere_of_light;
 };
@@ -136,6 +136,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     buf.quad_index.resize(LambertChunk);
     buf.sphere_index.resize(LambertChunk);
     buf.conductor_index.resize(LambertChunk);
+    buf.conductor_sphere_index.resize(LambertChunk);
     // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
     QuadTable quads;
     std::vector<int> &quad_of_light = buf.quad_of_light;
@@ -175,6 +176,19 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         col[EtaR * st] = rc.eta.r, col[EtaG * st] = rc.eta.g, col[EtaB * st] = rc.eta.b;
         col[KR * st] = rc.k.r, col[KG * st] = rc.k.g, col[KB * st] = rc.k.b;
         col[SpR * st] = rc.specular.r, col[SpG * st] = rc.specular.g, col[SpB * st] = rc.specular.b;
+    };
+    // The vertex columns of rough_conductor_nee_kernel (also those of its sphere variant).
+    auto gather_conductor_nee = [&](float *col, size_t st, const SurfaceInteraction &si, const RoughConductorInfo &rc,
+                                    const Spectrum &beta) {
+        using namespace rn_col;
+        gather_conductor(col, st, si, rc);
+        const Frame &f = si.sh_frame;
+        col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
+        col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
+        col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
+        col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+        col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+        col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
     };
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
@@ -250,6 +264,20 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         size_t n_sph = 0;
         SoaColumns &sc = buf.sphere;
         sc.resize(lq_col::Count, LambertChunk);
+        // The next-event estimates of a kernel's lanes wait for their shadow rays (columns from
+        // O0: origin, direction, t_max, contribution, whether it counts).
+        auto take_shadow_rays = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0) {
+            constexpr size_t O0 = decltype(o0)::value;
+            for (size_t m = 0; m < count; ++m) {
+                if (!(cols[O0 + 10][m] > 0.f)) continue;
+                const uint32_t k = buf.scatter[index[m]].path;
+                buf.shadow_rays[n_shadow] = Ray{{cols[O0][m], cols[O0 + 1][m], cols[O0 + 2][m]},
+                                                {cols[O0 + 3][m], cols[O0 + 4][m], cols[O0 + 5][m]}, 0.f,
+                                                cols[O0 + 6][m], buf.si[k].time};
+                buf.shadows[n_shadow++] = {k, Spectrum(cols[O0 + 7][m], cols[O0 + 8][m], cols[O0 + 9][m])};
+            }
+            count = 0;
+        };
         // Shadow rays and contributions of a kernel's lanes whose estimate counts.
         auto collect = [&](SoaColumns &c, const uint32_t *index, size_t count) {
             using namespace lq_col;
@@ -289,6 +317,21 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
             col[Quad * st] = float(row);
         };
+        // Rough conductor vertices that chose a sphere emitter seen from outside: a kernel too.
+        size_t n_csph = 0;
+        SoaColumns &csc = buf.conductor_sphere;
+        csc.resize(rsn_col::Count, LambertChunk);
+        auto flush_conductor_sphere = [&] {
+            if (n_csph == 0) return;
+            rough_conductor_sphere_nee_kernel(csc, n_csph, spheres, float(lights.size()));
+            take_shadow_rays(csc, buf.conductor_sphere_index, n_csph, std::integral_constant<size_t, rn_col::Ox>{});
+        };
+        // Whether p is outside sphere emitter `row` (Sphere::sample_solid_angle's test).
+        auto outside_sphere = [&](int row, Point3f p) {
+            Vec3f dc = Point3f(spheres.at(SphereTable::Cx, row), spheres.at(SphereTable::Cy, row),
+                               spheres.at(SphereTable::Cz, row)) - p;
+            return squared_norm(dc) > sphere_radius_adj2[row];
+        };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             const SurfaceInteraction &si = buf.si[v.path];
@@ -304,17 +347,25 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                     if (n_quad == LambertChunk) flush_quad();
                     continue;
                 }
-                if (const int row = sphere_of_light[idx]; row >= 0) {
-                    // From outside the sphere only (Sphere::sample_solid_angle's test).
-                    Vec3f dc = Point3f(spheres.at(SphereTable::Cx, row), spheres.at(SphereTable::Cy, row),
-                                       spheres.at(SphereTable::Cz, row)) - si.p;
-                    if (squared_norm(dc) > sphere_radius_adj2[row]) {
-                        v.nee = false;
-                        buf.sphere_index[n_sph] = v.path;
-                        gather(sc, n_sph++, si, *lam, paths[v.path].throughput, j, row);
-                        if (n_sph == LambertChunk) flush_sphere();
-                        continue;
-                    }
+                if (const int row = sphere_of_light[idx]; row >= 0 && outside_sphere(row, si.p)) {
+                    v.nee = false;
+                    buf.sphere_index[n_sph] = v.path;
+                    gather(sc, n_sph++, si, *lam, paths[v.path].throughput, j, row);
+                    if (n_sph == LambertChunk) flush_sphere();
+                    continue;
+                }
+            } else if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
+                if (const int row = sphere_of_light[idx]; row >= 0 && outside_sphere(row, si.p)) {
+                    v.nee = false;
+                    const size_t m = n_csph++;
+                    buf.conductor_sphere_index[m] = uint32_t(j);
+                    float *col = csc.data.data() + m;
+                    const size_t st = csc.stride;
+                    gather_conductor_nee(col, st, si, *cond, paths[v.path].throughput);
+                    col[rsn_col::Ux * st] = u[1][j], col[rsn_col::Uy * st] = u[2][j];
+                    col[rsn_col::Sphere * st] = float(row);
+                    if (n_csph == LambertChunk) flush_conductor_sphere();
+                    continue;
                 }
             }
             const Light &light = *lights[idx];
@@ -324,26 +375,13 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         }
         flush_quad();
         flush_sphere();
+        flush_conductor_sphere();
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
         // Constant Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.
         size_t n_lam = 0;
         SoaColumns &lc = buf.lambert;
         lc.resize(ln_col::Count, LambertChunk);
-        // The next-event estimates of a kernel's lanes wait for their shadow rays (columns from
-        // O0: origin, direction, t_max, contribution, whether it counts).
-        auto take_shadow_rays = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0) {
-            constexpr size_t O0 = decltype(o0)::value;
-            for (size_t m = 0; m < count; ++m) {
-                if (!(cols[O0 + 10][m] > 0.f)) continue;
-                const uint32_t k = buf.scatter[index[m]].path;
-                buf.shadow_rays[n_shadow] = Ray{{cols[O0][m], cols[O0 + 1][m], cols[O0 + 2][m]},
-                                                {cols[O0 + 3][m], cols[O0 + 4][m], cols[O0 + 5][m]}, 0.f,
-                                                cols[O0 + 6][m], buf.si[k].time};
-                buf.shadows[n_shadow++] = {k, Spectrum(cols[O0 + 7][m], cols[O0 + 8][m], cols[O0 + 9][m])};
-            }
-            count = 0;
-        };
         auto flush_nee = [&] {
             if (n_lam == 0) return;
             lambert_nee_kernel(lc, n_lam, float(lights.size()));
@@ -391,14 +429,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = rc.data.data() + m;
                 const size_t st = rc.stride;
-                gather_conductor(col, st, si, *cond);
-                const Frame &f = si.sh_frame;
-                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
-                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
-                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
-                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+                gather_conductor_nee(col, st, si, *cond, beta);
                 col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
                 col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
                 col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;

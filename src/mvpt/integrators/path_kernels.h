@@ -152,4 +152,15 @@ static_assert(rn_col::Gz == rn_col::Px + 5 && rn_col::LDelta == rn_col::Ldx + 8 
 /// (as lambert_nee_kernel): RoughConductor::eval and ::pdf, MIS, contribution and shadow ray.
 void rough_conductor_nee_kernel(SoaColumns &c, size_t n, float light_count);
 
+/// Columns of `rough_conductor_sphere_nee_kernel`: rn_col's (the emitter sample's columns are
+/// filled by the kernel), then the emitter sample's numbers and the emitter's SphereTable row.
+namespace rsn_col {
+enum : size_t { Ux = rn_col::Count, Uy, Sphere, Count };
+}
+
+/// `rough_conductor_nee_kernel` towards sphere emitters seen from outside, emitter sampling
+/// included (Sphere::sample_solid_angle's cone sampling, then AreaLight::sample_li); lanes
+/// whose emitter sample is void get Ok = 0.
+void rough_conductor_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count);
+
 } // namespace mvpt

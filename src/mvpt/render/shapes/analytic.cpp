@@ -2,6 +2,8 @@
 
 #include <embree3/rtcore_ray.h>
 
+#include <vector>
+
 namespace mvpt {
 
 namespace {
@@ -16,42 +18,55 @@ void bounds_callback(const RTCBoundsFunctionArguments *args) {
     o->upper_x = b.max.x + pad.x; o->upper_y = b.max.y + pad.y; o->upper_z = b.max.z + pad.z;
 }
 
-double hit_of(const AnalyticShape *shape, RTCRayN *rays, unsigned n, unsigned i) {
-    double o[3] = {RTCRayN_org_x(rays, n, i), RTCRayN_org_y(rays, n, i), RTCRayN_org_z(rays, n, i)};
-    double d[3] = {RTCRayN_dir_x(rays, n, i), RTCRayN_dir_y(rays, n, i), RTCRayN_dir_z(rays, n, i)};
-    return shape->intersect_t(o, d, RTCRayN_tnear(rays, n, i), RTCRayN_tfar(rays, n, i));
-}
+/// Lanes of one callback call processed at a time (Embree's widest packet).
+constexpr unsigned MaxLanes = 16;
 
 void intersect_callback(const RTCIntersectFunctionNArguments *args) {
     auto *shape = static_cast<const AnalyticShape *>(args->geometryUserPtr);
     RTCRayN *rays = RTCRayHitN_RayN(args->rayhit, args->N);
     RTCHitN *hits = RTCRayHitN_HitN(args->rayhit, args->N);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (args->valid[i] != -1) continue;
-        double t = hit_of(shape, rays, args->N, i);
-        if (std::isnan(t)) continue;
-        RTCRayN_tfar(rays, args->N, i) = float(t);
-        RTCHitN_Ng_x(hits, args->N, i) = 0.f;
-        RTCHitN_Ng_y(hits, args->N, i) = 0.f;
-        RTCHitN_Ng_z(hits, args->N, i) = 1.f;
-        RTCHitN_u(hits, args->N, i) = 0.f;
-        RTCHitN_v(hits, args->N, i) = 0.f;
-        RTCHitN_primID(hits, args->N, i) = args->primID;
-        RTCHitN_geomID(hits, args->N, i) = args->geomID;
-        RTCHitN_instID(hits, args->N, i, 0) = args->context->instID[0];
+    const unsigned n = args->N;
+    double local[MaxLanes];
+    std::vector<double> wide; // wider packets than Embree's documented 16 lanes: not expected
+    double *t = n <= MaxLanes ? local : (wide.resize(n), wide.data());
+    shape->intersect_t_n(rays, n, args->valid, t);
+    for (unsigned i = 0; i < n; ++i) {
+        if (std::isnan(t[i])) continue;
+        RTCRayN_tfar(rays, n, i) = float(t[i]);
+        RTCHitN_Ng_x(hits, n, i) = 0.f;
+        RTCHitN_Ng_y(hits, n, i) = 0.f;
+        RTCHitN_Ng_z(hits, n, i) = 1.f;
+        RTCHitN_u(hits, n, i) = 0.f;
+        RTCHitN_v(hits, n, i) = 0.f;
+        RTCHitN_primID(hits, n, i) = args->primID;
+        RTCHitN_geomID(hits, n, i) = args->geomID;
+        RTCHitN_instID(hits, n, i, 0) = args->context->instID[0];
     }
 }
 
 void occluded_callback(const RTCOccludedFunctionNArguments *args) {
     auto *shape = static_cast<const AnalyticShape *>(args->geometryUserPtr);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (args->valid[i] != -1) continue;
-        if (!std::isnan(hit_of(shape, args->ray, args->N, i)))
-            RTCRayN_tfar(args->ray, args->N, i) = -Infinity;
-    }
+    const unsigned n = args->N;
+    double local[MaxLanes];
+    std::vector<double> wide; // wider packets than Embree's documented 16 lanes: not expected
+    double *t = n <= MaxLanes ? local : (wide.resize(n), wide.data());
+    shape->intersect_t_n(args->ray, n, args->valid, t);
+    for (unsigned i = 0; i < n; ++i)
+        if (!std::isnan(t[i])) RTCRayN_tfar(args->ray, n, i) = -Infinity;
 }
 
 } // namespace
+
+void AnalyticShape::intersect_t_n(const RTCRayN *rays, unsigned n, const int *valid, double *t) const {
+    RTCRayN *r = const_cast<RTCRayN *>(rays); // Embree's accessors take non-const packets
+    for (unsigned i = 0; i < n; ++i) {
+        t[i] = std::nan("");
+        if (valid[i] != -1) continue;
+        double o[3] = {RTCRayN_org_x(r, n, i), RTCRayN_org_y(r, n, i), RTCRayN_org_z(r, n, i)};
+        double d[3] = {RTCRayN_dir_x(r, n, i), RTCRayN_dir_y(r, n, i), RTCRayN_dir_z(r, n, i)};
+        t[i] = intersect_t(o, d, RTCRayN_tnear(r, n, i), RTCRayN_tfar(r, n, i));
+    }
+}
 
 unsigned AnalyticShape::attach(RTCDevice device, RTCScene scene, const MotionTime &) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);

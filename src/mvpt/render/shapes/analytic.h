@@ -1,5 +1,6 @@
 // Base of the analytic shapes (sphere, disk, cylinder): one Embree user
-// geometry primitive whose intersect/occluded callbacks call `intersect_t`.
+// geometry primitive whose intersect/occluded callbacks pass Embree's ray
+// packets to `intersect_t_n` (by default `intersect_t` lane by lane).
 #pragma once
 
 #include "../../scene/plugin.h"
@@ -15,6 +16,10 @@ public:
 
     /// Nearest hit parameter in [tmin, tmax] along `o + t d` (d need not be unit), or NaN.
     virtual double intersect_t(const double o[3], const double d[3], double tmin, double tmax) const = 0;
+
+    /// intersect_t of the lanes of an Embree ray packet (n lanes, structure of arrays) that
+    /// `valid` marks with -1; NaN for the others. The default calls intersect_t lane by lane.
+    virtual void intersect_t_n(const RTCRayN *rays, unsigned n, const int *valid, double *t) const;
 };
 
 /// Roots of a x^2 + b x + c = 0 (near <= far), numerically stable (the

@@ -2,12 +2,66 @@
 // `to_world`; uv = (phi / 2pi, theta / pi) in object space. Light sampling
 // picks uniformly inside the visible cone from outside [Akalin, "Sampling the
 // visible sphere"], uniformly by area from inside.
+#include "../../core/multi_isa.h"
 #include "../../core/warp.h"
 #include "analytic.h"
 #include "instance.h"
 #include "mesh.h"
 
+#include <cstring>
+#include <limits>
+
 namespace mvpt {
+
+namespace {
+
+/// Cheap exact-enough rejection of the ray segment o + t d, t in [tmin, tmax], against the
+/// sphere (center c, squared radius r2 with a margin) without square root or division: the
+/// squared distance to the center is convex along the ray, so the segment misses the sphere
+/// when its point closest to the center lies outside. Most shadow rays (which stop just short
+/// of a sampled point on the sphere) and passing rays end here; the margin leaves every case
+/// that rounding could decide either way to the roots. Branch-free (selects), so that a loop
+/// over a packet's lanes vectorises.
+/// `mask ? a : b` by bit masking (math.h's select for doubles): the loop below stays branch-free.
+[[gnu::always_inline]] inline double select_d(bool mask, double a, double b) {
+    uint64_t m = 0u - uint64_t(mask), ia, ib;
+    std::memcpy(&ia, &a, 8);
+    std::memcpy(&ib, &b, 8);
+    uint64_t r = (ia & m) | (ib & ~m);
+    double out;
+    std::memcpy(&out, &r, 8);
+    return out;
+}
+
+[[gnu::always_inline]] inline bool segment_misses(double cx, double cy, double cz, double r2, double ox, double oy,
+                                                  double oz, double dx, double dy, double dz, double tmin, double tmax) {
+    const double lx = ox - cx, ly = oy - cy, lz = oz - cz;
+    const double dd = (dx * dx + dy * dy) + dz * dz, ld = (lx * dx + ly * dy) + lz * dz,
+                 ll = (lx * lx + ly * ly) + lz * lz;
+    // The segment's point closest to the center: beyond tmax, before tmin, or inside (then the
+    // squared line distance times dd decides).
+    const bool beyond = -ld >= tmax * dd, before = !beyond & (-ld <= tmin * dd);
+    const bool line_misses = ll * dd - ld * ld > r2 * dd;
+    const double t = select_d(beyond, tmax, tmin);
+    const double px = lx + t * dx, py = ly + t * dy, pz = lz + t * dz;
+    const bool end_misses = (std::abs(t) <= 1.7976931348623157e308) & ((px * px + py * py) + pz * pz > r2);
+    return ((beyond | before) & end_misses) | (!(beyond | before) & line_misses);
+}
+
+/// segment_misses for the n lanes of an Embree packet (RTCRayN: n-wide structure of arrays
+/// org_x, org_y, org_z, tnear, dir_x, dir_y, dir_z, time, tfar): t[i] = 0 for the valid lanes
+/// that may hit, NaN for the others.
+MVPT_MULTI_ISA void sphere_candidates(const float *r, size_t n, const int *valid, double cx, double cy, double cz,
+                                      double r2, double *t) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (size_t i = 0; i < n; ++i) {
+        bool misses = segment_misses(cx, cy, cz, r2, r[i], r[n + i], r[2 * n + i], r[4 * n + i], r[5 * n + i],
+                                     r[6 * n + i], r[3 * n + i], r[8 * n + i]);
+        t[i] = select_d((valid[i] == -1) & !misses, 0.0, nan);
+    }
+}
+
+} // namespace
 
 class Sphere final : public AnalyticShape {
 public:
@@ -30,12 +84,22 @@ public:
     }
 
     double intersect_t(const double o[3], const double d[3], double tmin, double tmax) const override {
-        if (segment_misses(o, d, tmin, tmax)) return std::nan("");
-        double near_t, far_t;
-        if (!roots(o, d, near_t, far_t)) return std::nan("");
-        if (near_t >= tmin && near_t <= tmax) return near_t;
-        if (far_t >= tmin && far_t <= tmax) return far_t;
-        return std::nan("");
+        if (segment_misses(m_center.x, m_center.y, m_center.z, r2_margin(), o[0], o[1], o[2], d[0], d[1], d[2], tmin,
+                           tmax))
+            return std::nan("");
+        return nearest_root(o, d, tmin, tmax);
+    }
+
+    /// A packet's lanes: the rejection test as one vector loop over all lanes, the roots
+    /// (rarely needed: hits and near misses) lane by lane. Same results as intersect_t.
+    void intersect_t_n(const RTCRayN *rays, unsigned n, const int *valid, double *t) const override {
+        const float *r = reinterpret_cast<const float *>(rays);
+        sphere_candidates(r, n, valid, m_center.x, m_center.y, m_center.z, r2_margin(), t);
+        for (unsigned i = 0; i < n; ++i) {
+            if (std::isnan(t[i])) continue;
+            const double o[3] = {r[i], r[n + i], r[2 * n + i]}, d[3] = {r[4 * n + i], r[5 * n + i], r[6 * n + i]};
+            t[i] = nearest_root(o, d, r[3 * n + i], r[8 * n + i]);
+        }
     }
 
     void fill_interaction(const Ray &ray, float t, uint32_t, Vec2f, SurfaceInteraction &si) const override {
@@ -128,31 +192,16 @@ public:
     }
 
 private:
-    /// Cheap exact-enough rejection without square root or division: the squared
-    /// distance to the center is convex along the ray, so the segment [tmin, tmax] misses
-    /// the sphere when its point closest to the center lies outside. Most shadow rays
-    /// (which stop just short of a sampled point on the sphere) and passing rays end here.
-    /// The margin leaves every case that rounding could decide either way to `roots`.
-    bool segment_misses(const double o[3], const double d[3], double tmin, double tmax) const {
-        double l[3], dd = 0, ld = 0, ll = 0;
-        for (int i = 0; i < 3; ++i) {
-            l[i] = o[i] - double(m_center[i]);
-            dd += d[i] * d[i];
-            ld += l[i] * d[i];
-            ll += l[i] * l[i];
-        }
-        const double r2 = m_radius * m_radius * (1.0 + 1e-6);
-        double t; // the segment's point closest to the center, when it is an end point
-        if (-ld >= tmax * dd) t = tmax;      // the closest approach lies beyond tmax
-        else if (-ld <= tmin * dd) t = tmin; // ... before tmin
-        else return ll * dd - ld * ld > r2 * dd; // squared line distance times dd
-        if (!std::isfinite(t)) return false;
-        double p2 = 0;
-        for (int i = 0; i < 3; ++i) {
-            double p = l[i] + t * d[i];
-            p2 += p * p;
-        }
-        return p2 > r2;
+    /// The squared radius with segment_misses's margin.
+    double r2_margin() const { return m_radius * m_radius * (1.0 + 1e-6); }
+
+    /// The nearest root of the ray's quadratic in [tmin, tmax], or NaN.
+    double nearest_root(const double o[3], const double d[3], double tmin, double tmax) const {
+        double near_t, far_t;
+        if (!roots(o, d, near_t, far_t)) return std::nan("");
+        if (near_t >= tmin && near_t <= tmax) return near_t;
+        if (far_t >= tmin && far_t <= tmax) return far_t;
+        return std::nan("");
     }
 
     bool roots(const double o[3], const double d[3], double &near_t, double &far_t) const {
