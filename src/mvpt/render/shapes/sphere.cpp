@@ -15,13 +15,6 @@ namespace mvpt {
 
 namespace {
 
-/// Cheap exact-enough rejection of the ray segment o + t d, t in [tmin, tmax], against the
-/// sphere (center c, squared radius r2 with a margin) without square root or division: the
-/// squared distance to the center is convex along the ray, so the segment misses the sphere
-/// when its point closest to the center lies outside. Most shadow rays (which stop just short
-/// of a sampled point on the sphere) and passing rays end here; the margin leaves every case
-/// that rounding could decide either way to the roots. Branch-free (selects), so that a loop
-/// over a packet's lanes vectorises.
 /// `mask ? a : b` by bit masking (math.h's select for doubles): the loop below stays branch-free.
 [[gnu::always_inline]] inline double select_d(bool mask, double a, double b) {
     uint64_t m = 0u - uint64_t(mask), ia, ib;
@@ -33,6 +26,13 @@ namespace {
     return out;
 }
 
+/// Cheap exact-enough rejection of the ray segment o + t d, t in [tmin, tmax], against the
+/// sphere (center c, squared radius r2 with a margin) without square root or division: the
+/// squared distance to the center is convex along the ray, so the segment misses the sphere
+/// when its point closest to the center lies outside. Most shadow rays (which stop just short
+/// of a sampled point on the sphere) and passing rays end here; the margin leaves every case
+/// that rounding could decide either way to the roots. Branch-free (selects), so that a loop
+/// over a packet's lanes vectorises.
 [[gnu::always_inline]] inline bool segment_misses(double cx, double cy, double cz, double r2, double ox, double oy,
                                                   double oz, double dx, double dy, double dz, double tmin, double tmax) {
     const double lx = ox - cx, ly = oy - cy, lz = oz - cz;
