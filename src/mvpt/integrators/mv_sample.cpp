@@ -269,6 +269,7 @@ void MvPendingSamples::clear() {
     samples.clear();
     slot.clear(), pixel.clear(), w.clear(), nee.clear(), bounce.clear();
     rays.clear(), states.clear(), samplers.clear();
+    shadow_rays.clear();
 }
 
 void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
@@ -397,7 +398,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     const auto &lights = scene.lights();
     auto &f_nee = sc.nee_f;
     f_nee.resize(ns);
-    Spectrum nee_weight(0.f); // light weight times MIS weight, zero when the light is not seen
+    Spectrum nee_weight(0.f); // light weight times MIS weight, zero when no view reflects the light
+    int32_t nee_shadow = -1;  // its shadow ray, traced in mv_finish_samples
     if (!lights.empty()) {
         size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
         auto [ls, weight] = lights[idx]->sample_li(si.p, u_light, si.time);
@@ -409,10 +411,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee.data(), pdf.data());
             const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
             if (max_over_views(f_nee.data(), ns) > 0.f) { // some view reflects light this way
-                Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                nee_shadow = int32_t(pending.shadow_rays.size());
+                pending.shadow_rays.push_back(std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p));
                 ++counters.shadow_rays;
-                if (!scene.occluded(shadow))
-                    nee_weight = weight * (ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns)));
+                nee_weight = weight * (ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns)));
             }
         }
     }
@@ -466,6 +468,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     rec.first = uint32_t(pending.slot.size());
     rec.count = uint32_t(ns);
     rec.delta_view = mix.delta ? int32_t(mix.view) : -1;
+    rec.shadow = nee_shadow;
     rec.e = le_y * (1.f / n_l);
     const size_t end = rec.first + ns;
     pending.slot.resize(end), pending.pixel.resize(end), pending.w.resize(end);
@@ -494,13 +497,18 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
         ctx.path->trace_batch(*ctx.scene, pending.rays.data(), pending.states.data(), pending.samplers.data(),
                               pending.radiance.data(), pending.valid.data(), n_suffix, counters);
     stats[slot].rays += counters.rays + counters.shadow_rays - rays_before;
+    // The shared NEE's shadow rays as packets (counted when queued).
+    pending.shadow_blocked.resize(pending.shadow_rays.size());
+    if (!pending.shadow_rays.empty())
+        ctx.scene->occluded(pending.shadow_rays.data(), pending.shadow_rays.size(), pending.shadow_blocked.data());
     for (const MvPendingSamples::Sample &rec : pending.samples) {
         const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
         const bool final_valid = rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid;
         const bool bounce = !suffix.is_black();
+        const bool light_seen = rec.shadow >= 0 && !pending.shadow_blocked[rec.shadow];
         for (uint32_t i = 0; i < rec.count; ++i) {
             const uint32_t j = rec.first + i;
-            Spectrum L = pending.nee[j];
+            Spectrum L = light_seen ? pending.nee[j] : Spectrum(0.f);
             if (bounce && (rec.delta_view < 0 || int32_t(i) == rec.delta_view)) L += pending.bounce[j] * suffix;
             const Spectrum lw = final_valid ? L * pending.w[j] : Spectrum(0.f);
             if (i == 0) sink.native(pending.slot[j], pending.pixel[j], lw, pending.w[j], rec.e);

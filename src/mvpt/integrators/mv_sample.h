@@ -98,7 +98,8 @@ struct MvPrimaries {
 
 /// Native samples whose suffix (the path continuing from the shared bounce, §7) waits to
 /// be traced with the other samples of its tile as one wavefront of the path tracer
-/// (PathIntegrator::trace_batch); mv_finish_samples then splats their contributions.
+/// (PathIntegrator::trace_batch), and whose NEE shadow ray waits likewise;
+/// mv_finish_samples then splats their contributions.
 struct MvPendingSamples {
     /// Per sample: its sharing views' entries [first, first + count) below (the native view
     /// first), its suffix (an index into the suffix arrays, or -1), its valid-path flag when it
@@ -107,6 +108,7 @@ struct MvPendingSamples {
     struct Sample {
         uint32_t first = 0, count = 0;
         int32_t suffix = -1, delta_view = -1;
+        int32_t shadow = -1; ///< the shared NEE's shadow ray (its radiance counts if unblocked), or -1
         bool valid = false;
         Spectrum e{0.f};
     };
@@ -123,6 +125,9 @@ struct MvPendingSamples {
     std::vector<Sampler> samplers;
     std::vector<Spectrum> radiance;
     std::vector<uint8_t> valid;
+    /// The shared NEE's shadow rays, traced as packets with the suffixes; results.
+    std::vector<Ray> shadow_rays;
+    std::vector<uint8_t> shadow_blocked;
     void clear();
 };
 
