@@ -10,6 +10,8 @@
 
 namespace mvpt {
 
+using kernel::sample_sphere_emitter;
+using kernel::SphereEmitterSample;
 using kernel::max_of;
 using kernel::min_of;
 using kernel::nee_contribution_and_shadow_ray;
@@ -156,44 +158,11 @@ MVPT_MULTI_ISA void lambert_sphere_nee_kernel_impl(float *c, size_t s, size_t n,
         const float cx = q[SphereTable::Cx * M + k], cy = q[SphereTable::Cy * M + k], cz = q[SphereTable::Cz * M + k];
         const float radius = q[SphereTable::Radius * M + k];
         // Sphere::sample_solid_angle from outside: a uniform direction in the subtended cone.
-        float dcx = cx - px, dcy = cy - py, dcz = cz - pz;
-        float dc2 = dcx * dcx + dcy * dcy + dcz * dcz;
-        float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
-              inv_sin_max = 1.f / sin_max, cos_max = std::sqrt(max_of(1.f - sin_max2, 0.f));
-        float tay = (cos_max - 1.f) * ux + 1.f;
-        float sin2 = select(sin_max2 > 0.00068523f, 1.f - tay * tay, sin_max2 * ux);
-        float cos_t = std::sqrt(max_of(1.f - sin2, 0.f));
-        float cos_alpha = sin2 * inv_sin_max + cos_t * std::sqrt(max_of(1.f - sin2 * inv_sin_max * inv_sin_max, 0.f));
-        float sin_alpha = std::sqrt(max_of(1.f - cos_alpha * cos_alpha, 0.f));
-        Vec2f sc_phi = warp::sincos_turn(uy);
-        float vlx = sc_phi.y * sin_alpha, vly = sc_phi.x * sin_alpha, vlz = cos_alpha;
-        // Frame(dc * -inv_dc) [Duff et al. 2017] and to_world.
-        float neg_inv = -inv_dc;
-        float fnx = dcx * neg_inv, fny = dcy * neg_inv, fnz = dcz * neg_inv;
-        float sign = std::copysign(1.f, fnz);
-        float fa = -1.f / (sign + fnz), fb = fnx * fny * fa;
-        float fsx = 1.f + sign * fnx * fnx * fa, fsy = sign * fb, fsz = -sign * fnx;
-        float ftx = fb, fty = sign + fny * fny * fa, ftz = -fny;
-        float dirx = (fsx * vlx + ftx * vly) + fnx * vlz;
-        float diry = (fsy * vlx + fty * vly) + fny * vlz;
-        float dirz = (fsz * vlx + ftz * vly) + fnz * vlz;
-        float lpx = cx + dirx * radius, lpy = cy + diry * radius, lpz = cz + dirz * radius;
-        bool flip = q[SphereTable::Flip * M + k] > 0.f;
-        float snx = select(flip, -dirx, dirx), sny = select(flip, -diry, diry), snz = select(flip, -dirz, dirz);
-        float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
-        float dist2 = vx * vx + vy * vy + vz * vz;
-        float lpdf = select(dist2 == 0.f, 0.f, 1.f / ((2.f * Pi) * (1.f - cos_max)));
-        // AreaLight::sample_li.
-        float dist = std::sqrt(dist2);
-        float inv_dist = 1.f / dist;
-        const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
-        bool front_side = !(snx * ldx + sny * ldy + snz * ldz >= 0.f);
-        float inv_pdf = 1.f / lpdf;
-        float wr = q[SphereTable::Lr * M + k] * inv_pdf, wg = q[SphereTable::Lg * M + k] * inv_pdf,
-              wb = q[SphereTable::Lb * M + k] * inv_pdf;
-        bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
-        lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
-                         light_count);
+        const SphereEmitterSample e =
+            sample_sphere_emitter(px, py, pz, ux, uy, cx, cy, cz, radius, q[SphereTable::Flip * M + k] > 0.f,
+                                  q[SphereTable::Lr * M + k], q[SphereTable::Lg * M + k], q[SphereTable::Lb * M + k]);
+        lambert_nee_tail(c, s, i, px, py, pz, e.lpx, e.lpy, e.lpz, e.vx, e.vy, e.vz, e.ldx, e.ldy, e.ldz, e.pdf, e.wr,
+                         e.wg, e.wb, e.sampled, light_count);
     }
 }
 
