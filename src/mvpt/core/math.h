@@ -28,6 +28,16 @@ inline float select(bool mask, float a, float b) {
     std::memcpy(&out, &r, 4);
     return out;
 }
+/// The same for doubles.
+inline double select(bool mask, double a, double b) {
+    uint64_t m = 0u - uint64_t(mask), ia, ib;
+    std::memcpy(&ia, &a, 8);
+    std::memcpy(&ib, &b, 8);
+    uint64_t r = (ia & m) | (ib & ~m);
+    double out;
+    std::memcpy(&out, &r, 8);
+    return out;
+}
 /// sqrt(max(x, 0)) with the maximum as a bit select (std::max's result for every input, NaN
 /// included), so that loops using it vectorise.
 inline float safe_sqrt(float x) { return std::sqrt(select(x < 0.f, 0.f, x)); }

@@ -7,6 +7,7 @@
 #include "../core/math.h"
 #include "../core/warp.h"
 #include "../render/interaction.h"
+#include "path_kernels.h"
 
 namespace mvpt::kernel {
 
@@ -110,11 +111,16 @@ struct SphereEmitterSample {
     float wr, wg, wb;     ///< radiance / pdf
     bool sampled;         ///< false where li would skip the sample
 };
-/// `u` = (ux, uy) the two numbers of the emitter sample; the sphere's centre, radius,
-/// orientation (`flip`: normals point inwards) and radiance.
+/// `u` = (ux, uy) the two numbers of the emitter sample, `q` the SphereTable's rows and `k`
+/// the sphere's entry (centre, radius, orientation: `flip` when normals point inwards,
+/// radiance).
 [[gnu::always_inline]] inline SphereEmitterSample sample_sphere_emitter(float px, float py, float pz, float ux, float uy,
-                                                                       float cx, float cy, float cz, float radius,
-                                                                       bool flip, float lr, float lg, float lb) {
+                                                                       const float *q, int k) {
+    constexpr size_t M = SphereTable::Max;
+    const float cx = q[SphereTable::Cx * M + k], cy = q[SphereTable::Cy * M + k], cz = q[SphereTable::Cz * M + k];
+    const float radius = q[SphereTable::Radius * M + k];
+    const bool flip = q[SphereTable::Flip * M + k] > 0.f;
+    const float lr = q[SphereTable::Lr * M + k], lg = q[SphereTable::Lg * M + k], lb = q[SphereTable::Lb * M + k];
     SphereEmitterSample r;
     float dcx = cx - px, dcy = cy - py, dcz = cz - pz;
     float dc2 = dcx * dcx + dcy * dcy + dcz * dcz;

@@ -149,18 +149,13 @@ void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, fl
 
 MVPT_MULTI_ISA void lambert_sphere_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
     using namespace lq_col;
-    constexpr size_t M = SphereTable::Max;
 #pragma GCC ivdep
     for (size_t i = 0; i < n; ++i) {
         const int k = int(c[Quad * s + i]);
         const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
         const float ux = c[Ux * s + i], uy = c[Uy * s + i];
-        const float cx = q[SphereTable::Cx * M + k], cy = q[SphereTable::Cy * M + k], cz = q[SphereTable::Cz * M + k];
-        const float radius = q[SphereTable::Radius * M + k];
         // Sphere::sample_solid_angle from outside: a uniform direction in the subtended cone.
-        const SphereEmitterSample e =
-            sample_sphere_emitter(px, py, pz, ux, uy, cx, cy, cz, radius, q[SphereTable::Flip * M + k] > 0.f,
-                                  q[SphereTable::Lr * M + k], q[SphereTable::Lg * M + k], q[SphereTable::Lb * M + k]);
+        const SphereEmitterSample e = sample_sphere_emitter(px, py, pz, ux, uy, q, k);
         lambert_nee_tail(c, s, i, px, py, pz, e.lpx, e.lpy, e.lpz, e.vx, e.vy, e.vz, e.ldx, e.ldy, e.ldz, e.pdf, e.wr,
                          e.wg, e.wb, e.sampled, light_count);
     }

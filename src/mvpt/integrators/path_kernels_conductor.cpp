@@ -188,15 +188,10 @@ template <int Mode> [[gnu::always_inline]] inline void conductor_nee_lane(float 
 [[gnu::always_inline]] inline bool sphere_emitter_sample(float *c, size_t s, size_t i, const float *q) {
     using namespace rsn_col;
     using namespace rn_col;
-    constexpr size_t M = SphereTable::Max;
     const int k = int(c[Sphere * s + i]);
     const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
     const float ux = c[Ux * s + i], uy = c[Uy * s + i];
-    const float cx = q[SphereTable::Cx * M + k], cy = q[SphereTable::Cy * M + k], cz = q[SphereTable::Cz * M + k];
-    const float radius = q[SphereTable::Radius * M + k];
-    const SphereEmitterSample e =
-        sample_sphere_emitter(px, py, pz, ux, uy, cx, cy, cz, radius, q[SphereTable::Flip * M + k] > 0.f,
-                              q[SphereTable::Lr * M + k], q[SphereTable::Lg * M + k], q[SphereTable::Lb * M + k]);
+    const SphereEmitterSample e = sample_sphere_emitter(px, py, pz, ux, uy, q, k);
     c[Ldx * s + i] = e.ldx, c[Ldy * s + i] = e.ldy, c[Ldz * s + i] = e.ldz;
     c[Lpx * s + i] = e.lpx, c[Lpy * s + i] = e.lpy, c[Lpz * s + i] = e.lpz;
     c[LDist * s + i] = e.dist, c[LPdf * s + i] = e.pdf, c[LDelta * s + i] = 0.f;

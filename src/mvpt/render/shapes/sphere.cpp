@@ -15,17 +15,6 @@ namespace mvpt {
 
 namespace {
 
-/// `mask ? a : b` by bit masking (math.h's select for doubles): the loop below stays branch-free.
-[[gnu::always_inline]] inline double select_d(bool mask, double a, double b) {
-    uint64_t m = 0u - uint64_t(mask), ia, ib;
-    std::memcpy(&ia, &a, 8);
-    std::memcpy(&ib, &b, 8);
-    uint64_t r = (ia & m) | (ib & ~m);
-    double out;
-    std::memcpy(&out, &r, 8);
-    return out;
-}
-
 /// Cheap exact-enough rejection of the ray segment o + t d, t in [tmin, tmax], against the
 /// sphere (center c, squared radius r2 with a margin) without square root or division: the
 /// squared distance to the center is convex along the ray, so the segment misses the sphere
@@ -42,7 +31,7 @@ namespace {
     // squared line distance times dd decides).
     const bool beyond = -ld >= tmax * dd, before = !beyond & (-ld <= tmin * dd);
     const bool line_misses = ll * dd - ld * ld > r2 * dd;
-    const double t = select_d(beyond, tmax, tmin);
+    const double t = select(beyond, tmax, tmin);
     const double px = lx + t * dx, py = ly + t * dy, pz = lz + t * dz;
     const bool end_misses = (std::abs(t) <= 1.7976931348623157e308) & ((px * px + py * py) + pz * pz > r2);
     return ((beyond | before) & end_misses) | (!(beyond | before) & line_misses);
@@ -57,7 +46,7 @@ MVPT_MULTI_ISA void sphere_candidates(const float *r, size_t n, const int *valid
     for (size_t i = 0; i < n; ++i) {
         bool misses = segment_misses(cx, cy, cz, r2, r[i], r[n + i], r[2 * n + i], r[4 * n + i], r[5 * n + i],
                                      r[6 * n + i], r[3 * n + i], r[8 * n + i]);
-        t[i] = select_d((valid[i] == -1) & !misses, 0.0, nan);
+        t[i] = select((valid[i] == -1) & !misses, 0.0, nan);
     }
 }
 
