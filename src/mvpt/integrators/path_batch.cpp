@@ -12,6 +12,7 @@
 #include "../render/bsdf.h"
 #include "../render/light.h"
 #include "../render/shape.h"
+#include "../render/texture.h"
 #include "../scene/scene.h"
 
 #include <climits>
@@ -54,6 +55,12 @@ struct PendingShadow {
     Spectrum contribution;
 };
 
+/// The reflectance of a Lambertian vertex: its texture at the hit's uv (as DiffuseBsdf
+/// evaluates it), or the constant.
+inline Color3f lambert_reflectance(const LambertInfo &lam, const SurfaceInteraction &si) {
+    return lam.texture ? lam.texture->eval(si.uv) : lam.reflectance;
+}
+
 /// Lanes per call of a Lambertian vector kernel: its columns (about 40 × 64 floats) stay in L1.
 constexpr size_t LambertChunk = 64;
 
@@ -73,7 +80,7 @@ struct WaveBuffers {
     std::vector<float> u[7];
     std::vector<uint64_t> u_hash;
     std::vector<uint32_t> u_dim;
-    /// Constant Lambertian vertices: their columns for the vector kernels, and where each lane came from.
+    /// Lambertian vertices: their columns for the vector kernels, and where each lane came from.
     SoaColumns lambert, quad, sphere;
     std::vector<uint32_t> lambert_index, quad_index, sphere_index;
     /// Constant rough conductor vertices, likewise (those sampling a sphere emitter apart).
@@ -312,7 +319,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
             col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
             col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-            col[Rr * st] = lam.reflectance.r, col[Rg * st] = lam.reflectance.g, col[Rb * st] = lam.reflectance.b;
+            const Color3f refl = lambert_reflectance(lam, si);
+            col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
             col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
             col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
             col[Quad * st] = float(row);
@@ -378,7 +386,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         flush_conductor_sphere();
 
         // ---------------- Next-event estimation: BSDF and shadow rays (traced below) ----------------
-        // Constant Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.
+        // Lambertian vertices go to a vector kernel (path_kernels.cpp), the others one by one.
         size_t n_lam = 0;
         SoaColumns &lc = buf.lambert;
         lc.resize(ln_col::Count, LambertChunk);
@@ -413,7 +421,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
                 col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
                 col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                const Color3f refl = lambert_reflectance(*lam, si);
+                col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
                 col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
                 col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
@@ -507,7 +516,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
                 col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
                 col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                col[Rr * st] = lam->reflectance.r, col[Rg * st] = lam->reflectance.g, col[Rb * st] = lam->reflectance.b;
+                const Color3f refl = lambert_reflectance(*lam, si);
+                col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
                 col[Eta * st] = p.eta, col[URr * st] = u[6][j];
                 col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;

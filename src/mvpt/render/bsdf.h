@@ -48,12 +48,17 @@ struct BsdfSample {
     uint32_t sampled_type = BsdfNone;
 };
 
-/// A constant Lambertian reflectance (diffuse with a constant texture, or twosided around
-/// such a BSDF): the wavefront path tracer samples and evaluates it in vector kernels.
+class Texture;
+
+/// A Lambertian reflectance (diffuse, or twosided around one): the wavefront path tracer
+/// samples and evaluates it in vector kernels.
 struct LambertInfo {
+    /// The reflectance when it is constant (`texture` is null).
     Color3f reflectance;
     /// Reflects on both sides (twosided: the back side mirrors directions through the surface).
     bool two_sided = false;
+    /// A varying reflectance: this texture at the hit's uv (then `reflectance` is unused).
+    const Texture *texture = nullptr;
 };
 
 /// A rough conductor of constant parameters (roughconductor with constant textures, one alpha,
@@ -98,7 +103,7 @@ public:
     bool is_purely_delta() const { return m_flags != 0 && (m_flags & BsdfSmooth) == 0; }
     /// Roughness at `si` for path-reuse heuristics: GGX-equivalent alpha, 1 for diffuse.
     virtual float roughness(const SurfaceInteraction &) const { return 1.f; }
-    /// The constant Lambertian reflectance this BSDF amounts to, or nullptr.
+    /// The Lambertian reflectance this BSDF amounts to, or nullptr.
     const LambertInfo *lambert() const { return m_is_lambert ? &m_lambert : nullptr; }
     /// The constant rough conductor this BSDF amounts to, or nullptr.
     const RoughConductorInfo *rough_conductor() const { return m_is_rough_conductor ? &m_rough_conductor : nullptr; }

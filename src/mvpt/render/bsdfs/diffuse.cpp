@@ -12,8 +12,9 @@ public:
         m_reflectance = props.get_texture("reflectance", 0.5f);
         m_constant = m_reflectance->is_constant();
         if (m_constant) m_constant_value = m_reflectance->eval(Vec2f(0.f, 0.f));
-        m_is_lambert = m_constant;
+        m_is_lambert = true;
         m_lambert.reflectance = m_constant_value;
+        m_lambert.texture = m_constant ? nullptr : m_reflectance.get();
         m_flags = BsdfDiffuseReflection;
     }
 

@@ -20,13 +20,13 @@ public:
         m_flags = m_brdf[0]->flags() | m_brdf[1]->flags();
         if (m_flags & BsdfTransmission)
             props.fail("", "twosided: only materials without a transmission component can be nested");
-        // Both sides one constant Lambertian reflectance: sampled and evaluated as such by the
-        // wavefront path tracer's kernels.
+        // Both sides one Lambertian reflectance (the same constant or texture): sampled and
+        // evaluated as such by the wavefront path tracer's kernels.
         const LambertInfo *front = m_brdf[0]->lambert(), *back = m_brdf[1]->lambert();
-        if (front && back && !front->two_sided && !back->two_sided &&
+        if (front && back && !front->two_sided && !back->two_sided && front->texture == back->texture &&
             std::memcmp(&front->reflectance, &back->reflectance, sizeof(Color3f)) == 0) {
             m_is_lambert = true;
-            m_lambert = {front->reflectance, true};
+            m_lambert = {front->reflectance, true, front->texture};
         }
         const RoughConductorInfo *fc = m_brdf[0]->rough_conductor(), *bc = m_brdf[1]->rough_conductor();
         if (fc && bc && !fc->two_sided && !bc->two_sided && same_conductor(*fc, *bc)) {
