@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 namespace mvpt {
 
@@ -18,26 +19,21 @@ inline constexpr float Infinity = std::numeric_limits<float>::infinity();
 inline constexpr float OneMinusEpsilon = 0x1.fffffep-1f;
 
 inline float sqr(float x) { return x * x; }
-/// `mask ? a : b` by bit masking: no branch to mispredict when `mask` depends on a random number.
-inline float select(bool mask, float a, float b) {
-    uint32_t m = 0u - uint32_t(mask), ia, ib;
-    std::memcpy(&ia, &a, 4);
-    std::memcpy(&ib, &b, 4);
-    uint32_t r = (ia & m) | (ib & ~m);
-    float out;
-    std::memcpy(&out, &r, 4);
+/// `mask ? a : b` by bit masking, for floats and doubles: no branch to mispredict when
+/// `mask` depends on a random number, and loops using it vectorise.
+template <typename T> inline T select_bits(bool mask, T a, T b) {
+    using Bits = std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>;
+    static_assert(sizeof(T) == sizeof(Bits));
+    Bits m = Bits(0) - Bits(mask), ia, ib;
+    std::memcpy(&ia, &a, sizeof(T));
+    std::memcpy(&ib, &b, sizeof(T));
+    Bits r = (ia & m) | (ib & ~m);
+    T out;
+    std::memcpy(&out, &r, sizeof(T));
     return out;
 }
-/// The same for doubles.
-inline double select(bool mask, double a, double b) {
-    uint64_t m = 0u - uint64_t(mask), ia, ib;
-    std::memcpy(&ia, &a, 8);
-    std::memcpy(&ib, &b, 8);
-    uint64_t r = (ia & m) | (ib & ~m);
-    double out;
-    std::memcpy(&out, &r, 8);
-    return out;
-}
+inline float select(bool mask, float a, float b) { return select_bits(mask, a, b); }
+inline double select(bool mask, double a, double b) { return select_bits(mask, a, b); }
 /// sqrt(max(x, 0)) with the maximum as a bit select (std::max's result for every input, NaN
 /// included), so that loops using it vectorise.
 inline float safe_sqrt(float x) { return std::sqrt(select(x < 0.f, 0.f, x)); }
