@@ -55,6 +55,17 @@ struct PendingShadow {
     Spectrum contribution;
 };
 
+/// One lane's emitter sample and weight L/pdf in the columns Ldx .. Ldx + 11 (direction,
+/// point, distance, density, delta flag, weight), where the NEE kernels read them.
+template <size_t Ldx>
+inline void put_emitter_sample(float *col, size_t st, const LightSample &ls, const Spectrum &weight) {
+    static_assert(ln_col::Wr == ln_col::Ldx + 9 && rn_col::Wr == rn_col::Ldx + 9, "emitter columns are contiguous");
+    col[Ldx * st] = ls.d.x, col[(Ldx + 1) * st] = ls.d.y, col[(Ldx + 2) * st] = ls.d.z;
+    col[(Ldx + 3) * st] = ls.p.x, col[(Ldx + 4) * st] = ls.p.y, col[(Ldx + 5) * st] = ls.p.z;
+    col[(Ldx + 6) * st] = ls.dist, col[(Ldx + 7) * st] = ls.pdf, col[(Ldx + 8) * st] = ls.delta ? 1.f : 0.f;
+    col[(Ldx + 9) * st] = weight.r, col[(Ldx + 10) * st] = weight.g, col[(Ldx + 11) * st] = weight.b;
+}
+
 /// The reflectance of a Lambertian vertex: its texture at the hit's uv (as DiffuseBsdf
 /// evaluates it), or the constant.
 inline Color3f lambert_reflectance(const LambertInfo &lam, const SurfaceInteraction &si) {
@@ -424,10 +435,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 const Color3f refl = lambert_reflectance(*lam, si);
                 col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
-                col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
-                col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
-                col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;
-                col[Wr * st] = weight.r, col[Wg * st] = weight.g, col[Wb * st] = weight.b;
+                put_emitter_sample<Ldx>(col, st, ls, weight);
                 if (n_lam == LambertChunk) flush_nee();
                 continue;
             }
@@ -439,10 +447,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 float *col = rc.data.data() + m;
                 const size_t st = rc.stride;
                 gather_conductor_nee(col, st, si, *cond, beta);
-                col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
-                col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
-                col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;
-                col[Wr * st] = weight.r, col[Wg * st] = weight.g, col[Wb * st] = weight.b;
+                put_emitter_sample<Ldx>(col, st, ls, weight);
                 if (n_rc == LambertChunk) flush_rc_nee();
                 continue;
             }

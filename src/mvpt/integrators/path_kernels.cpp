@@ -10,13 +10,7 @@
 
 namespace mvpt {
 
-using kernel::sample_sphere_emitter;
-using kernel::SphereEmitterSample;
-using kernel::max_of;
-using kernel::min_of;
-using kernel::nee_contribution_and_shadow_ray;
-using kernel::next_ray_and_roulette;
-using kernel::offset_along;
+using namespace kernel; // the shared lane helpers (kernel_helpers.h)
 
 MVPT_MULTI_ISA void lambert_sample_kernel_impl(float *c, size_t s, size_t n) {
     using namespace ls_col;

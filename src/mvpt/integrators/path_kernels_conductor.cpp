@@ -17,13 +17,7 @@
 
 namespace mvpt {
 
-using kernel::sample_sphere_emitter;
-using kernel::SphereEmitterSample;
-using kernel::max_of;
-using kernel::min_of;
-using kernel::nee_contribution_and_shadow_ray;
-using kernel::next_ray_and_roulette;
-using kernel::offset_along;
+using namespace kernel; // the shared lane helpers (kernel_helpers.h)
 
 namespace {
 
