@@ -35,28 +35,37 @@ class SplatBuffer {
 public:
     explicit SplatBuffer(const std::vector<size_t> &pixels_per_view) : m_pixels(pixels_per_view), m_data(pixels_per_view.size()) {}
 
-    /// Add one shared contribution W*L, W; false (nothing added) when a value is not finite
-    /// or too large.
+    /// Whether a value may be splatted: finite and below SplatMax in magnitude.
+    static bool fits(float x) { return std::abs(x) < float(SplatMax); }
+    static bool fits(const Spectrum &s) { return fits(s[0]) & fits(s[1]) & fits(s[2]); }
+
+    /// Add one shared contribution W*L, W; false (nothing added) when a value does not fit.
     bool add(int slot, uint32_t pixel, const Spectrum &lw, float w) {
-        float big = std::max({std::abs(lw[0]), std::abs(lw[1]), std::abs(lw[2]), std::abs(w)});
-        if (!(double(big) < SplatMax)) return false; // also catches NaN
-        int64_t *p = pixel_of(slot, pixel);
-        p[0] += to_fixed(lw[0]);
-        p[1] += to_fixed(lw[1]);
-        p[2] += to_fixed(lw[2]);
-        p[6] += to_fixed(w);
-        p[7] += 1;
+        if (!(fits(lw) & fits(w))) return false;
+        add_fitting(slot, pixel, lw[0], lw[1], lw[2], w);
         return true;
     }
     /// The same for the native view's own pixel, with the radiance E only it estimates.
     bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
-        float big = std::max({std::abs(e[0]), std::abs(e[1]), std::abs(e[2])});
-        if (!(double(big) < SplatMax) || !add(slot, pixel, lw, w)) return false;
+        if (!fits(e) || !add(slot, pixel, lw, w)) return false;
+        add_native(slot, pixel, e);
+        return true;
+    }
+    /// Add W*L (per channel) and W that fit, and count the contribution.
+    void add_fitting(int slot, uint32_t pixel, float lw_r, float lw_g, float lw_b, float w) {
+        int64_t *p = pixel_of(slot, pixel);
+        p[0] += to_fixed(lw_r);
+        p[1] += to_fixed(lw_g);
+        p[2] += to_fixed(lw_b);
+        p[6] += to_fixed(w);
+        p[7] += 1;
+    }
+    /// Add the native-only radiance E that fits.
+    void add_native(int slot, uint32_t pixel, const Spectrum &e) {
         int64_t *p = pixel_of(slot, pixel);
         p[3] += to_fixed(e[0]);
         p[4] += to_fixed(e[1]);
         p[5] += to_fixed(e[2]);
-        return true;
     }
     /// The buffer of view `slot` (empty if nothing was splatted there).
     std::vector<SplatPixel> &view(int slot) { return m_data[slot]; }

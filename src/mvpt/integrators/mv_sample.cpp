@@ -55,6 +55,11 @@ void MvContext::prepare() {
 namespace {
 const BsdfContext Ctx;
 
+/// Scratch arrays only grow: resizing them to each sample's count would refill them.
+template <typename V> void grow(V &v, size_t n) {
+    if (v.size() < n) v.resize(n);
+}
+
 /// Material similarity of candidates a and b, memoised in the |V| x |V| matrix `sm`.
 float cached_similarity(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si, size_t a,
                         size_t b) {
@@ -152,7 +157,7 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     if (m < 2) return;
     auto &seg = sc.segments;
     const size_t padded = whole_lanes(m - 1); // whole vectors, and whole packets for occluded_segments
-    seg.resize(4 * padded);
+    grow(seg, 4 * padded);
     float *dx = seg.data(), *dy = dx + padded, *dz = dy + padded, *t_max = dz + padded;
     // Every candidate's lens point is on the native lens point's side of the surface (§3
     // orientation test), so all visibility rays leave from one offset origin.
@@ -166,7 +171,7 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
                 if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
             }
     auto &blocked = sc.blocked;
-    blocked.resize(m);
+    grow(blocked, m);
     ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data(), ctx.across);
     for (size_t i = 1; i < m; ++i) {
         if (selected_only && !sc.selected[i]) continue;
@@ -180,29 +185,27 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
 
 /// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d.
 void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si,
-                       const std::vector<int> &targets) {
+                       const int *targets, size_t nt) {
     MvCandidates &c = sc.cand;
     const size_t m = c.size;
     //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
     // over the strategies j whose shift to k is valid (visibility included).
     auto &valid_set = sc.valid_set;
-    valid_set.resize(m);
+    grow(valid_set, m);
     size_t n_valid = 0;
     for (size_t j = 0; j < m; ++j) { // branch-free compaction
         valid_set[n_valid] = uint32_t(j);
         n_valid += sc.visible[j];
     }
-    valid_set.resize(n_valid);
-    sc.d.assign(m, 0.f);
+    grow(sc.d, (m + 7) / 8 * 8);
     const bool uniform_time = !ctx.scene_moves || ctx.all_time_compatible_equal_dt;
     if (!sc.material && uniform_time && ctx.all_time_compatible) {
         // No pairwise terms: the vector loop of balance_sums (j = k gives n_k).
-        const size_t nv = valid_set.size(), nt = targets.size(), padded = (nt + 7) / 8 * 8;
+        const size_t nv = n_valid, padded = (nt + 7) / 8 * 8;
         auto &g = sc.g_valid, &nn = sc.n_valid, &gt = sc.g_targets, &dt = sc.d_targets;
         const float *gp = c.g.data(), *np = c.n.data();
         if (nv < m) { // gather the valid strategies
-            g.resize(nv);
-            nn.resize(nv);
+            grow(g, nv), grow(nn, nv);
             for (size_t i = 0; i < nv; ++i) {
                 g[i] = c.g[valid_set[i]];
                 nn[i] = c.n[valid_set[i]];
@@ -210,23 +213,23 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
             gp = g.data(), np = nn.data();
         }
         if (nt == m) { // every candidate is a target (they are 0..m-1): no gather, no scatter
-            sc.d.resize(padded);
             balance_sums(gp, np, nv, sc.cand.g_padded(padded), padded, ctx.cfg.select_jacobian, sc.d.data());
             return;
         }
-        gt.resize(padded);
-        dt.resize(padded);
+        grow(gt, padded), grow(dt, padded);
         for (size_t t = 0; t < nt; ++t) gt[t] = c.g[targets[t]];
-        std::fill(gt.begin() + nt, gt.end(), 1.f); // padding: any positive G
+        std::fill(gt.begin() + nt, gt.begin() + padded, 1.f); // padding: any positive G
         balance_sums(gp, np, nv, gt.data(), padded, ctx.cfg.select_jacobian, dt.data());
         for (size_t t = 0; t < nt; ++t) sc.d[targets[t]] = dt[t];
         return;
     }
-    for (int k : targets) {
+    for (size_t t = 0; t < nt; ++t) {
+        const int k = targets[t];
         const MvView &vk = ctx.views[c.slot[k]];
         const float inv_gk = 1.f / c.g[k];
         double sum = c.n[k];
-        for (uint32_t j : valid_set) {
+        for (size_t v = 0; v < n_valid; ++v) {
+            const uint32_t j = valid_set[v];
             if (int(j) == k) continue;
             const MvView &vj = ctx.views[c.slot[j]];
             // Validity of j -> k is that of l -> j and l -> k except for time, which is not transitive.
@@ -260,16 +263,27 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
     std::vector<int> targets;
     for (size_t i = 0; i < sc.cand.size; ++i)
         if (sc.visible[i]) targets.push_back(int(i));
-    balance_densities(ctx, sc, bsdf, si, targets);
+    balance_densities(ctx, sc, bsdf, si, targets.data(), targets.size());
     for (int i : targets) out.emplace_back(sc.cand.slot[i], sc.d[i]);
     return out;
 }
 
 void MvPendingSamples::clear() {
     samples.clear();
-    slot.clear(), pixel.clear(), w.clear(), nee.clear(), bounce.clear();
+    entries = 0;
     rays.clear(), states.clear(), samplers.clear();
     shadow_rays.clear();
+}
+
+size_t MvPendingSamples::add_entries(size_t n) {
+    const size_t first = entries;
+    entries += n;
+    if (entries > slot.size()) { // grow geometrically: no per-sample resizing (and zero fills)
+        const size_t size = std::max(entries, 2 * slot.size());
+        slot.resize(size), pixel.resize(size), w.resize(size);
+        f_nee.resize(size), f_bounce.resize(size);
+    }
+    return first;
 }
 
 void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
@@ -369,14 +383,13 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
     auto &sharing = sc.sharing;
-    sharing.resize(m);
+    grow(sharing, m);
     size_t ns = 0;
     for (size_t i = 0; i < m; ++i) { // branch-free compaction
         sharing[ns] = int(i);
         ns += sc.visible[i] & sc.selected[i];
     }
-    sharing.resize(ns);
-    balance_densities(ctx, sc, bsdf, si, sharing);
+    balance_densities(ctx, sc, bsdf, si, sharing.data(), ns);
 
     // ---------------- Shared next-event estimation (§7) ----------------
     sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
@@ -391,13 +404,13 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     auto &wis = sc.sharing_wi;
     const Vec3f *wi_s = cand.wi.data(); // the sharing views' directions (all candidates share: no gather)
     if (ns < m) {
-        wis.resize(ns);
+        grow(wis, ns);
         for (size_t i = 0; i < ns; ++i) wis[i] = cand.wi[sharing[i]];
         wi_s = wis.data();
     }
     const auto &lights = scene.lights();
     auto &f_nee = sc.nee_f;
-    f_nee.resize(ns);
+    grow(f_nee, ns);
     Spectrum nee_weight(0.f); // light weight times MIS weight, zero when no view reflects the light
     int32_t nee_shadow = -1;  // its shadow ray, traced in mv_finish_samples
     if (!lights.empty()) {
@@ -407,7 +420,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);
             auto &pdf = sc.view_pdf;
-            pdf.resize(ns);
+            grow(pdf, ns);
             bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee.data(), pdf.data());
             const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
             if (max_over_views(f_nee.data(), ns) > 0.f) { // some view reflects light this way
@@ -423,8 +436,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
     sampler.set_dimension(DimBounceView);
     auto &fs = sc.mixture_f;
-    fs.resize(ns);
-    sc.view_pdf.resize(ns);
+    grow(fs, ns);
+    grow(sc.view_pdf, ns);
     MixtureSample mix =
         sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs.data(), sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
@@ -465,57 +478,28 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
 
     // ---------------- Each sharing view's share, L_i / D_i, splatted once the suffix is known ----------------
     // The native view is sharing[0] (candidate 0, always visible and selected).
-    rec.first = uint32_t(pending.slot.size());
+    rec.first = uint32_t(pending.add_entries(ns));
     rec.count = uint32_t(ns);
     rec.delta_view = mix.delta ? int32_t(mix.view) : -1;
     rec.shadow = nee_shadow;
+    rec.nee = nee;
+    rec.nee_weight = nee_weight;
+    rec.b_scale = b_scale;
+    if (mix.delta) rec.delta_bounce = mix.weight * b_scale;
     rec.e = le_y * (1.f / n_l);
-    const size_t end = rec.first + ns;
-    pending.slot.resize(end), pending.pixel.resize(end), pending.w.resize(end);
-    pending.nee.resize(end), pending.bounce.resize(end);
     for (size_t i = 0; i < ns; ++i) {
         const int k = sharing[i];
         const size_t j = rec.first + i;
         pending.slot[j] = cand.slot[k];
         pending.pixel[j] = cand.pixel[k];
         pending.w[j] = 1.f / sc.d[k];
-        pending.nee[j] = nee ? f_nee[i] * nee_weight : Spectrum(0.f);
-        pending.bounce[j] = (mix.delta ? mix.weight : fs[i]) * b_scale;
     }
+    // (f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.)
+    std::copy(f_nee.begin(), f_nee.begin() + long(ns), pending.f_nee.begin() + rec.first);
+    std::copy(fs.begin(), fs.begin() + long(ns), pending.f_bounce.begin() + rec.first);
     pending.samples.push_back(rec);
     st_l.sharing += ns;
     st_l.rays += counters.rays + counters.shadow_rays - rays_before;
-}
-
-void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
-                       RayCounters &counters, MvViewStats *stats) {
-    const size_t n_suffix = pending.rays.size();
-    pending.radiance.resize(n_suffix);
-    pending.valid.resize(n_suffix);
-    const uint64_t rays_before = counters.rays + counters.shadow_rays;
-    if (n_suffix > 0)
-        ctx.path->trace_batch(*ctx.scene, pending.rays.data(), pending.states.data(), pending.samplers.data(),
-                              pending.radiance.data(), pending.valid.data(), n_suffix, counters);
-    stats[slot].rays += counters.rays + counters.shadow_rays - rays_before;
-    // The shared NEE's shadow rays as packets (counted when queued).
-    pending.shadow_blocked.resize(pending.shadow_rays.size());
-    if (!pending.shadow_rays.empty())
-        ctx.scene->occluded(pending.shadow_rays.data(), pending.shadow_rays.size(), pending.shadow_blocked.data());
-    for (const MvPendingSamples::Sample &rec : pending.samples) {
-        const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
-        const bool final_valid = rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid;
-        const bool bounce = !suffix.is_black();
-        const bool light_seen = rec.shadow >= 0 && !pending.shadow_blocked[rec.shadow];
-        for (uint32_t i = 0; i < rec.count; ++i) {
-            const uint32_t j = rec.first + i;
-            Spectrum L = light_seen ? pending.nee[j] : Spectrum(0.f);
-            if (bounce && (rec.delta_view < 0 || int32_t(i) == rec.delta_view)) L += pending.bounce[j] * suffix;
-            const Spectrum lw = final_valid ? L * pending.w[j] : Spectrum(0.f);
-            if (i == 0) sink.native(pending.slot[j], pending.pixel[j], lw, pending.w[j], rec.e);
-            else sink.shared(pending.slot[j], pending.pixel[j], lw, pending.w[j]);
-        }
-    }
-    pending.clear();
 }
 
 } // namespace mvpt

@@ -103,22 +103,31 @@ struct MvPrimaries {
 struct MvPendingSamples {
     /// Per sample: its sharing views' entries [first, first + count) below (the native view
     /// first), its suffix (an index into the suffix arrays, or -1), its valid-path flag when it
-    /// has no suffix, the view that sampled a delta lobe (then only its entry gets the suffix,
-    /// else -1), and the native view's radiance E.
+    /// has no suffix, the shared NEE's shadow ray (its radiance counts if unblocked) or -1, and
+    /// the view that sampled a delta lobe (then only its entry gets the suffix, else -1).
+    /// The radiance of entry j (§7) is
+    ///   L_j = [nee] f_nee_j * nee_weight + [suffix] (f_bounce_j * b_scale) * suffix,
+    /// with delta_bounce in place of f_bounce_j * b_scale for a delta lobe's view.
     struct Sample {
         uint32_t first = 0, count = 0;
         int32_t suffix = -1, delta_view = -1;
-        int32_t shadow = -1; ///< the shared NEE's shadow ray (its radiance counts if unblocked), or -1
+        int32_t shadow = -1;
         bool valid = false;
-        Spectrum e{0.f};
+        bool nee = false; ///< nee_weight is not black
+        float b_scale = 0.f;
+        Spectrum nee_weight{0.f}, delta_bounce{0.f};
+        Spectrum e{0.f}; ///< the native view's own radiance E
     };
     std::vector<Sample> samples;
-    /// Per sharing view of each sample: slot, pixel, W = 1/D, the NEE radiance and the factor
-    /// of the suffix radiance.
+    /// Per sharing view of each sample: slot, pixel, W = 1/D, and the BSDF values f_k |cos|
+    /// towards the light sample and the bounce direction.
     std::vector<int> slot;
     std::vector<uint32_t> pixel;
     std::vector<float> w;
-    std::vector<Spectrum> nee, bounce;
+    std::vector<Spectrum> f_nee, f_bounce;
+    size_t entries = 0; ///< entries in use (the arrays above keep their size between tiles)
+    /// Room for n more entries; returns the first.
+    size_t add_entries(size_t n);
     /// The suffixes: start rays, path states and sample streams; results.
     std::vector<Ray> rays;
     std::vector<PathState> states;
@@ -128,6 +137,9 @@ struct MvPendingSamples {
     /// The shared NEE's shadow rays, traced as packets with the suffixes; results.
     std::vector<Ray> shadow_rays;
     std::vector<uint8_t> shadow_blocked;
+    /// One sample's W*L per channel and whether each entry may be splatted (mv_finish_samples).
+    std::vector<float> lw[3];
+    std::vector<uint32_t> ok;
     void clear();
 };
 
