@@ -43,3 +43,39 @@ TEST(SamplerBatch, VertexDrawsMatchSampler) {
         }
     }
 }
+
+TEST(SamplerBatch, StartDrawsMatchSampler) {
+    // Both forms: one pixel row and sample index for all lanes, and per-lane pixels and indices.
+    for (bool per_lane : {false, true})
+        for (size_t n : {0, 1, 7, 8, 9, 61, 256}) {
+            const uint32_t seed = 11, view = 4, row = 23, index = 5;
+            std::vector<uint32_t> px(n), py(n), sample(n);
+            for (size_t i = 0; i < n; ++i) {
+                px[i] = uint32_t(3 * i + 1);
+                py[i] = per_lane ? uint32_t(i % 13) : row;
+                sample[i] = per_lane ? uint32_t(i / 3) : index;
+            }
+            std::vector<uint64_t> ph(n), sh(n);
+            std::vector<float> u[5];
+            for (auto &v : u) v.resize(n);
+            float *const out[5] = {u[0].data(), u[1].data(), u[2].data(), u[3].data(), u[4].data()};
+            if (per_lane)
+                independent_start_draws(seed, view, px.data(), py.data(), sample.data(), n, ph.data(), sh.data(), out);
+            else
+                independent_start_draws(seed, view, px.data(), row, index, n, ph.data(), sh.data(), out);
+            for (size_t i = 0; i < n; ++i) {
+                Sampler s(SamplerKind::Independent, seed);
+                s.start(view, px[i], py[i], sample[i]);
+                ASSERT_EQ(sh[i], s.sample_hash()) << "lane " << i;
+                const Vec2f a = s.next_2d(), b = s.next_2d();
+                const float ref[5] = {a.x, a.y, b.x, b.y, s.next_1d()};
+                for (int k = 0; k < 5; ++k)
+                    ASSERT_EQ(std::memcmp(&u[k][i], &ref[k], sizeof(float)), 0)
+                        << (per_lane ? "per lane" : "row") << ", n " << n << ", lane " << i << ", number " << k;
+                // start_from with the batch's hashes continues exactly like the sampler.
+                Sampler t(SamplerKind::Independent, seed);
+                t.start_from(ph[i], sh[i], sample[i], 3);
+                ASSERT_EQ(t.next_1d(), s.next_1d()) << "lane " << i;
+            }
+        }
+}

@@ -86,12 +86,20 @@ void independent_vertex_draws(const uint64_t *hash, const uint32_t *dim, size_t 
 
 namespace {
 
+/// Lane i's pixel row and sample index: one for all lanes (a pixel row of one pass) or per lane.
+struct StartLanes {
+    const uint32_t *px, *py, *sample;
+    uint32_t row, index; ///< used where py / sample are null
+    uint32_t y(size_t i) const { return py ? py[i] : row; }
+    uint32_t s(size_t i) const { return sample ? sample[i] : index; }
+};
+
 /// independent_start_draws on lanes [begin, n) (any CPU).
-void start_draws_scalar(uint64_t h_view, const uint32_t *px, uint32_t py, uint32_t sample, size_t begin, size_t n,
-                        uint64_t *pixel_hash, uint64_t *sample_hash, float *const out[5]) {
+void start_draws_scalar(uint64_t h_view, const StartLanes &in, size_t begin, size_t n, uint64_t *pixel_hash,
+                        uint64_t *sample_hash, float *const out[5]) {
     for (size_t i = begin; i < n; ++i) {
-        uint64_t ph = hash_combine(hash_combine(h_view, px[i]), py);
-        uint64_t sh = hash_combine(ph, sample);
+        uint64_t ph = hash_combine(hash_combine(h_view, in.px[i]), in.y(i));
+        uint64_t sh = hash_combine(ph, in.s(i));
         pixel_hash[i] = ph;
         sample_hash[i] = sh;
         uint64_t b0 = Sampler::independent_bits(sh, 0), b1 = Sampler::independent_bits(sh, 1),
@@ -110,20 +118,17 @@ void start_draws_scalar(uint64_t h_view, const uint32_t *px, uint32_t py, uint32
     return mix8(h ^ (v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2)));
 }
 
-[[gnu::target("avx512f,avx512dq,avx512vl")]] size_t start_draws_avx512(uint64_t h_view, const uint32_t *px,
-                                                                        uint32_t py, uint32_t sample, size_t n,
+[[gnu::target("avx512f,avx512dq,avx512vl")]] size_t start_draws_avx512(uint64_t h_view, const StartLanes &in, size_t n,
                                                                         uint64_t *pixel_hash, uint64_t *sample_hash,
                                                                         float *const out[5]) {
     const U64x8 hv = {h_view, h_view, h_view, h_view, h_view, h_view, h_view, h_view};
-    const U64x8 vy = {py, py, py, py, py, py, py, py};
-    const U64x8 vs = {sample, sample, sample, sample, sample, sample, sample, sample};
     const uint64_t golden = 0x9e3779b97f4a7c15ULL;
     size_t i = 0;
     for (; i + 8 <= n; i += 8) {
-        U64x8 x;
-        for (int l = 0; l < 8; ++l) x[l] = px[i + l];
-        U64x8 ph = combine8(combine8(hv, x), vy);
-        U64x8 sh = combine8(ph, vs);
+        U64x8 x, y, s;
+        for (int l = 0; l < 8; ++l) x[l] = in.px[i + l], y[l] = in.y(i + l), s[l] = in.s(i + l);
+        U64x8 ph = combine8(combine8(hv, x), y);
+        U64x8 sh = combine8(ph, s);
         __builtin_memcpy(pixel_hash + i, &ph, sizeof(ph));
         __builtin_memcpy(sample_hash + i, &sh, sizeof(sh));
         U64x8 b0 = mix8(sh + golden * 1), b1 = mix8(sh + golden * 2), b2 = mix8(sh + golden * 3);
@@ -134,17 +139,28 @@ void start_draws_scalar(uint64_t h_view, const uint32_t *px, uint32_t py, uint32
 }
 #endif
 
-} // namespace
-
-void independent_start_draws(uint64_t seed, uint32_t view, const uint32_t *px, uint32_t py, uint32_t sample, size_t n,
-                             uint64_t *pixel_hash, uint64_t *sample_hash, float *const out[5]) {
+void start_draws(uint64_t seed, uint32_t view, const StartLanes &in, size_t n, uint64_t *pixel_hash,
+                 uint64_t *sample_hash, float *const out[5]) {
     // Sampler::start's hash_ints(seed, view, px, py), then the sample index.
     const uint64_t h_view = hash_combine(mix_bits(seed + 0x9e3779b97f4a7c15ULL), view);
     size_t done = 0;
 #if defined(__GNUC__) && defined(__x86_64__)
-    if (has_avx512()) done = start_draws_avx512(h_view, px, py, sample, n, pixel_hash, sample_hash, out);
+    if (has_avx512()) done = start_draws_avx512(h_view, in, n, pixel_hash, sample_hash, out);
 #endif
-    start_draws_scalar(h_view, px, py, sample, done, n, pixel_hash, sample_hash, out);
+    start_draws_scalar(h_view, in, done, n, pixel_hash, sample_hash, out);
+}
+
+} // namespace
+
+void independent_start_draws(uint64_t seed, uint32_t view, const uint32_t *px, uint32_t py, uint32_t sample, size_t n,
+                             uint64_t *pixel_hash, uint64_t *sample_hash, float *const out[5]) {
+    start_draws(seed, view, StartLanes{px, nullptr, nullptr, py, sample}, n, pixel_hash, sample_hash, out);
+}
+
+void independent_start_draws(uint64_t seed, uint32_t view, const uint32_t *px, const uint32_t *py,
+                             const uint32_t *sample, size_t n, uint64_t *pixel_hash, uint64_t *sample_hash,
+                             float *const out[5]) {
+    start_draws(seed, view, StartLanes{px, py, sample, 0, 0}, n, pixel_hash, sample_hash, out);
 }
 
 } // namespace mvpt

@@ -20,5 +20,9 @@ void independent_vertex_draws(const uint64_t *hash, const uint32_t *dim, size_t 
 /// out[3][i]; out[4][i]. Bit-identical to the sampler's own calls.
 void independent_start_draws(uint64_t seed, uint32_t view, const uint32_t *px, uint32_t py, uint32_t sample, size_t n,
                              uint64_t *pixel_hash, uint64_t *sample_hash, float *const out[5]);
+/// The same for n samples of any pixels (px[i], py[i]) and sample indices sample[i].
+void independent_start_draws(uint64_t seed, uint32_t view, const uint32_t *px, const uint32_t *py,
+                             const uint32_t *sample, size_t n, uint64_t *pixel_hash, uint64_t *sample_hash,
+                             float *const out[5]);
 
 } // namespace mvpt

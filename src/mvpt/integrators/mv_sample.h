@@ -84,8 +84,11 @@ struct MvScratch {
 /// The camera samples of a tile's native samples (§2) and their first hits: the camera rays
 /// are traced together as one coherent stream (mv_trace_primaries), as the path tracer does.
 struct MvPrimaries {
-    std::vector<int> px, py;              ///< pixel (full-film coordinates)
+    std::vector<uint32_t> px, py;         ///< pixel (full-film coordinates)
     std::vector<uint32_t> sample_index;   ///< the pixel's native-sample index
+    /// The independent sampler's hashes of (seed, view, pixel) and of the sample (for Sampler::start_from).
+    std::vector<uint64_t> pixel_hash, sample_hash;
+    std::vector<float> draws[5];          ///< the camera dimensions' numbers (independent sampler)
     std::vector<Vec2f> film, xi;          ///< film position, unit-disk lens point
     std::vector<float> time;
     std::vector<Ray> rays;
@@ -93,7 +96,9 @@ struct MvPrimaries {
     std::vector<uint8_t> hit;
     size_t size() const { return px.size(); }
     void clear() { px.clear(), py.clear(), sample_index.clear(); }
-    void push(int x, int y, uint32_t index) { px.push_back(x), py.push_back(y), sample_index.push_back(index); }
+    void push(int x, int y, uint32_t index) {
+        px.push_back(uint32_t(x)), py.push_back(uint32_t(y)), sample_index.push_back(index);
+    }
 };
 
 /// Native samples whose suffix (the path continuing from the shared bounce, §7) waits to
