@@ -31,11 +31,20 @@ bool same_sample(const LightSample &a, const LightSample &b) {
            same_bits(a.pdf, b.pdf) && a.delta == b.delta;
 }
 
+/// A temporary directory, removed with its contents when this goes out of scope.
+struct TempDir {
+    std::filesystem::path path;
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+    }
+};
+
 /// A small random lat-long map (`w` x `h`) with black texels and a black row (zero-density
-/// patches and rows the samplers must skip), written to a fresh temporary directory.
-std::filesystem::path write_envmap(int w, int h) {
-    auto dir = std::filesystem::temp_directory_path() / ("mvpt_envmap_batch_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
+/// patches and rows the samplers must skip), written as env.exr to a fresh temporary directory.
+TempDir write_envmap(int w, int h) {
+    TempDir dir{std::filesystem::temp_directory_path() / ("mvpt_envmap_batch_" + std::to_string(::getpid()))};
+    std::filesystem::create_directories(dir.path);
     std::vector<ExrChannel> ch = {{"R", {}}, {"G", {}}, {"B", {}}};
     Sampler s(SamplerKind::Independent, 11);
     for (int y = 0; y < h; ++y)
@@ -45,7 +54,7 @@ std::filesystem::path write_envmap(int w, int h) {
             const float bright = (x == 3 && y == 1) ? 40.f : 1.f; // a "sun"
             for (auto &c : ch) c.data.push_back(black ? 0.f : bright * s.next_1d());
         }
-    write_exr(dir / "env.exr", w, h, ch);
+    write_exr(dir.path / "env.exr", w, h, ch);
     return dir;
 }
 
@@ -73,7 +82,7 @@ TEST(EnvmapBatch, SampleLiBatchEqualsSampleLi) {
     const auto dir = write_envmap(37, 19);
     for (bool mis : {false, true}) {
         SCOPED_TRACE(mis ? "mis_compensation" : "plain");
-        auto scene = envmap_scene(dir, mis);
+        auto scene = envmap_scene(dir.path, mis);
         const Light *env = scene->environment();
         ASSERT_NE(env, nullptr);
         // Random reference points and numbers, then the edges of [0, 1)^2; more lanes than one stage holds.
@@ -114,7 +123,7 @@ TEST(EnvmapBatch, EvalEnvironmentBatchEqualsScalar) {
     const auto dir = write_envmap(37, 19);
     for (bool mis : {false, true}) {
         SCOPED_TRACE(mis ? "mis_compensation" : "plain");
-        auto scene = envmap_scene(dir, mis);
+        auto scene = envmap_scene(dir.path, mis);
         const Light *env = scene->environment();
         ASSERT_NE(env, nullptr);
         // Random directions, then the poles, the seam of the lat-long map and nearly vertical ones.
@@ -180,7 +189,7 @@ TEST(EnvmapBatch, PathBatchWithEnvmapBitIdenticalToLi) {
     const auto dir = write_envmap(37, 19);
     const auto scene_file =
         std::filesystem::path(__FILE__).parent_path().parent_path() / "scenes" / "features" / "emitter_envmap.xml";
-    auto scene = load_scene_file(scene_file, {{"envmap_file", (dir / "env.exr").string()}});
+    auto scene = load_scene_file(scene_file, {{"envmap_file", (dir.path / "env.exr").string()}});
     ASSERT_NE(scene->environment(), nullptr);
     RayCounters counters;
     for (int variant = 0; variant < 3; ++variant) {
