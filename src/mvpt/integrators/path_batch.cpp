@@ -446,8 +446,13 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         if (n_env > 0) {
             env->sample_li_batch(n_env, buf.env_ref.data(), buf.env_u.data(), buf.env_time.data(), buf.env_ls.data(),
                                  buf.env_weight.data());
-            for (size_t m = 0; m < n_env; ++m)
-                buf.scatter[buf.env_lane[m]].emitter_sample = {buf.env_ls[m], buf.env_weight[m]};
+            // Member by member: a pair temporary would be built on the stack with narrow stores
+            // and copied out with wide loads across them (failed store-to-load forwards).
+            for (size_t m = 0; m < n_env; ++m) {
+                auto &[ls, weight] = buf.scatter[buf.env_lane[m]].emitter_sample;
+                ls = buf.env_ls[m];
+                weight = buf.env_weight[m];
+            }
         }
         flush_quad();
         flush_sphere();
