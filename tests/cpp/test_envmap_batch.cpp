@@ -230,3 +230,61 @@ TEST(EnvmapBatch, PathBatchWithEnvmapBitIdenticalToLi) {
         EXPECT_GT(nonzero, rays.size() / 2) << "variant " << variant;
     }
 }
+
+// trace_batch (multi-view suffixes) from given states on the envmap scene, against trace:
+// states with delta and smooth previous lobes, so escaped rays take both batched evaluations.
+TEST(EnvmapBatch, TraceBatchWithEnvmapContinuesLikeTrace) {
+    const auto dir = write_envmap(37, 19);
+    const auto scene_file =
+        std::filesystem::path(__FILE__).parent_path().parent_path() / "scenes" / "features" / "emitter_envmap.xml";
+    auto scene = load_scene_file(scene_file, {{"envmap_file", (dir.path / "env.exr").string()}});
+    PathConfig cfg;
+    if (auto *p = dynamic_cast<const PathIntegrator *>(&scene->integrator())) cfg = p->config();
+    cfg.rr_depth = 2;
+    PathIntegrator integrator(cfg);
+    const Camera &cam = *scene->cameras()[0];
+    std::vector<Ray> rays;
+    std::vector<Sampler> samplers;
+    std::vector<PathState> states;
+    const int res = 24;
+    for (int y = 0; y < res; ++y)
+        for (int x = 0; x < res; ++x) {
+            Sampler s(cam.sampler_kind, 9);
+            s.start(0, uint32_t(x), uint32_t(y), 0);
+            s.set_dimension(DimFilm);
+            Vec2f u_film = s.next_2d();
+            Ray camera_ray = cam.generate_ray(
+                Vec2f((x + u_film.x) * cam.film.width / res, (y + u_film.y) * cam.film.height / res), Vec2f(0.f, 0.f), 0.f);
+            SurfaceInteraction si;
+            if (!scene->intersect(camera_ray, si)) continue;
+            PathState st;
+            st.depth = 1 + uint32_t(s.next_1d() * 3.f);
+            st.throughput = Spectrum(0.2f + s.next_1d(), 0.5f, 0.2f + s.next_1d());
+            st.prev_p = si.p;
+            st.prev_bsdf_pdf = 0.05f + 2.f * s.next_1d();
+            st.prev_bsdf_delta = s.next_1d() < 0.3f;
+            st.valid = s.next_1d() < 0.7f;
+            Vec3f d = warp::square_to_uniform_sphere(s.next_2d());
+            if (dot(d, si.n) * dot(camera_ray.d, si.n) > 0.f) d = -d; // back to the camera's side, as a bounce
+            rays.push_back(si.spawn_ray(d));
+            states.push_back(st);
+            samplers.push_back(s);
+        }
+    ASSERT_GT(rays.size(), 100u);
+    std::vector<Sampler> ref_samplers = samplers;
+    std::vector<Spectrum> batch(rays.size());
+    std::vector<uint8_t> valid(rays.size(), 7);
+    RayCounters counters;
+    integrator.trace_batch(*scene, rays.data(), states.data(), samplers.data(), batch.data(), valid.data(),
+                           rays.size(), counters);
+    size_t nonzero = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        bool ref_valid = true;
+        Spectrum ref = integrator.trace(*scene, rays[i], states[i], ref_samplers[i], counters, nullptr, &ref_valid);
+        nonzero += !ref.is_black();
+        ASSERT_EQ(bool(valid[i]), ref_valid) << "path " << i;
+        ASSERT_TRUE(same_bits(batch[i], ref)) << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " "
+                                              << batch[i].b << ", trace " << ref.r << " " << ref.g << " " << ref.b;
+    }
+    EXPECT_GT(nonzero, rays.size() / 2);
+}
