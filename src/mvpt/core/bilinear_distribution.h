@@ -53,12 +53,49 @@ public:
         size_t px = m_rows[py].sample(u.x, nullptr, &ux);
         const int x = int(px), y = int(py);
         on_cell(x, y);
-        float v00 = vertex(x, y), v10 = vertex(x + 1, y), v01 = vertex(x, y + 1), v11 = vertex(x + 1, y + 1);
-        // Marginal in y is linear between the row sums, then x given y is linear.
-        float fy = sample_linear(uy, v00 + v10, v01 + v11);
-        float fx = sample_linear(ux, lerp(fy, v00, v01), lerp(fy, v10, v11));
-        *pdf = bilerp(v00, v10, v01, v11, fx, fy);
-        return {(float(x) + fx) / float(m_w - 1), (float(y) + fy) / float(m_h - 1)};
+        return sample_in_cell(x, y, ux, uy, pdf);
+    }
+
+    /// Lanes per stage of `sample_batch` (its per-lane temporaries stay in L1).
+    static constexpr size_t BatchChunk = 64;
+
+    /// `sample` for `n` points at once (p[i], pdf[i] from u[i]), as stages over the lanes so
+    /// that their independent table reads overlap instead of each point's chain of dependent
+    /// cache misses (row CDF, then column guide and CDF, then patch vertices) running alone.
+    /// Each lane's arithmetic is `sample`'s; `on_cell(i, x, y)` is called when lane i's patch
+    /// is chosen, a stage before its vertices are read.
+    template <typename OnCell> void sample_batch(size_t n, const Vec2f *u, Vec2f *p, float *pdf, OnCell &&on_cell) const {
+        uint32_t cell_y[BatchChunk], start[BatchChunk], cell_x[BatchChunk];
+        float uy[BatchChunk], ux[BatchChunk];
+        for (size_t i0 = 0; i0 < n; i0 += BatchChunk) {
+            const size_t m = std::min(BatchChunk, n - i0);
+            // Stage 1: the rows, from the marginal (a small table, mostly cached).
+            for (size_t i = 0; i < m; ++i) cell_y[i] = uint32_t(m_marginal.sample(u[i0 + i].y, nullptr, &uy[i]));
+            // Stage 2: where each row's search starts (guide tables), fetching the CDF entries there.
+            for (size_t i = 0; i < m; ++i) {
+                const DiscreteDistribution &row = m_rows[cell_y[i]];
+                start[i] = uint32_t(row.search_start(u[i0 + i].x));
+                __builtin_prefetch(row.search_data(start[i]));
+            }
+            // Stage 3: the columns, fetching the patches' vertices.
+            for (size_t i = 0; i < m; ++i) {
+                const uint32_t y = cell_y[i];
+                cell_x[i] = uint32_t(m_rows[y].sample_from(start[i], u[i0 + i].x, nullptr, &ux[i]));
+                on_cell(i0 + i, int(cell_x[i]), int(y));
+                prefetch_cell(int(cell_x[i]), int(y));
+            }
+            // Stage 4: the points in their patches, as in `sample`.
+            for (size_t i = 0; i < m; ++i) p[i0 + i] = sample_in_cell(int(cell_x[i]), int(cell_y[i]), ux[i], uy[i], &pdf[i0 + i]);
+        }
+    }
+
+    /// Fetch the four vertices of patch (x, y) (read by `sample` and `pdf` in that patch).
+    void prefetch_cell(int x, int y) const {
+        const float *v0 = &m_values[size_t(y) * m_w + x];
+        __builtin_prefetch(v0);
+        __builtin_prefetch(v0 + 1);
+        __builtin_prefetch(v0 + m_w);
+        __builtin_prefetch(v0 + m_w + 1);
     }
 
     /// Density at `p` (clamped to the unit square).
@@ -72,6 +109,15 @@ public:
 
 private:
     float vertex(int x, int y) const { return m_values[size_t(y) * m_w + x]; }
+    /// The last step of `sample`: the point in patch (x, y) from the reused numbers ux, uy.
+    Vec2f sample_in_cell(int x, int y, float ux, float uy, float *pdf) const {
+        float v00 = vertex(x, y), v10 = vertex(x + 1, y), v01 = vertex(x, y + 1), v11 = vertex(x + 1, y + 1);
+        // Marginal in y is linear between the row sums, then x given y is linear.
+        float fy = sample_linear(uy, v00 + v10, v01 + v11);
+        float fx = sample_linear(ux, lerp(fy, v00, v01), lerp(fy, v10, v11));
+        *pdf = bilerp(v00, v10, v01, v11, fx, fy);
+        return {(float(x) + fx) / float(m_w - 1), (float(y) + fy) / float(m_h - 1)};
+    }
     static float bilerp(float v00, float v10, float v01, float v11, float fx, float fy) {
         return lerp(fy, lerp(fx, v00, v10), lerp(fx, v01, v11));
     }

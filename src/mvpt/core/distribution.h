@@ -41,18 +41,28 @@ public:
 
     /// Index with probability pmf(i); `u` is rescaled to [0, 1) for reuse.
     size_t sample(float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
+        return sample_from(search_start(u), u, pmf_out, u_reuse);
+    }
+
+    /// `sample` in two steps, for staged loops over many u's whose table reads overlap: where
+    /// the search for `u` starts (a guide-table entry; 0 for short tables) ...
+    size_t search_start(float u) const {
+        if (m_guide.empty()) return 0;
+        size_t g = m_guide.size();
+        double x = double(u) * double(g);
+        return m_guide[x > 0.0 ? std::min(size_t(x), g - 1) : 0];
+    }
+    /// ... and the rest of `sample` from there (`start` = search_start(u)).
+    size_t sample_from(size_t start, float u, float *pmf_out = nullptr, float *u_reuse = nullptr) const {
         // i = number of interior CDF entries <= u (std::upper_bound's answer). Short tables
         // (an emitter's few triangles): a branch-free count, as each comparison is a coin
         // flip for a random u. Long ones (envmap rows): the guide table, then a short scan;
         // a binary search's chain of dependent cache misses cost more (matpreview's envmap).
         const double *interior = m_cdf.data() + 1, du = double(u);
-        size_t count = m_cdf.size() - 2, i = 0;
+        size_t count = m_cdf.size() - 2, i = start;
         if (count <= ShortTable) {
             for (size_t j = 0; j < count; ++j) i += interior[j] <= du;
         } else {
-            size_t g = m_guide.size();
-            double x = du * double(g);
-            i = m_guide[x > 0.0 ? std::min(size_t(x), g - 1) : 0];
             while (i > 0 && interior[i - 1] > du) --i; // only if j/g rounded above u
             while (i < count && interior[i] <= du) ++i;
         }
@@ -64,6 +74,8 @@ public:
         if (u_reuse) *u_reuse = p > 0 ? std::min(float((u - m_cdf[i]) / p), OneMinusEpsilon) : 0.f;
         return i;
     }
+    /// The CDF entries a search from `start` reads first (to prefetch them).
+    const double *search_data(size_t start) const { return m_cdf.data() + start; }
 
 private:
     /// Tables up to this many interior CDF entries are searched by a plain count.

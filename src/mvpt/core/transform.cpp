@@ -113,12 +113,6 @@ Point3f Transform::point(Point3f p) const {
     return {float(r[0]), float(r[1]), float(r[2])};
 }
 
-Vec3f Transform::vector(Vec3f v) const {
-    return {float(m_m.m[0][0] * v.x + m_m.m[0][1] * v.y + m_m.m[0][2] * v.z),
-            float(m_m.m[1][0] * v.x + m_m.m[1][1] * v.y + m_m.m[1][2] * v.z),
-            float(m_m.m[2][0] * v.x + m_m.m[2][1] * v.y + m_m.m[2][2] * v.z)};
-}
-
 Normal3f Transform::normal(Normal3f n) const {
     return {float(m_inv.m[0][0] * n.x + m_inv.m[1][0] * n.y + m_inv.m[2][0] * n.z),
             float(m_inv.m[0][1] * n.x + m_inv.m[1][1] * n.y + m_inv.m[2][1] * n.z),

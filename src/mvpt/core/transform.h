@@ -67,7 +67,13 @@ public:
     bool flips_handedness() const { return m_m.determinant3x3() < 0; }
 
     Point3f point(Point3f p) const;
-    Vec3f vector(Vec3f v) const;
+    /// (Inline: an out-of-line call returns the vector in two registers that callers store and
+    /// reload across the halves, a failed store-to-load forward per call in hot loops.)
+    Vec3f vector(Vec3f v) const {
+        return {float(m_m.m[0][0] * v.x + m_m.m[0][1] * v.y + m_m.m[0][2] * v.z),
+                float(m_m.m[1][0] * v.x + m_m.m[1][1] * v.y + m_m.m[1][2] * v.z),
+                float(m_m.m[2][0] * v.x + m_m.m[2][1] * v.y + m_m.m[2][2] * v.z)};
+    }
     /// Normals transform with the inverse transpose; the result is not normalized.
     Normal3f normal(Normal3f n) const;
 

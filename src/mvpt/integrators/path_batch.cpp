@@ -99,6 +99,15 @@ struct WaveBuffers {
     std::vector<uint32_t> conductor_index, conductor_sphere_index;
     /// Per light, its row in the QuadTable / SphereTable, or -1.
     std::vector<int> quad_of_light, sphere_of_light;
+    /// The environment's batched lanes: escaped rays (path, origin, direction, emission,
+    /// density), then NEE vertices (scatter index, point, numbers, time, sample, weight).
+    std::vector<uint32_t> env_lane;
+    std::vector<Point3f> env_ref;
+    std::vector<Vec3f> env_d;
+    std::vector<Spectrum> env_le, env_weight;
+    std::vector<float> env_pdf, env_time;
+    std::vector<Vec2f> env_u;
+    std::vector<LightSample> env_ls;
 };
 } // namespace
 
@@ -112,7 +121,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     const auto &lights = scene.lights();
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
     const BsdfContext ctx;
-    const bool valid0 = !m_cfg.hide_emitters && scene.environment() != nullptr;
+    const Light *const env = scene.environment();
+    const bool valid0 = !m_cfg.hide_emitters && env != nullptr;
 
     // Through a pointer the compiler cannot see through (an empty asm): otherwise GCC recomputes
     // the thread_local's address, a __tls_get_addr call in a shared library, at every use.
@@ -150,6 +160,17 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     for (auto &u : buf.u) u.resize(n);
     buf.u_hash.resize(n);
     buf.u_dim.resize(n);
+    if (env) {
+        buf.env_lane.resize(n);
+        buf.env_ref.resize(n);
+        buf.env_d.resize(n);
+        buf.env_le.resize(n);
+        buf.env_weight.resize(n);
+        buf.env_pdf.resize(n);
+        buf.env_time.resize(n);
+        buf.env_u.resize(n);
+        buf.env_ls.resize(n);
+    }
     buf.lambert_index.resize(LambertChunk);
     buf.quad_index.resize(LambertChunk);
     buf.sphere_index.resize(LambertChunk);
@@ -223,7 +244,9 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first && !states); // camera rays: coherent
 
         // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
-        size_t n_scatter = 0;
+        // Escaped rays are evaluated after this loop, all at once (their densities wanted:
+        // env_lane[0, n_env_mis); not wanted: env_lane[env_nomis, active)).
+        size_t n_scatter = 0, n_env_mis = 0, env_nomis = active;
         for (size_t k = 0; k < active; ++k) {
             WavePath &p = paths[k];
             Sampler &sampler = samplers[p.slot];
@@ -237,15 +260,18 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
             if (emitter && !(p.depth == 0 && m_cfg.hide_emitters)) {
-                float env_pdf = 0.f;
-                Spectrum le = hit ? emitter->eval(si_hit, -ray.d)
-                                  : emitter->eval_environment_pdf(p.prev_p, si_hit, ray.d,
-                                                                  p.prev_bsdf_delta ? nullptr : &env_pdf);
+                if (!hit) {
+                    const size_t e = p.prev_bsdf_delta ? --env_nomis : n_env_mis++;
+                    buf.env_lane[e] = uint32_t(k);
+                    buf.env_ref[e] = p.prev_p;
+                    buf.env_d[e] = ray.d;
+                    continue;
+                }
+                Spectrum le = emitter->eval(si_hit, -ray.d);
                 if (!le.is_black()) {
                     float w = 1.f;
                     if (!p.prev_bsdf_delta)
-                        w = mis_power(p.prev_bsdf_pdf, hit ? emitter_pdf(scene, emitter, p.prev_p, si_hit, ray.d)
-                                                           : emitter_pdf_from(scene, emitter, env_pdf));
+                        w = mis_power(p.prev_bsdf_pdf, emitter_pdf(scene, emitter, p.prev_p, si_hit, ray.d));
                     p.result += p.throughput * le * w;
                 }
             }
@@ -272,6 +298,21 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             }
         }
         if (independent) independent_vertex_draws(buf.u_hash.data(), buf.u_dim.data(), n_scatter, u);
+        if (n_env_mis > 0)
+            env->eval_environment_batch(n_env_mis, buf.env_ref.data(), buf.env_d.data(), buf.env_le.data(),
+                                        buf.env_pdf.data());
+        if (env_nomis < active)
+            env->eval_environment_batch(active - env_nomis, buf.env_ref.data() + env_nomis,
+                                        buf.env_d.data() + env_nomis, buf.env_le.data() + env_nomis, nullptr);
+        auto add_escaped = [&](size_t e, bool mis) {
+            WavePath &p = paths[buf.env_lane[e]];
+            const Spectrum &le = buf.env_le[e];
+            if (le.is_black()) return;
+            const float w = mis ? mis_power(p.prev_bsdf_pdf, emitter_pdf_from(scene, env, buf.env_pdf[e])) : 1.f;
+            p.result += p.throughput * le * w;
+        };
+        for (size_t e = 0; e < n_env_mis; ++e) add_escaped(e, true);
+        for (size_t e = env_nomis; e < active; ++e) add_escaped(e, false);
 
         // ---------------- Next-event estimation: emitter samples ----------------
         // A Lambertian vertex that chose a quad emitter is done whole (emitter sample, BSDF,
@@ -351,6 +392,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                                spheres.at(SphereTable::Cz, row)) - p;
             return squared_norm(dc) > sphere_radius_adj2[row];
         };
+        // Vertices that chose the environment sample it after this loop, all at once.
+        size_t n_env = 0;
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = buf.scatter[j];
             const SurfaceInteraction &si = buf.si[v.path];
@@ -388,9 +431,28 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 }
             }
             const Light &light = *lights[idx];
+            if (&light == env) {
+                const size_t m = n_env++;
+                buf.env_lane[m] = uint32_t(j);
+                buf.env_ref[m] = si.p;
+                buf.env_u[m] = {u[1][j], u[2][j]};
+                buf.env_time[m] = si.time;
+                continue;
+            }
             // Constructed in place (guaranteed copy elision): copying the returned pair with wide
             // loads right after the callee's narrow stores would stall on store forwarding.
             ::new (&v.emitter_sample) std::pair<LightSample, Spectrum>(light.sample_li(si.p, {u[1][j], u[2][j]}, si.time));
+        }
+        if (n_env > 0) {
+            env->sample_li_batch(n_env, buf.env_ref.data(), buf.env_u.data(), buf.env_time.data(), buf.env_ls.data(),
+                                 buf.env_weight.data());
+            // Member by member: a pair temporary would be built on the stack with narrow stores
+            // and copied out with wide loads across them (failed store-to-load forwards).
+            for (size_t m = 0; m < n_env; ++m) {
+                auto &[ls, weight] = buf.scatter[buf.env_lane[m]].emitter_sample;
+                ls = buf.env_ls[m];
+                weight = buf.env_weight[m];
+            }
         }
         flush_quad();
         flush_sphere();

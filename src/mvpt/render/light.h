@@ -6,6 +6,7 @@
 #include "../scene/properties.h"
 #include "interaction.h"
 
+#include <tuple>
 #include <utility>
 
 namespace mvpt {
@@ -66,6 +67,18 @@ public:
     virtual Spectrum eval_environment_pdf(Point3f ref, const SurfaceInteraction &si, Vec3f d, float *pdf) const {
         if (pdf) *pdf = pdf_li(ref, si, d);
         return eval_environment(d);
+    }
+    /// `sample_li` for `n` reference points at once (lane i: ref[i], u[i], time[i] into ls[i],
+    /// weight[i]); a light overrides it to run the lanes in stages whose memory reads overlap.
+    virtual void sample_li_batch(size_t n, const Point3f *ref, const Vec2f *u, const float *time, LightSample *ls,
+                                 Spectrum *weight) const {
+        for (size_t i = 0; i < n; ++i) std::tie(ls[i], weight[i]) = sample_li(ref[i], u[i], time[i]);
+    }
+    /// `eval_environment_pdf` for `n` escaped rays at once (from ref[i] in direction d[i], no
+    /// surface hit), every lane's density into `pdf` unless it is null.
+    virtual void eval_environment_batch(size_t n, const Point3f *ref, const Vec3f *d, Spectrum *le, float *pdf) const {
+        const SurfaceInteraction si_none;
+        for (size_t i = 0; i < n; ++i) le[i] = eval_environment_pdf(ref[i], si_none, d[i], pdf ? pdf + i : nullptr);
     }
     /// Scene extent, for lights placed at infinity.
     virtual void set_scene_bounds(Point3f center, float radius) { (void)center; (void)radius; }

@@ -56,29 +56,27 @@ public:
     }
 
     std::pair<LightSample, Spectrum> sample_li(Point3f ref, Vec2f u, float) const override {
-        LightSample ls;
         float pdf_uv;
         // The texels that `lookup` reads below are those of the sampled patch: fetching
         // them while the sampler reads the patch's density overlaps two cache misses.
-        Vec2f uv = m_distr.sample(u, &pdf_uv, [this](int x, int y) {
-            const Color3f *row0 = &m_texels[size_t(y) * m_w + x], *row1 = row0 + m_w;
-            // Texels x and x + 1 of both rows: 24 bytes each, possibly across a line boundary.
-            __builtin_prefetch(row0);
-            __builtin_prefetch(row1);
-            __builtin_prefetch(reinterpret_cast<const char *>(row0 + 2) - 1);
-            __builtin_prefetch(reinterpret_cast<const char *>(row1 + 2) - 1);
-        });
-        if (!(pdf_uv > 0.f)) return {ls, {}};
-        uv.x += half_texel();
-        float inv_sin_theta;
-        Vec3f d = m_to_world.vector(uv_to_direction(uv, inv_sin_theta));
-        ls.d = d;
-        ls.n = -d;
-        ls.dist = 2.f * std::max(m_radius, norm(ref - m_center));
-        ls.p = ref + d * ls.dist;
-        // Jacobian of the lat-long map: dA_uv = dw / (2 pi^2 sin(theta)).
-        ls.pdf = pdf_uv * inv_sin_theta * (1.f / (2.f * Pi * Pi));
-        return {ls, lookup(uv) / ls.pdf};
+        Vec2f uv = m_distr.sample(u, &pdf_uv, [this](int x, int y) { prefetch_texels(x, y); });
+        std::pair<LightSample, Spectrum> out;
+        sample_from_uv(ref, uv, pdf_uv, out.first, out.second);
+        return out;
+    }
+
+    /// sample_li's lanes in stages (BilinearDistribution2D::sample_batch, then the directions
+    /// and texels of all lanes), so that different lanes' table and texel reads overlap.
+    void sample_li_batch(size_t n, const Point3f *ref, const Vec2f *u, const float *, LightSample *ls,
+                         Spectrum *weight) const override {
+        constexpr size_t Chunk = BilinearDistribution2D::BatchChunk;
+        Vec2f uv[Chunk];
+        float pdf_uv[Chunk];
+        for (size_t i0 = 0; i0 < n; i0 += Chunk) {
+            const size_t m = std::min(Chunk, n - i0);
+            m_distr.sample_batch(m, u + i0, uv, pdf_uv, [this](size_t, int x, int y) { prefetch_texels(x, y); });
+            for (size_t i = 0; i < m; ++i) sample_from_uv(ref[i0 + i], uv[i], pdf_uv[i], ls[i0 + i], weight[i0 + i]);
+        }
     }
 
     float pdf_li(Point3f, const SurfaceInteraction &, Vec3f d) const override {
@@ -97,11 +95,69 @@ public:
         return lookup(uv);
     }
 
+    /// eval_environment_pdf's lanes in two stages: all directions' lat-long coordinates, then
+    /// all densities and texels (independent reads that overlap).
+    void eval_environment_batch(size_t n, const Point3f *, const Vec3f *d, Spectrum *le, float *pdf) const override {
+        constexpr size_t Chunk = BilinearDistribution2D::BatchChunk;
+        Vec3f v[Chunk];
+        Vec2f uv[Chunk];
+        for (size_t i0 = 0; i0 < n; i0 += Chunk) {
+            const size_t m = std::min(Chunk, n - i0);
+            for (size_t i = 0; i < m; ++i) {
+                v[i] = m_to_local.vector(d[i0 + i]);
+                uv[i] = direction_to_uv(v[i]);
+                prefetch_lookup(uv[i]);
+            }
+            if (pdf)
+                for (size_t i = 0; i < m; ++i) pdf[i0 + i] = pdf_local(v[i], uv[i]);
+            for (size_t i = 0; i < m; ++i) le[i0 + i] = lookup(uv[i]);
+        }
+    }
+
 private:
     /// Mitsuba's dr::Epsilon<float> (2^-24), the floor on sin(theta).
     static constexpr float Epsilon = 0x1p-24f;
 
     float half_texel() const { return 0.5f / float(m_w - 1); }
+
+    /// Fetch the texels that `lookup` reads for a point in patch (x, y) (texels x and x + 1 of
+    /// rows y and y + 1: 24 bytes each, possibly across a line boundary).
+    void prefetch_texels(int x, int y) const {
+        const Color3f *row0 = &m_texels[size_t(y) * m_w + x], *row1 = row0 + m_w;
+        __builtin_prefetch(row0);
+        __builtin_prefetch(row1);
+        __builtin_prefetch(reinterpret_cast<const char *>(row0 + 2) - 1);
+        __builtin_prefetch(reinterpret_cast<const char *>(row1 + 2) - 1);
+    }
+
+    /// Fetch the texels and density vertices that lookup(uv) and pdf_local(v, uv) read.
+    void prefetch_lookup(Vec2f uv) const {
+        uv.x -= half_texel();
+        uv = {uv.x - std::floor(uv.x), uv.y - std::floor(uv.y)};
+        float fx = uv.x * float(m_w - 1), fy = uv.y * float(m_h - 1);
+        int x = std::min(int(fx), m_w - 2), y = std::min(int(fy), m_h - 2);
+        prefetch_texels(x, y);
+        m_distr.prefetch_cell(x, y);
+    }
+
+    /// The rest of sample_li from the sampled lat-long point `uv` and its density `pdf_uv`.
+    void sample_from_uv(Point3f ref, Vec2f uv, float pdf_uv, LightSample &ls, Spectrum &weight) const {
+        ls = LightSample();
+        if (!(pdf_uv > 0.f)) {
+            weight = Spectrum();
+            return;
+        }
+        uv.x += half_texel();
+        float inv_sin_theta;
+        Vec3f d = m_to_world.vector(uv_to_direction(uv, inv_sin_theta));
+        ls.d = d;
+        ls.n = -d;
+        ls.dist = 2.f * std::max(m_radius, norm(ref - m_center));
+        ls.p = ref + d * ls.dist;
+        // Jacobian of the lat-long map: dA_uv = dw / (2 pi^2 sin(theta)).
+        ls.pdf = pdf_uv * inv_sin_theta * (1.f / (2.f * Pi * Pi));
+        weight = lookup(uv) / ls.pdf;
+    }
 
     /// pdf_li of the emitter-space direction `v`, whose lat-long coordinates are `uv`.
     float pdf_local(Vec3f v, Vec2f uv) const {
