@@ -3,6 +3,7 @@
 // one-lane calls bit for bit: sample_li, eval_environment_pdf, eval_environment, pdf_li.
 // Also li_batch against li on the envmap feature scene (test_path_batch.cpp skips it, as
 // its EXR is written by a test).
+#include "batch_checks.h"
 #include "mvpt/core/sampler.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
@@ -24,7 +25,7 @@ using namespace mvpt;
 
 namespace {
 
-template <typename T> bool same_bits(const T &a, const T &b) { return std::memcmp(&a, &b, sizeof(T)) == 0; }
+using test::same_bits;
 
 bool same_sample(const LightSample &a, const LightSample &b) {
     return same_bits(a.p, b.p) && same_bits(a.n, b.n) && same_bits(a.d, b.d) && same_bits(a.dist, b.dist) &&
@@ -271,20 +272,6 @@ TEST(EnvmapBatch, TraceBatchWithEnvmapContinuesLikeTrace) {
             samplers.push_back(s);
         }
     ASSERT_GT(rays.size(), 100u);
-    std::vector<Sampler> ref_samplers = samplers;
-    std::vector<Spectrum> batch(rays.size());
-    std::vector<uint8_t> valid(rays.size(), 7);
-    RayCounters counters;
-    integrator.trace_batch(*scene, rays.data(), states.data(), samplers.data(), batch.data(), valid.data(),
-                           rays.size(), counters);
-    size_t nonzero = 0;
-    for (size_t i = 0; i < rays.size(); ++i) {
-        bool ref_valid = true;
-        Spectrum ref = integrator.trace(*scene, rays[i], states[i], ref_samplers[i], counters, nullptr, &ref_valid);
-        nonzero += !ref.is_black();
-        ASSERT_EQ(bool(valid[i]), ref_valid) << "path " << i;
-        ASSERT_TRUE(same_bits(batch[i], ref)) << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " "
-                                              << batch[i].b << ", trace " << ref.r << " " << ref.g << " " << ref.b;
-    }
+    const size_t nonzero = test::expect_trace_batch_equals_trace(*scene, integrator, rays, states, samplers);
     EXPECT_GT(nonzero, rays.size() / 2);
 }

@@ -2,6 +2,7 @@
 // queries against their one-ray-at-a-time counterparts, on every per-feature scene: the
 // same hits and bit-identical radiance per path (the renderer uses the batches, for camera
 // paths and for multi-view suffixes; tests use li and trace).
+#include "batch_checks.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
 #include "mvpt/scene/scene.h"
@@ -27,7 +28,7 @@ std::vector<std::filesystem::path> feature_scenes() {
     return out;
 }
 
-bool same_bits(const Spectrum &a, const Spectrum &b) { return std::memcmp(&a, &b, sizeof(Spectrum)) == 0; }
+using test::same_bits;
 
 /// Camera rays of a `res`² pixel grid over view 0's film, `spp` samples each, with their samplers.
 /// `sobol` replaces the sensor's sampler by the Sobol sampler.
@@ -133,7 +134,6 @@ TEST(PathBatch, RadianceBitIdenticalToLi) {
 // as trace does, result and valid flag, for states of every kind: deeper vertices, delta and
 // smooth previous lobes, paths not yet valid.
 TEST(PathBatch, TraceBatchContinuesLikeTrace) {
-    RayCounters counters;
     for (const auto &path : feature_scenes()) {
         SCOPED_TRACE(path.string());
         auto scene = load_scene_file(path);
@@ -163,20 +163,7 @@ TEST(PathBatch, TraceBatchContinuesLikeTrace) {
             states.push_back(st);
             batch_samplers.push_back(s);
         }
-        std::vector<Sampler> ref_samplers = batch_samplers;
-        std::vector<Spectrum> batch(rays.size());
-        std::vector<uint8_t> valid(rays.size(), 7);
-        integrator.trace_batch(*scene, rays.data(), states.data(), batch_samplers.data(), batch.data(), valid.data(),
-                               rays.size(), counters);
-        size_t nonzero = 0;
-        for (size_t i = 0; i < rays.size(); ++i) {
-            bool ref_valid = true;
-            Spectrum ref = integrator.trace(*scene, rays[i], states[i], ref_samplers[i], counters, nullptr, &ref_valid);
-            nonzero += !ref.is_black();
-            ASSERT_EQ(bool(valid[i]), ref_valid) << "path " << i;
-            ASSERT_TRUE(same_bits(batch[i], ref)) << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " "
-                                                  << batch[i].b << ", trace " << ref.r << " " << ref.g << " " << ref.b;
-        }
+        const size_t nonzero = test::expect_trace_batch_equals_trace(*scene, integrator, rays, states, batch_samplers);
         EXPECT_GT(nonzero, rays.size() / 10); // the comparison saw light
         EXPECT_GT(rays.size(), 100u);
     }
