@@ -192,7 +192,6 @@ TEST(EnvmapBatch, PathBatchWithEnvmapBitIdenticalToLi) {
         std::filesystem::path(__FILE__).parent_path().parent_path() / "scenes" / "features" / "emitter_envmap.xml";
     auto scene = load_scene_file(scene_file, {{"envmap_file", (dir.path / "env.exr").string()}});
     ASSERT_NE(scene->environment(), nullptr);
-    RayCounters counters;
     for (int variant = 0; variant < 3; ++variant) {
         // The scene's integrator, then hidden emitters, then long paths with Russian roulette.
         PathConfig cfg;
@@ -200,34 +199,12 @@ TEST(EnvmapBatch, PathBatchWithEnvmapBitIdenticalToLi) {
         if (variant == 1) { cfg.max_depth = 3; cfg.hide_emitters = true; }
         if (variant == 2) { cfg.max_depth = -1; cfg.rr_depth = 2; }
         PathIntegrator integrator(cfg);
-        const Camera &cam = *scene->cameras()[0];
         std::vector<Ray> rays;
         std::vector<Sampler> samplers;
-        const int res = 16;
-        for (int sample = 0; sample < 2; ++sample)
-            for (int y = 0; y < res; ++y)
-                for (int x = 0; x < res; ++x) {
-                    Sampler sampler(cam.sampler_kind, 7);
-                    sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(sample));
-                    sampler.set_dimension(DimFilm);
-                    Vec2f u_film = sampler.next_2d();
-                    sampler.next_2d();
-                    sampler.next_1d();
-                    Vec2f film_pos((x + u_film.x) * cam.film.width / res, (y + u_film.y) * cam.film.height / res);
-                    rays.push_back(cam.generate_ray(film_pos, Vec2f(0.f, 0.f), 0.f));
-                    samplers.push_back(sampler);
-                }
-        std::vector<Sampler> batch_samplers = samplers;
-        std::vector<Spectrum> batch(rays.size());
-        integrator.li_batch(*scene, rays.data(), batch_samplers.data(), batch.data(), rays.size(), counters);
-        size_t nonzero = 0;
-        for (size_t i = 0; i < rays.size(); ++i) {
-            Spectrum ref = integrator.li(*scene, rays[i], samplers[i], counters);
-            nonzero += !ref.is_black();
-            ASSERT_TRUE(same_bits(batch[i], ref)) << "variant " << variant << ", path " << i << ": batch " << batch[i].r
-                                                  << " " << batch[i].g << " " << batch[i].b << ", li " << ref.r << " "
-                                                  << ref.g << " " << ref.b;
-        }
+        test::camera_rays(*scene, 16, 2, rays, samplers);
+        SCOPED_TRACE("variant " + std::to_string(variant));
+        const size_t nonzero = test::expect_li_batch_equals_li(*scene, integrator, rays, samplers);
+        if (HasFailure()) return;
         EXPECT_GT(nonzero, rays.size() / 2) << "variant " << variant;
     }
 }

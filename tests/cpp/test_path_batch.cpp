@@ -28,27 +28,8 @@ std::vector<std::filesystem::path> feature_scenes() {
     return out;
 }
 
+using test::camera_rays;
 using test::same_bits;
-
-/// Camera rays of a `res`² pixel grid over view 0's film, `spp` samples each, with their samplers.
-/// `sobol` replaces the sensor's sampler by the Sobol sampler.
-void camera_rays(const Scene &scene, int res, int spp, std::vector<Ray> &rays, std::vector<Sampler> &samplers,
-                 bool sobol = false) {
-    const Camera &cam = *scene.cameras()[0];
-    for (int s = 0; s < spp; ++s)
-        for (int y = 0; y < res; ++y)
-            for (int x = 0; x < res; ++x) {
-                Sampler sampler(sobol ? SamplerKind::Sobol : cam.sampler_kind, 7);
-                sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(s));
-                sampler.set_dimension(DimFilm);
-                Vec2f u_film = sampler.next_2d(), u_lens = sampler.next_2d();
-                float u_time = sampler.next_1d();
-                Vec2f film_pos((x + u_film.x) * cam.film.width / res, (y + u_film.y) * cam.film.height / res);
-                Vec2f lens = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
-                rays.push_back(cam.generate_ray(film_pos, lens, cam.sample_time(u_time)));
-                samplers.push_back(sampler);
-            }
-}
 
 } // namespace
 
@@ -98,7 +79,6 @@ TEST(PathBatch, BatchedQueriesMatchSingleRays) {
 }
 
 TEST(PathBatch, RadianceBitIdenticalToLi) {
-    RayCounters counters;
     for (const auto &path : feature_scenes()) {
         SCOPED_TRACE(path.string());
         auto scene = load_scene_file(path);
@@ -114,17 +94,9 @@ TEST(PathBatch, RadianceBitIdenticalToLi) {
             std::vector<Ray> rays;
             std::vector<Sampler> samplers;
             camera_rays(*scene, 16, 2, rays, samplers, variant == 3);
-            std::vector<Sampler> batch_samplers = samplers;
-            std::vector<Spectrum> batch(rays.size());
-            integrator.li_batch(*scene, rays.data(), batch_samplers.data(), batch.data(), rays.size(), counters);
-            size_t nonzero = 0;
-            for (size_t i = 0; i < rays.size(); ++i) {
-                Spectrum ref = integrator.li(*scene, rays[i], samplers[i], counters);
-                nonzero += !ref.is_black();
-                ASSERT_TRUE(same_bits(batch[i], ref)) << "variant " << variant << ", path " << i << ": batch "
-                                                      << batch[i].r << " " << batch[i].g << " " << batch[i].b
-                                                      << ", li " << ref.r << " " << ref.g << " " << ref.b;
-            }
+            SCOPED_TRACE("variant " + std::to_string(variant));
+            const size_t nonzero = test::expect_li_batch_equals_li(*scene, integrator, rays, samplers);
+            if (HasFailure()) return;
             EXPECT_GT(nonzero, rays.size() / 10) << "variant " << variant; // the comparison saw light
         }
     }
