@@ -16,14 +16,14 @@ namespace mvpt::test {
 template <typename T> bool same_bits(const T &a, const T &b) { return std::memcmp(&a, &b, sizeof(T)) == 0; }
 
 /// Camera rays of a `res`² pixel grid over view 0's film, `spp` samples each, with their samplers.
-/// `sobol` replaces the sensor's sampler by the Sobol sampler.
+/// `sobol` replaces the sensor's sampler by the Sobol sampler; `seed` is the samplers' seed.
 inline void camera_rays(const Scene &scene, int res, int spp, std::vector<Ray> &rays, std::vector<Sampler> &samplers,
-                        bool sobol = false) {
+                        bool sobol = false, uint32_t seed = 7) {
     const Camera &cam = *scene.cameras()[0];
     for (int s = 0; s < spp; ++s)
         for (int y = 0; y < res; ++y)
             for (int x = 0; x < res; ++x) {
-                Sampler sampler(sobol ? SamplerKind::Sobol : cam.sampler_kind, 7);
+                Sampler sampler(sobol ? SamplerKind::Sobol : cam.sampler_kind, seed);
                 sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(s));
                 sampler.set_dimension(DimFilm);
                 Vec2f u_film = sampler.next_2d(), u_lens = sampler.next_2d();
@@ -36,9 +36,10 @@ inline void camera_rays(const Scene &scene, int res, int spp, std::vector<Ray> &
 }
 
 /// li_batch of `rays` equals li of each ray bit for bit (gtest failures otherwise); returns how
-/// many paths carried light.
+/// many paths carried light, and li's radiance of each path in `li_out` if given.
 inline size_t expect_li_batch_equals_li(const Scene &scene, const PathIntegrator &integrator,
-                                        const std::vector<Ray> &rays, const std::vector<Sampler> &samplers) {
+                                        const std::vector<Ray> &rays, const std::vector<Sampler> &samplers,
+                                        std::vector<Spectrum> *li_out = nullptr) {
     std::vector<Sampler> batch_samplers = samplers, ref_samplers = samplers;
     std::vector<Spectrum> batch(rays.size());
     RayCounters counters;
@@ -47,6 +48,7 @@ inline size_t expect_li_batch_equals_li(const Scene &scene, const PathIntegrator
     for (size_t i = 0; i < rays.size(); ++i) {
         Spectrum ref = integrator.li(scene, rays[i], ref_samplers[i], counters);
         nonzero += !ref.is_black();
+        if (li_out) li_out->push_back(ref);
         EXPECT_TRUE(same_bits(batch[i], ref)) << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " "
                                               << batch[i].b << ", li " << ref.r << " " << ref.g << " " << ref.b;
         if (::testing::Test::HasFailure()) break; // the first difference says enough

@@ -2,6 +2,7 @@
 // wavefront's Lambertian vector kernels, with the texture evaluated when the lanes are
 // gathered: li_batch must stay bit-identical to li there, for every kernel that reads the
 // reflectance (quad and sphere emitters, other emitters, BSDF sampling).
+#include "batch_checks.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
 #include "mvpt/render/bsdf.h"
@@ -62,8 +63,6 @@ const char *TexturedScene = R"(
     <emitter type="constant"><rgb name="radiance" value="0.3, 0.35, 0.4"/></emitter>
 </scene>)";
 
-bool same_bits(const Spectrum &a, const Spectrum &b) { return std::memcmp(&a, &b, sizeof(Spectrum)) == 0; }
-
 } // namespace
 
 TEST(PathBatchTextured, TexturedDiffuseTakesTheLambertKernels) {
@@ -81,35 +80,16 @@ TEST(PathBatchTextured, TexturedDiffuseTakesTheLambertKernels) {
 
 TEST(PathBatchTextured, RadianceBitIdenticalToLi) {
     auto scene = load_scene_string(TexturedScene, std::filesystem::current_path());
-    const Camera &cam = *scene->cameras()[0];
     PathConfig cfg;
     if (auto *p = dynamic_cast<const PathIntegrator *>(&scene->integrator())) cfg = p->config();
     PathIntegrator integrator(cfg);
-    RayCounters counters;
-    constexpr int Res = 24, Spp = 3;
     std::vector<Ray> rays;
     std::vector<Sampler> samplers;
-    for (int s = 0; s < Spp; ++s)
-        for (int y = 0; y < Res; ++y)
-            for (int x = 0; x < Res; ++x) {
-                Sampler sampler(cam.sampler_kind, 11);
-                sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(s));
-                sampler.set_dimension(DimFilm);
-                Vec2f u_film = sampler.next_2d();
-                sampler.next_2d();
-                float u_time = sampler.next_1d();
-                Vec2f film_pos((x + u_film.x) * cam.film.width / Res, (y + u_film.y) * cam.film.height / Res);
-                rays.push_back(cam.generate_ray(film_pos, Vec2f(0.f, 0.f), cam.sample_time(u_time)));
-                samplers.push_back(sampler);
-            }
-    std::vector<Sampler> batch_samplers = samplers;
-    std::vector<Spectrum> batch(rays.size());
-    integrator.li_batch(*scene, rays.data(), batch_samplers.data(), batch.data(), rays.size(), counters);
+    test::camera_rays(*scene, 24, 3, rays, samplers, false, 11);
+    std::vector<Spectrum> li;
+    test::expect_li_batch_equals_li(*scene, integrator, rays, samplers, &li);
     size_t reddish = 0, bluish = 0;
-    for (size_t i = 0; i < rays.size(); ++i) {
-        Spectrum ref = integrator.li(*scene, rays[i], samplers[i], counters);
-        ASSERT_TRUE(same_bits(batch[i], ref)) << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " "
-                                              << batch[i].b << ", li " << ref.r << " " << ref.g << " " << ref.b;
+    for (const Spectrum &ref : li) {
         reddish += ref.r > 2.f * ref.b;
         bluish += ref.b > 2.f * ref.r;
     }

@@ -2,6 +2,7 @@
 // PathIntegrator::li, bit for bit, in the cases that pick their branches: both sides of a
 // twosided diffuse, one-sided diffuse seen from behind, quad and sphere emitters (flipped
 // normals, a reference point inside a sphere, a back-facing quad), several emitters of each kind.
+#include "batch_checks.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
 #include "mvpt/render/camera.h"
@@ -71,34 +72,10 @@ static void expect_batch_equals_li(const char *xml) {
     auto scene = load_scene_string(xml, ".");
     auto *path = dynamic_cast<const PathIntegrator *>(&scene->integrator());
     ASSERT_NE(path, nullptr);
-    const Camera &cam = *scene->cameras()[0];
     std::vector<Ray> rays;
     std::vector<Sampler> samplers;
-    const int res = 24, spp = 4;
-    for (int s = 0; s < spp; ++s)
-        for (int y = 0; y < res; ++y)
-            for (int x = 0; x < res; ++x) {
-                Sampler sampler(cam.sampler_kind, 3);
-                sampler.start(0, uint32_t(x), uint32_t(y), uint32_t(s));
-                sampler.set_dimension(DimFilm);
-                Vec2f u_film = sampler.next_2d();
-                sampler.next_2d();
-                sampler.next_1d();
-                rays.push_back(cam.generate_ray(Vec2f(x + u_film.x, y + u_film.y), Vec2f(0.f, 0.f), 0.f));
-                samplers.push_back(sampler);
-            }
-    std::vector<Sampler> batch_samplers = samplers;
-    std::vector<Spectrum> batch(rays.size());
-    RayCounters counters;
-    path->li_batch(*scene, rays.data(), batch_samplers.data(), batch.data(), rays.size(), counters);
-    size_t nonzero = 0;
-    for (size_t i = 0; i < rays.size(); ++i) {
-        Spectrum ref = path->li(*scene, rays[i], samplers[i], counters);
-        nonzero += !ref.is_black();
-        ASSERT_EQ(std::memcmp(&batch[i], &ref, sizeof(Spectrum)), 0)
-            << "path " << i << ": batch " << batch[i].r << " " << batch[i].g << " " << batch[i].b << ", li " << ref.r
-            << " " << ref.g << " " << ref.b;
-    }
+    test::camera_rays(*scene, 24, 4, rays, samplers, false, 3); // the scenes' films are 24 px
+    const size_t nonzero = test::expect_li_batch_equals_li(*scene, *path, rays, samplers);
     EXPECT_GT(nonzero, rays.size() / 2);
 }
 

@@ -300,7 +300,7 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
         for (auto &d : prim.draws) d.resize(n);
         float *const out[5] = {prim.draws[0].data(), prim.draws[1].data(), prim.draws[2].data(), prim.draws[3].data(),
                                prim.draws[4].data()};
-        independent_start_draws(Sampler(cam.sampler_kind, ctx.seeds[slot]).seed(), l.scene_index, prim.px.data(),
+        independent_start_draws(ctx.seeds[slot], l.scene_index, prim.px.data(),
                                 prim.py.data(), prim.sample_index.data(), n, prim.pixel_hash.data(),
                                 prim.sample_hash.data(), out);
         for (size_t i = 0; i < n; ++i) {

@@ -28,7 +28,6 @@ MVPT_MULTI_ISA void contribution_kernel(const Spectrum *__restrict f_nee, const 
     const bool nee = t.nee, bounce = t.bounce, valid = t.valid;
     const float nw0 = t.nee_weight[0], nw1 = t.nee_weight[1], nw2 = t.nee_weight[2], bs = t.b_scale;
     const float s0 = t.suffix[0], s1 = t.suffix[1], s2 = t.suffix[2];
-    const float top = float(SplatMax);
     for (size_t i = 0; i < n; ++i) {
         const Spectrum fn = f_nee[i], fb = f_bounce[i];
         const float l0 = select(nee, fn.r * nw0, 0.f) + select(bounce, fb.r * bs * s0, 0.f);
@@ -36,8 +35,8 @@ MVPT_MULTI_ISA void contribution_kernel(const Spectrum *__restrict f_nee, const 
         const float l2 = select(nee, fn.b * nw2, 0.f) + select(bounce, fb.b * bs * s2, 0.f);
         const float v0 = select(valid, l0 * w[i], 0.f), v1 = select(valid, l1 * w[i], 0.f), v2 = select(valid, l2 * w[i], 0.f);
         o0[i] = v0, o1[i] = v1, o2[i] = v2;
-        ok[i] = uint32_t(std::abs(v0) < top) & uint32_t(std::abs(v1) < top) & uint32_t(std::abs(v2) < top) &
-                uint32_t(std::abs(w[i]) < top);
+        ok[i] = uint32_t(SplatBuffer::fits(v0)) & uint32_t(SplatBuffer::fits(v1)) & uint32_t(SplatBuffer::fits(v2)) &
+                uint32_t(SplatBuffer::fits(w[i]));
     }
 }
 
