@@ -301,6 +301,53 @@ void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
     }
 }
 
+void Scene::occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const {
+    constexpr size_t Width = 16;
+    constexpr float large = 1.844e18f; // embree_can_trace's bound
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    const float *const cols[8] = {rays.ox, rays.oy, rays.oz, rays.dx, rays.dy, rays.dz, rays.t_max, rays.time};
+    alignas(64) RTCRay16 p;
+    for (size_t i = 0; i < Width; ++i) {
+        p.tnear[i] = 0.f;
+        p.mask[i] = 0xffffffffu;
+        p.flags[i] = 0;
+        p.time[i] = 0.f;
+    }
+    for (size_t b = 0; b < n; b += Width) {
+        const size_t m = std::min(Width, n - b);
+        // Whole packets are copied column by column; a last partial one repeats its last ray (inactive).
+        alignas(64) float tail[8][Width];
+        const float *src[8];
+        for (size_t q = 0; q < 8; ++q) {
+            src[q] = cols[q] + b;
+            if (m < Width) {
+                for (size_t i = 0; i < Width; ++i) tail[q][i] = src[q][std::min(i, m - 1)];
+                src[q] = tail[q];
+            }
+        }
+        std::memcpy(p.org_x, src[0], sizeof(p.org_x));
+        std::memcpy(p.org_y, src[1], sizeof(p.org_y));
+        std::memcpy(p.org_z, src[2], sizeof(p.org_z));
+        std::memcpy(p.dir_x, src[3], sizeof(p.dir_x));
+        std::memcpy(p.dir_y, src[4], sizeof(p.dir_y));
+        std::memcpy(p.dir_z, src[5], sizeof(p.dir_z));
+        std::memcpy(p.tfar, src[6], sizeof(p.tfar));
+        if (m_animated)
+            for (size_t i = 0; i < Width; ++i) p.time[i] = m_motion.to_embree(src[7][i]);
+        alignas(64) int valid[Width];
+        for (size_t i = 0; i < Width; ++i) {
+            bool finite = (std::abs(p.org_x[i]) <= large) & (std::abs(p.org_y[i]) <= large) &
+                          (std::abs(p.org_z[i]) <= large) & (std::abs(p.dir_x[i]) <= large) &
+                          (std::abs(p.dir_y[i]) <= large) & (std::abs(p.dir_z[i]) <= large);
+            valid[i] = -int((i < m) & finite & (p.tfar[i] == p.tfar[i]));
+        }
+        rtcOccluded16(valid, m_scene, &ctx, &p);
+        for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
+    }
+}
+
 std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const std::map<std::string, std::string> &defines,
                                        const std::string &rig) {
     XmlNode root = parse_scene_file(path, defines);
