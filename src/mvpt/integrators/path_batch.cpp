@@ -74,13 +74,15 @@ inline Color3f lambert_reflectance(const LambertInfo &lam, const SurfaceInteract
 
 /// Lanes per call of a Lambertian vector kernel: its columns (about 40 × 64 floats) stay in L1.
 constexpr size_t LambertChunk = 64;
+static_assert(LambertChunk % 16 == 0, "SoaColumns::resize(cols, LambertChunk) gives stride LambertChunk");
 
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
     std::vector<WavePath> paths;
     /// The active paths' rays, in the order of `paths`.
     std::vector<Ray> rays;
-    std::vector<Ray> shadow_rays;
+    /// The vertex's shadow rays as columns (origin, direction, t_max, time), handed to Embree as they are.
+    std::vector<float> shadow[8];
     std::vector<SurfaceInteraction> si;
     std::vector<uint8_t> hit, blocked, alive;
     std::vector<ScatterVertex> scatter;
@@ -130,8 +132,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     WaveBuffers *buf_ptr = &tls_buffers;
     asm("" : "+r"(buf_ptr));
     WaveBuffers &buf = *buf_ptr;
-    auto &paths = buf.paths;
-    paths.resize(n);
+    // Raw pointers into the buffers (sized first): through a vector, GCC reloads the data
+    // pointer after every byte store (a char may alias it).
+    buf.paths.resize(n);
+    WavePath *const paths = buf.paths.data();
     buf.rays.assign(start_rays, start_rays + n);
     bool independent = true; // then the vertices' numbers are drawn in one batched loop
     for (size_t i = 0; i < n; ++i) {
@@ -153,10 +157,17 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     buf.si.resize(n);
     buf.hit.resize(n);
     buf.alive.resize(n);
-    buf.shadow_rays.resize(n);
+    for (auto &c : buf.shadow) c.resize(n);
+    float *const shadow[8] = {buf.shadow[0].data(), buf.shadow[1].data(), buf.shadow[2].data(), buf.shadow[3].data(),
+                              buf.shadow[4].data(), buf.shadow[5].data(), buf.shadow[6].data(), buf.shadow[7].data()};
     buf.blocked.resize(n);
     buf.scatter.resize(n);
     buf.shadows.resize(n);
+    SurfaceInteraction *const sis = buf.si.data();
+    Ray *const rays = buf.rays.data();
+    uint8_t *const hits = buf.hit.data(), *const alive = buf.alive.data(), *const blocked = buf.blocked.data();
+    ScatterVertex *const scatter = buf.scatter.data();
+    PendingShadow *const shadows = buf.shadows.data();
     for (auto &u : buf.u) u.resize(n);
     buf.u_hash.resize(n);
     buf.u_dim.resize(n);
@@ -241,7 +252,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // li reads (Shape::fill_interaction's contract; wi is set below), and misses are reset
         // in the emission loop.
         counters.rays += active;
-        scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), first && !states); // camera rays: coherent
+        scene.intersect(rays, active, sis, hits, first && !states); // camera rays: coherent
 
         // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
         // Escaped rays are evaluated after this loop, all at once (their densities wanted:
@@ -250,12 +261,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         for (size_t k = 0; k < active; ++k) {
             WavePath &p = paths[k];
             Sampler &sampler = samplers[p.slot];
-            const SurfaceInteraction &si_hit = buf.si[k];
-            const bool hit = buf.hit[k] != 0;
-            const Ray &ray = buf.rays[k];
-            buf.alive[k] = 0;
+            const SurfaceInteraction &si_hit = sis[k];
+            const bool hit = hits[k] != 0;
+            const Ray &ray = rays[k];
+            alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
-            if (!hit) buf.si[k] = SurfaceInteraction();
+            if (!hit) sis[k] = SurfaceInteraction();
 
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
@@ -277,12 +288,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             }
             if (!hit || p.depth + 1 >= max_depth) continue;
 
-            SurfaceInteraction &si = buf.si[k];
+            SurfaceInteraction &si = sis[k];
             si.wi = si.to_local(-ray.d);
             // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
             const size_t j = n_scatter++;
-            buf.scatter[j].path = uint32_t(k);
-            buf.scatter[j].bsdf = si.shape->bsdf.get();
+            scatter[j].path = uint32_t(k);
+            scatter[j].bsdf = si.shape->bsdf.get();
             if (independent) {
                 buf.u_hash[j] = sampler.sample_hash();
                 buf.u_dim[j] = sampler.dimension();
@@ -327,25 +338,29 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // O0: origin, direction, t_max, contribution, whether it counts).
         auto take_shadow_rays = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0) {
             constexpr size_t O0 = decltype(o0)::value;
+            const float *const cd = cols.data.data(); // LambertChunk lanes per column
             for (size_t m = 0; m < count; ++m) {
-                if (!(cols[O0 + 10][m] > 0.f)) continue;
-                const uint32_t k = buf.scatter[index[m]].path;
-                buf.shadow_rays[n_shadow] = Ray{{cols[O0][m], cols[O0 + 1][m], cols[O0 + 2][m]},
-                                                {cols[O0 + 3][m], cols[O0 + 4][m], cols[O0 + 5][m]}, 0.f,
-                                                cols[O0 + 6][m], buf.si[k].time};
-                buf.shadows[n_shadow++] = {k, Spectrum(cols[O0 + 7][m], cols[O0 + 8][m], cols[O0 + 9][m])};
+                auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
+                if (!(at(O0 + 10) > 0.f)) continue;
+                const uint32_t k = scatter[index[m]].path;
+                for (size_t q = 0; q < 7; ++q) shadow[q][n_shadow] = at(O0 + q);
+                shadow[7][n_shadow] = sis[k].time;
+                shadows[n_shadow++] = {k, Spectrum(at(O0 + 7), at(O0 + 8), at(O0 + 9))};
             }
             count = 0;
         };
         // Shadow rays and contributions of a kernel's lanes whose estimate counts.
         auto collect = [&](SoaColumns &c, const uint32_t *index, size_t count) {
             using namespace lq_col;
+            const float *const cd = c.data.data(); // LambertChunk lanes per column
             for (size_t m = 0; m < count; ++m) {
-                if (!(c[Ok][m] > 0.f)) continue;
+                auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
+                if (!(at(Ok) > 0.f)) continue;
                 const uint32_t k = index[m];
-                buf.shadow_rays[n_shadow] = Ray{{c[Ox][m], c[Oy][m], c[Oz][m]}, {c[Dx][m], c[Dy][m], c[Dz][m]}, 0.f,
-                                                c[TMax][m], buf.si[k].time};
-                buf.shadows[n_shadow++] = {k, Spectrum(c[Cr][m], c[Cg][m], c[Cb][m])};
+                static_assert(TMax == Ox + 6);
+                for (size_t q = 0; q < 7; ++q) shadow[q][n_shadow] = at(Ox + q);
+                shadow[7][n_shadow] = sis[k].time;
+                shadows[n_shadow++] = {k, Spectrum(at(Cr), at(Cg), at(Cb))};
             }
         };
         auto flush_quad = [&] {
@@ -365,7 +380,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                           const Spectrum &beta, size_t j, int row) {
             using namespace lq_col;
             float *col = c.data.data() + m;
-            const size_t st = c.stride;
+            constexpr size_t st = LambertChunk; // == c.stride (resize to LambertChunk lanes): columns at fixed offsets
             col[WiZ * st] = si.wi.z;
             col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
             col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
@@ -395,8 +410,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // Vertices that chose the environment sample it after this loop, all at once.
         size_t n_env = 0;
         for (size_t j = 0; j < n_scatter; ++j) {
-            ScatterVertex &v = buf.scatter[j];
-            const SurfaceInteraction &si = buf.si[v.path];
+            ScatterVertex &v = scatter[j];
+            const SurfaceInteraction &si = sis[v.path];
             const Bsdf &bsdf = *v.bsdf;
             v.nee = bsdf.has_smooth() && !lights.empty();
             if (!v.nee) continue;
@@ -422,7 +437,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                     const size_t m = n_csph++;
                     buf.conductor_sphere_index[m] = uint32_t(j);
                     float *col = csc.data.data() + m;
-                    const size_t st = csc.stride;
+                    constexpr size_t st = LambertChunk;
                     gather_conductor_nee(col, st, si, *cond, paths[v.path].throughput);
                     col[rsn_col::Ux * st] = u[1][j], col[rsn_col::Uy * st] = u[2][j];
                     col[rsn_col::Sphere * st] = float(row);
@@ -449,7 +464,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             // Member by member: a pair temporary would be built on the stack with narrow stores
             // and copied out with wide loads across them (failed store-to-load forwards).
             for (size_t m = 0; m < n_env; ++m) {
-                auto &[ls, weight] = buf.scatter[buf.env_lane[m]].emitter_sample;
+                auto &[ls, weight] = scatter[buf.env_lane[m]].emitter_sample;
                 ls = buf.env_ls[m];
                 weight = buf.env_weight[m];
             }
@@ -477,9 +492,9 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             take_shadow_rays(rc, buf.conductor_index, n_rc, std::integral_constant<size_t, rn_col::Ox>{});
         };
         for (size_t j = 0; j < n_scatter; ++j) {
-            ScatterVertex &v = buf.scatter[j];
+            ScatterVertex &v = scatter[j];
             if (!v.nee || v.emitter_sample.second.is_black()) continue;
-            const SurfaceInteraction &si = buf.si[v.path];
+            const SurfaceInteraction &si = sis[v.path];
             const Bsdf &bsdf = *v.bsdf;
             const LightSample &ls = v.emitter_sample.first;
             if (const LambertInfo *lam = bsdf.lambert()) {
@@ -488,7 +503,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 buf.lambert_index[m] = uint32_t(j);
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = lc.data.data() + m;
-                const size_t st = lc.stride;
+                constexpr size_t st = LambertChunk;
                 col[WiZ * st] = si.wi.z;
                 col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
                 col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
@@ -507,7 +522,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 buf.conductor_index[m] = uint32_t(j);
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = rc.data.data() + m;
-                const size_t st = rc.stride;
+                constexpr size_t st = LambertChunk;
                 gather_conductor_nee(col, st, si, *cond, beta);
                 put_emitter_sample<Ldx>(col, st, ls, weight);
                 if (n_rc == LambertChunk) flush_rc_nee();
@@ -518,9 +533,11 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             Vec3f wo = si.to_local(ls.d);
             Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
             if (!f.is_black()) {
-                buf.shadow_rays[n_shadow] = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                const Ray r = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                const float ray_cols[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmax, r.time};
+                for (size_t q = 0; q < 8; ++q) shadow[q][n_shadow] = ray_cols[q];
                 float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
-                buf.shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
+                shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
             }
         }
         flush_nee();
@@ -533,20 +550,22 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
         auto take_samples = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0, auto b0) {
             constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
+            const float *const cd = cols.data.data(); // LambertChunk lanes per column
             for (size_t m = 0; m < count; ++m) {
+                auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
                 const uint32_t k = index[m];
                 WavePath &p = paths[k];
                 p.valid = true;
-                if (!(cols[O0 + 7][m] > 0.f)) continue;
-                const SurfaceInteraction &si = buf.si[k];
-                buf.rays[k] = Ray{{cols[O0][m], cols[O0 + 1][m], cols[O0 + 2][m]},
-                                  {cols[O0 + 3][m], cols[O0 + 4][m], cols[O0 + 5][m]}, 0.f, Infinity, si.time};
-                p.throughput = Spectrum(cols[B0][m], cols[B0 + 1][m], cols[B0 + 2][m]);
+                if (!(at(O0 + 7) > 0.f)) continue;
+                const SurfaceInteraction &si = sis[k];
+                rays[k] = Ray{{at(O0), at(O0 + 1), at(O0 + 2)},
+                                  {at(O0 + 3), at(O0 + 4), at(O0 + 5)}, 0.f, Infinity, si.time};
+                p.throughput = Spectrum(at(B0), at(B0 + 1), at(B0 + 2));
                 p.prev_p = si.p;
-                p.prev_bsdf_pdf = cols[O0 + 6][m];
+                p.prev_bsdf_pdf = at(O0 + 6);
                 p.prev_bsdf_delta = false;
                 ++p.depth;
-                buf.alive[k] = 1;
+                alive[k] = 1;
             }
             count = 0;
         };
@@ -563,10 +582,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                          std::integral_constant<size_t, rs_col::Br>{});
         };
         for (size_t j = 0; j < n_scatter; ++j) {
-            const ScatterVertex &v = buf.scatter[j];
+            const ScatterVertex &v = scatter[j];
             const size_t k = v.path;
             WavePath &p = paths[k];
-            const SurfaceInteraction &si = buf.si[k];
+            const SurfaceInteraction &si = sis[k];
             const Bsdf &bsdf = *v.bsdf;
             if (const LambertInfo *lam = bsdf.lambert()) {
                 using namespace ls_col;
@@ -574,7 +593,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 buf.lambert_index[m] = uint32_t(k);
                 const Frame &f = si.sh_frame;
                 float *col = lc.data.data() + m;
-                const size_t st = lc.stride;
+                constexpr size_t st = LambertChunk;
                 col[WiZ * st] = si.wi.z;
                 col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
                 col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
@@ -596,7 +615,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 const size_t m = n_rc++;
                 buf.conductor_index[m] = uint32_t(k);
                 float *col = rc.data.data() + m;
-                const size_t st = rc.stride;
+                constexpr size_t st = LambertChunk;
                 gather_conductor(col, st, si, *cond);
                 const Frame &f = si.sh_frame;
                 col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
@@ -615,7 +634,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (!(bs.sampled_type & BsdfNull)) p.valid = true;
             if (bsdf_weight.is_black()) continue;
             Vec3f wo_world = si.to_world(bs.wo);
-            buf.rays[k] = si.spawn_ray(wo_world);
+            rays[k] = si.spawn_ray(wo_world);
             p.throughput *= bsdf_weight;
             p.eta *= bs.eta;
             p.prev_p = si.p;
@@ -630,24 +649,25 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 p.throughput *= 1.f / q;
             }
             ++p.depth;
-            buf.alive[k] = 1;
+            alive[k] = 1;
         }
         flush_sample();
         flush_rc_sample();
 
         // ---------------- Shadow rays of this vertex ----------------
         counters.shadow_rays += n_shadow;
-        scene.occluded(buf.shadow_rays.data(), n_shadow, buf.blocked.data());
+        scene.occluded(RayColumns{shadow[0], shadow[1], shadow[2], shadow[3], shadow[4], shadow[5], shadow[6], shadow[7]},
+                       n_shadow, blocked);
         for (size_t j = 0; j < n_shadow; ++j)
-            if (!buf.blocked[j]) paths[buf.shadows[j].path].result += buf.shadows[j].contribution;
+            if (!blocked[j]) paths[shadows[j].path].result += shadows[j].contribution;
 
         // Finished paths leave; the others move to the front (their order is kept).
         size_t next = 0;
         for (size_t k = 0; k < active; ++k) {
-            if (buf.alive[k]) {
+            if (alive[k]) {
                 if (next != k) {
                     paths[next] = paths[k];
-                    buf.rays[next] = buf.rays[k];
+                    rays[next] = rays[k];
                 }
                 ++next;
             } else {

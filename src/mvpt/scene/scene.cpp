@@ -25,6 +25,20 @@ bool embree_can_trace(const Ray &ray) {
                   (std::abs(ray.d.x) <= large) & (std::abs(ray.d.y) <= large) & (std::abs(ray.d.z) <= large);
     return finite & (ray.tmin == ray.tmin) & (ray.tmax == ray.tmax);
 }
+
+/// `embree_can_trace` of a 16-wide packet's lanes (SoA, after packing) as Embree's valid
+/// mask, lanes from `m` on inactive: one vector loop instead of a test per Ray.
+template <class RayK>
+void packet_valid(const RayK &r, uint32_t m, int *valid) {
+    constexpr float large = 1.844e18f;
+    for (uint32_t i = 0; i < 16; ++i) {
+        bool finite = (std::abs(r.org_x[i]) <= large) & (std::abs(r.org_y[i]) <= large) &
+                      (std::abs(r.org_z[i]) <= large) & (std::abs(r.dir_x[i]) <= large) &
+                      (std::abs(r.dir_y[i]) <= large) & (std::abs(r.dir_z[i]) <= large);
+        bool ok = (i < m) & finite & (r.tnear[i] == r.tnear[i]) & (r.tfar[i] == r.tfar[i]);
+        valid[i] = ok ? -1 : 0;
+    }
+}
 } // namespace
 
 Scene::Scene() {
@@ -208,7 +222,6 @@ void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t
         alignas(64) int valid[16];
         for (size_t i = 0; i < 16; ++i) {
             const Ray &ray = rays[b + std::min(i, m - 1)];
-            valid[i] = i < m && embree_can_trace(ray) ? -1 : 0;
             p.ray.org_x[i] = ray.o.x; p.ray.org_y[i] = ray.o.y; p.ray.org_z[i] = ray.o.z;
             p.ray.dir_x[i] = ray.d.x; p.ray.dir_y[i] = ray.d.y; p.ray.dir_z[i] = ray.d.z;
             p.ray.tnear[i] = ray.tmin;
@@ -219,6 +232,7 @@ void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t
             p.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
             p.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
         }
+        packet_valid(p.ray, uint32_t(m), valid);
         rtcIntersect16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) {
             hit[b + i] = valid[i] && p.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
@@ -287,7 +301,6 @@ void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
         alignas(64) int valid[Width];
         for (size_t i = 0; i < Width; ++i) {
             const Ray &ray = rays[b + std::min(i, m - 1)];
-            valid[i] = i < m && embree_can_trace(ray) ? -1 : 0;
             p.org_x[i] = ray.o.x; p.org_y[i] = ray.o.y; p.org_z[i] = ray.o.z;
             p.dir_x[i] = ray.d.x; p.dir_y[i] = ray.d.y; p.dir_z[i] = ray.d.z;
             p.tnear[i] = ray.tmin;
@@ -296,8 +309,50 @@ void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
             p.mask[i] = 0xffffffffu;
             p.flags[i] = 0;
         }
+        packet_valid(p, uint32_t(m), valid);
         rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
+    }
+}
+
+void Scene::occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const {
+    constexpr size_t Width = 16;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    const float *const cols[8] = {rays.ox, rays.oy, rays.oz, rays.dx, rays.dy, rays.dz, rays.t_max, rays.time};
+    alignas(64) RTCRay16 p;
+    for (size_t i = 0; i < Width; ++i) {
+        p.tnear[i] = 0.f;
+        p.mask[i] = 0xffffffffu;
+        p.flags[i] = 0;
+        p.time[i] = 0.f;
+    }
+    for (size_t b = 0; b < n; b += Width) {
+        const size_t m = std::min(Width, n - b);
+        // Whole packets are copied column by column; a last partial one repeats its last ray (inactive).
+        alignas(64) float tail[8][Width];
+        const float *src[8];
+        for (size_t q = 0; q < 8; ++q) {
+            src[q] = cols[q] + b;
+            if (m < Width) {
+                for (size_t i = 0; i < Width; ++i) tail[q][i] = src[q][std::min(i, m - 1)];
+                src[q] = tail[q];
+            }
+        }
+        std::memcpy(p.org_x, src[0], sizeof(p.org_x));
+        std::memcpy(p.org_y, src[1], sizeof(p.org_y));
+        std::memcpy(p.org_z, src[2], sizeof(p.org_z));
+        std::memcpy(p.dir_x, src[3], sizeof(p.dir_x));
+        std::memcpy(p.dir_y, src[4], sizeof(p.dir_y));
+        std::memcpy(p.dir_z, src[5], sizeof(p.dir_z));
+        std::memcpy(p.tfar, src[6], sizeof(p.tfar));
+        if (m_animated)
+            for (size_t i = 0; i < Width; ++i) p.time[i] = m_motion.to_embree(src[7][i]);
+        alignas(64) int valid[Width];
+        packet_valid(p, uint32_t(m), valid);
+        rtcOccluded16(valid, m_scene, &ctx, &p);
+        for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
     }
 }
 

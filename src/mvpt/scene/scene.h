@@ -19,6 +19,11 @@
 
 namespace mvpt {
 
+/// Rays as columns (structure of arrays), all with tmin 0: origins, directions, t_max, times.
+struct RayColumns {
+    const float *ox, *oy, *oz, *dx, *dy, *dz, *t_max, *time;
+};
+
 class Scene {
 public:
     Scene();
@@ -39,6 +44,8 @@ public:
     void intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent = false) const;
     /// `occluded` for `n` unrelated rays at once, into `blocked` (16-wide packets).
     void occluded(const Ray *rays, size_t n, uint8_t *blocked) const;
+    /// The same for rays given as columns (a wavefront's shadow rays): no repacking of Ray structs.
+    void occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const;
     /// Visibility of `n` segments from one origin `o` at scene time `time`: unit directions
     /// (dx, dy, dz) and finite lengths `t_max` as arrays, traced as 8-wide packets; a
     /// segment with t_max <= 0 (or NaN) is not traced (not blocked). The arrays hold n rounded
