@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <stdexcept>
 #include <tuple>
 
@@ -76,6 +77,18 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     for (MvFilm &f : m_mv_films) m_mv.native_map.push_back(f.map.data());
     m_mv.prepare();
     m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
+    m_mv.rig.reset();
+    if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2) {
+        // Lens points of every view: the corners of the square around each lens disk.
+        std::vector<Point3f> lens;
+        for (const MvView &v : m_mv.views)
+            for (Vec2f xi : {Vec2f(-1.f, -1.f), Vec2f(1.f, -1.f), Vec2f(-1.f, 1.f), Vec2f(1.f, 1.f)})
+                lens.push_back(v.camera->lens_point(v.t0, xi));
+        const char *cells = std::getenv("MVPT_RIG_CELLS");
+        const int n_cells = cells ? std::atoi(cells) : cfg.rig_cells;
+        if (n_cells > 0)
+            m_mv.rig = std::make_shared<RigVisibility>(*m_scene.occluder_bvh(), lens, m_mv.across, n_cells);
+    }
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one

@@ -173,7 +173,10 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
             }
     auto &blocked = sc.blocked;
     grow(blocked, m);
-    ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data(), ctx.across);
+    if (ctx.rig && ctx.rig->unblocked(o, si.shape, si.prim)) // y's cell sees the whole rig
+        std::fill(blocked.begin(), blocked.begin() + long(m - 1), uint8_t(0));
+    else
+        ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data(), ctx.across);
     for (size_t i = 1; i < m; ++i) {
         if (selected_only && !sc.selected[i]) continue;
         counters.shadow_rays += t_max[i - 1] > 0.f;

@@ -11,8 +11,10 @@
 
 #include "../mv_film.h"
 #include "../render/camera_projection.h"
+#include "../scene/rig_visibility.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace mvpt {
@@ -57,6 +59,8 @@ struct MvContext {
     /// The direction from the first view's lens centre to the second's (a camera row or a
     /// grid's row): it orients the bounding pyramid of a sample's visibility segments.
     Vec3f across{1.f, 0.f, 0.f};
+    /// Cells of the scene proven to see the whole rig unblocked (static scenes and cameras).
+    std::shared_ptr<const RigVisibility> rig;
 
     /// Sets the derived members above from `views` and `scene_moves`.
     void prepare();

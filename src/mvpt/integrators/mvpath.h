@@ -50,6 +50,9 @@ struct MvConfig {
     /// by default the eps of the relMSE that `mvpt compare` and the benchmarks report, so
     /// that pixels darker than ~0.1 count by absolute error there as well.
     float adaptive_eps = 0.01f;
+    /// Visibility cells (scene/rig_visibility.h) along the scene's longest side; 0 turns them
+    /// off. Static scenes and cameras only.
+    int rig_cells = 64;
 };
 
 /// The `mvpath` integrator: path tracing whose first vertex is shared between views.

@@ -59,6 +59,8 @@ public:
     /// unblocked without tracing them (static scenes; multi-view rendering calls it once
     /// before its passes). `enable = false` drops it (for tests).
     void prepare_segment_culling(bool enable = true) const;
+    /// The occluder tree of prepare_segment_culling, or null.
+    const OccluderBvh *occluder_bvh() const { return m_occluders.get(); }
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return m_shapes; }
     const std::vector<std::shared_ptr<Light>> &lights() const { return m_lights; }
     /// The environment light (constant or envmap), if any.

@@ -217,10 +217,19 @@ void *create_leaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive *prims,
 
 OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Shape>> &shapes) {
     OccluderList list;
-    for (const auto &s : shapes) s->occluders(list);
+    struct Range {
+        const Shape *shape;
+        size_t tri0, tri1, sph0, sph1;
+    };
+    std::vector<Range> ranges;
+    for (const auto &s : shapes) {
+        const size_t tri0 = list.triangles.size(), sph0 = list.spheres.size();
+        s->occluders(list);
+        ranges.push_back({s.get(), tri0, list.triangles.size(), sph0, list.spheres.size()});
+    }
     std::vector<RTCBuildPrimitive> build;
-    auto add = [&](Prim p, BoundingBox b) {
-        if (!(b.min.x <= b.max.x)) return; // empty or NaN
+    auto add = [&](Prim p, BoundingBox b) -> int64_t {
+        if (!(b.min.x <= b.max.x)) return -1; // empty or NaN
         RTCBuildPrimitive r;
         r.lower_x = b.min.x, r.lower_y = b.min.y, r.lower_z = b.min.z;
         r.upper_x = b.max.x, r.upper_y = b.max.y, r.upper_z = b.max.z;
@@ -232,7 +241,14 @@ OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Sha
         m_prims.push_back(p);
         m_extent = std::max({m_extent, std::abs(b.min.x), std::abs(b.min.y), std::abs(b.min.z), std::abs(b.max.x),
                              std::abs(b.max.y), std::abs(b.max.z)});
+        for (int c = 0; c < 3; ++c) {
+            const double l = (&b.min.x)[c], h = (&b.max.x)[c];
+            m_lo[c] = m_prims.size() == 1 ? l : std::min(m_lo[c], l);
+            m_hi[c] = m_prims.size() == 1 ? h : std::max(m_hi[c], h);
+        }
+        return int64_t(m_prims.size()) - 1;
     };
+    std::vector<int64_t> tri_prim, sph_prim; // occluder index by list index
     // Boxes in float, rounded outwards: each holds its primitive exactly. Coordinates are kept
     // out of [-1e-10, 1e-10] (a box side at 0 would round out to a denormal, and products with
     // denormals take the slow microcode path in the node tests).
@@ -256,13 +272,25 @@ OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Sha
         const double e2[3] = {p.p[2][0] - p.p[0][0], p.p[2][1] - p.p[0][1], p.p[2][2] - p.p[0][2]};
         p.n[0] = e1[1] * e2[2] - e1[2] * e2[1], p.n[1] = e1[2] * e2[0] - e1[0] * e2[2], p.n[2] = e1[0] * e2[1] - e1[1] * e2[0];
         p.n_len = std::sqrt(dot3(p.n, p.n));
-        add(p, outward(b, 0.0));
+        tri_prim.push_back(add(p, outward(b, 0.0)));
     }
     for (const auto &[c, r] : list.spheres) {
         Prim p{Kind::Sphere, {{c.x, c.y, c.z}, {r, 0, 0}, {}}, {}, 0, {}, {}};
         BoundingBox b;
         b.min = b.max = c;
-        add(p, outward(b, r));
+        sph_prim.push_back(add(p, outward(b, r)));
+    }
+    // A shape's triangles (in primitive order) or its sphere, when they are all occluders.
+    auto contiguous = [](const std::vector<int64_t> &index, size_t i0, size_t i1) {
+        for (size_t i = i0; i < i1; ++i)
+            if (index[i] < 0 || index[i] != index[i0] + int64_t(i - i0)) return false;
+        return i1 > i0;
+    };
+    for (const Range &r : ranges) {
+        if (r.sph1 == r.sph0 && contiguous(tri_prim, r.tri0, r.tri1))
+            m_shape_occluders[r.shape] = {tri_prim[r.tri0], uint32_t(r.tri1 - r.tri0)};
+        else if (r.tri1 == r.tri0 && r.sph1 == r.sph0 + 1 && sph_prim[r.sph0] >= 0)
+            m_shape_occluders[r.shape] = {sph_prim[r.sph0], 1};
     }
     for (const BoundingBox &box : list.boxes) {
         // Bounds of analytic shapes and instances are computed in float: pad them relatively.
@@ -346,27 +374,8 @@ bool OccluderBvh::prim_may_block(const Prim &prim, const SegmentBundle &b) const
     return true;
 }
 
-bool OccluderBvh::may_block(const SegmentBundle &b) const {
+template <class Keep, class LeafTest> bool OccluderBvh::walk(Keep keep, LeafTest leaf) const {
     if (!m_root) return false;
-    // The inner nodes' tests run in float: a box is cut off by a plane only when it lies beyond
-    // it by more than their rounding (below 1e-6 |n|_1 (|p| + |o| + |d|) inside the scene).
-    // The box corner nearest to the inside is min or max per axis by the sign of n's
-    // component: n.corner = n+ . lo + n- . hi with n+ = max(n, 0), n- = min(n, 0).
-    typedef float F4 __attribute__((vector_size(16)));
-    typedef int32_t I4 __attribute__((vector_size(16)));
-    const float extent = std::max({m_extent, std::abs(b.origin_f[0]), std::abs(b.origin_f[1]), std::abs(b.origin_f[2])});
-    // Only the four side planes: the box of the end points already bounds the height.
-    float limit[4], pos[4][3], neg[4][3];
-    for (int k = 0; k < 4; ++k) {
-        const float *n = b.normal_f[k];
-        limit[k] = b.limit_f[k] + 4e-6f * b.norm1_f[k] * (2.f * extent + std::abs(b.offset_f[k]));
-        // Components below 1e-10 are dropped (no denormal products; the change of n.p is far
-        // below the margin).
-        for (int c = 0; c < 3; ++c) {
-            const float nc = std::abs(n[c]) < 1e-10f ? 0.f : n[c];
-            pos[k][c] = std::max(nc, 0.f), neg[k][c] = std::min(nc, 0.f);
-        }
-    }
     const Header *stack[128];
     int sp = 0;
     stack[sp++] = static_cast<const Header *>(m_root);
@@ -375,23 +384,158 @@ bool OccluderBvh::may_block(const SegmentBundle &b) const {
         if (h->leaf) {
             const Leaf *l = static_cast<const Leaf *>(h);
             for (uint32_t i = 0; i < l->count; ++i)
-                if (prim_may_block(m_prims[l->prim[i]], b)) return true;
+                if (leaf(l->prim[i])) return true;
             continue;
         }
         const Inner *n = static_cast<const Inner *>(h);
+        const auto mask = keep(n->lo);
+        for (uint32_t c = 0; c < n->count; ++c)
+            if (mask[c]) stack[sp++] = n->child[c];
+    }
+    return false;
+}
+
+namespace {
+typedef float F4 __attribute__((vector_size(16)));
+typedef int32_t I4 __attribute__((vector_size(16)));
+
+/// A node's four child boxes (lo[3][4] then hi[3][4]) against a region's float box and
+/// half-spaces n.p <= limit (n split into its positive and negative parts): a box is cut off
+/// by a plane when its corner nearest to the inside, n+ . lo + n- . hi, lies beyond it.
+struct NodeTest {
+    float lo[3], hi[3];
+    int planes = 0;
+    float pos[ConvexRegion::MaxPlanes][3], neg[ConvexRegion::MaxPlanes][3], limit[ConvexRegion::MaxPlanes];
+
+    /// Plane n.p <= limit, where `limit` already holds the margin for the float rounding.
+    void add(const float n[3], float lim) {
+        // Components below 1e-10 are dropped (no denormal products; the change of n.p is far
+        // below the margin).
+        for (int c = 0; c < 3; ++c) {
+            const float nc = std::abs(n[c]) < 1e-10f ? 0.f : n[c];
+            pos[planes][c] = std::max(nc, 0.f), neg[planes][c] = std::min(nc, 0.f);
+        }
+        limit[planes++] = lim;
+    }
+    I4 operator()(const float (&node)[3][4]) const {
         F4 box[6];
-        std::memcpy(box, n->lo, sizeof(box)); // lo[3][4] then hi[3][4]
-        I4 keep = (box[0] <= b.hi_f[0]) & (box[3] >= b.lo_f[0]) & (box[1] <= b.hi_f[1]) & (box[4] >= b.lo_f[1]) &
-                  (box[2] <= b.hi_f[2]) & (box[5] >= b.lo_f[2]);
-        for (int k = 0; k < 4; ++k) {
+        std::memcpy(box, node, sizeof(box)); // lo[3][4] then hi[3][4] (Inner's layout)
+        I4 keep = (box[0] <= hi[0]) & (box[3] >= lo[0]) & (box[1] <= hi[1]) & (box[4] >= lo[1]) & (box[2] <= hi[2]) &
+                  (box[5] >= lo[2]);
+        for (int k = 0; k < planes; ++k) {
             const F4 low = (pos[k][0] * box[0] + neg[k][0] * box[3]) + (pos[k][1] * box[1] + neg[k][1] * box[4]) +
                            (pos[k][2] * box[2] + neg[k][2] * box[5]);
             keep &= low <= limit[k];
         }
-        for (uint32_t c = 0; c < n->count; ++c)
-            if (keep[c]) stack[sp++] = n->child[c];
+        return keep;
     }
-    return false;
+};
+} // namespace
+
+bool OccluderBvh::may_block(const SegmentBundle &b) const {
+    // The inner nodes' tests run in float: a box is cut off by a plane only when it lies beyond
+    // it by more than their rounding (below 1e-6 |n|_1 (|p| + |o| + |d|) inside the scene).
+    const float extent = std::max({m_extent, std::abs(b.origin_f[0]), std::abs(b.origin_f[1]), std::abs(b.origin_f[2])});
+    NodeTest test;
+    for (int c = 0; c < 3; ++c) test.lo[c] = b.lo_f[c], test.hi[c] = b.hi_f[c];
+    // Only the four side planes: the box of the end points already bounds the height.
+    for (int k = 0; k < 4; ++k)
+        test.add(b.normal_f[k], b.limit_f[k] + 4e-6f * b.norm1_f[k] * (2.f * extent + std::abs(b.offset_f[k])));
+    return walk(test, [&](uint32_t i) { return prim_may_block(m_prims[i], b); });
+}
+
+bool OccluderBvh::may_block(const ConvexRegion &r, int64_t skip) const {
+    const float extent = std::max({m_extent, float(std::max(std::abs(r.lo[0]), std::abs(r.hi[0]))),
+                                   float(std::max(std::abs(r.lo[1]), std::abs(r.hi[1]))),
+                                   float(std::max(std::abs(r.lo[2]), std::abs(r.hi[2])))});
+    NodeTest test;
+    for (int c = 0; c < 3; ++c) // rounded outwards: the float box holds the double one
+        test.lo[c] = std::nextafter(float(r.lo[c]), -INFINITY), test.hi[c] = std::nextafter(float(r.hi[c]), INFINITY);
+    for (int k = 0; k < r.planes; ++k) {
+        const float n[3] = {float(r.normal[k][0]), float(r.normal[k][1]), float(r.normal[k][2])};
+        test.add(n, float(r.offset[k]) + 4e-6f * float(r.normal_len[k]) * (2.f * extent + 1.f) +
+                        4e-6f * std::abs(float(r.offset[k])));
+    }
+    return walk(test, [&](uint32_t i) { return int64_t(i) != skip && prim_may_block(m_prims[i], r); });
+}
+
+bool OccluderBvh::prim_may_block(const Prim &prim, const ConvexRegion &r) const {
+    const double eps = r.eps;
+    for (int c = 0; c < 3; ++c) // the primitive's box against the region's
+        if (prim.lo[c] > r.hi[c] || prim.hi[c] < r.lo[c]) return false;
+    auto beyond = [&](int k, const double *p) { return dot3(r.normal[k], p) - r.offset[k] > eps * r.normal_len[k]; };
+    if (prim.kind == Kind::Triangle) {
+        // Separated by the triangle's plane: every vertex of the region strictly on one side.
+        const double *p0 = prim.p[0], *nt = prim.n;
+        const double tol = eps * prim.n_len;
+        int above = 0, below = 0;
+        for (int v = 0; v < r.vertices; ++v) {
+            const double *q = r.vertex[v];
+            const double s = nt[0] * (q[0] - p0[0]) + nt[1] * (q[1] - p0[1]) + nt[2] * (q[2] - p0[2]);
+            above += s > tol;
+            below += s < -tol;
+        }
+        if (above == r.vertices || below == r.vertices) return false;
+        for (int k = 0; k < r.planes; ++k) // or by a half-space of the region
+            if (beyond(k, prim.p[0]) && beyond(k, prim.p[1]) && beyond(k, prim.p[2])) return false;
+        return true;
+    }
+    if (prim.kind == Kind::Sphere) {
+        const double *c = prim.p[0], rad = prim.p[1][0];
+        for (int k = 0; k < r.planes; ++k) // |n|_1 >= |n|: the sphere's nearest point is beyond too
+            if (dot3(r.normal[k], c) - rad * r.normal_len[k] - r.offset[k] > eps * r.normal_len[k]) return false;
+        return true;
+    }
+    for (int k = 0; k < r.planes; ++k) { // a box: its corner nearest to the inside of each plane
+        const double *n = r.normal[k];
+        double low = 0;
+        for (int c = 0; c < 3; ++c) low += n[c] * (n[c] >= 0 ? prim.p[0][c] : prim.p[1][c]);
+        if (low - r.offset[k] > eps * r.normal_len[k]) return false;
+    }
+    return true;
+}
+
+int64_t OccluderBvh::occluder_of(const Shape *shape, uint32_t prim) const {
+    auto it = m_shape_occluders.find(shape);
+    if (it == m_shape_occluders.end() || prim >= it->second.count) return -1;
+    return it->second.first + int64_t(prim);
+}
+
+bool OccluderBvh::triangle(int64_t i, double p[3][3], double n[3], double *n_len) const {
+    const Prim &prim = m_prims[size_t(i)];
+    if (prim.kind != Kind::Triangle) return false;
+    std::memcpy(p, prim.p, sizeof(prim.p));
+    std::memcpy(n, prim.n, sizeof(prim.n));
+    *n_len = prim.n_len;
+    return true;
+}
+
+void ConvexRegion::add_vertex(const double p[3]) {
+    for (int c = 0; c < 3; ++c) vertex[vertices][c] = p[c];
+    ++vertices;
+}
+
+void ConvexRegion::add_plane(const double n[3], double d) {
+    for (int c = 0; c < 3; ++c) normal[planes][c] = n[c];
+    offset[planes++] = d;
+}
+
+void ConvexRegion::add_support_plane(const double n[3]) {
+    double d = -INFINITY;
+    for (int v = 0; v < vertices; ++v) d = std::max(d, dot3(n, vertex[v]));
+    add_plane(n, d);
+}
+
+void ConvexRegion::finish() {
+    double scale = 1.0;
+    for (int c = 0; c < 3; ++c) {
+        lo[c] = INFINITY, hi[c] = -INFINITY;
+        for (int v = 0; v < vertices; ++v) lo[c] = std::min(lo[c], vertex[v][c]), hi[c] = std::max(hi[c], vertex[v][c]);
+        scale += std::max(std::abs(lo[c]), std::abs(hi[c]));
+    }
+    for (int k = 0; k < planes; ++k)
+        normal_len[k] = std::abs(normal[k][0]) + std::abs(normal[k][1]) + std::abs(normal[k][2]);
+    eps = Margin * scale;
 }
 
 } // namespace mvpt

@@ -10,6 +10,8 @@
 #include <embree3/rtcore.h>
 
 #include <cstddef>
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 namespace mvpt {
@@ -43,6 +45,23 @@ struct SegmentBundle {
     float lo_f[3], hi_f[3], origin_f[3];
 };
 
+/// A convex region that holds a set of segments, for the queries that bound a whole family
+/// of bundles at once (RigVisibility): the segments lie in the hull of `vertex` and in every
+/// half-space normal.p <= offset (absolute coordinates; any valid bounds, tight or not).
+struct ConvexRegion {
+    static constexpr int MaxVertices = 16, MaxPlanes = 8;
+    int vertices = 0, planes = 0;
+    double vertex[MaxVertices][3];
+    double normal[MaxPlanes][3], offset[MaxPlanes];
+    /// Set by `finish`: |n|_1 per plane, the vertices' box and the margin of the tests.
+    double normal_len[MaxPlanes], lo[3], hi[3], eps = 0;
+    void add_vertex(const double p[3]);
+    void add_plane(const double n[3], double d);
+    /// The half-space n.p <= max over the vertices of n.p (the support plane along n).
+    void add_support_plane(const double n[3]);
+    void finish();
+};
+
 /// Occluders of a static scene (every shape's triangles, spheres or bounding box) in a
 /// 4-wide BVH built by Embree's BVH builder, for `may_block` queries.
 class OccluderBvh {
@@ -54,7 +73,18 @@ public:
     /// False only if no occluder can meet any segment of the bundle (exact in double
     /// precision, up to a relative margin of 1e-9, i.e. far below the spawn offset).
     bool may_block(const SegmentBundle &b) const;
+    /// The same for a convex region, ignoring occluder `skip` (-1: none).
+    bool may_block(const ConvexRegion &r, int64_t skip) const;
     size_t size() const { return m_prims.size(); }
+    /// The occluder that is primitive `prim` of `shape` (a mesh triangle or a sphere), or -1.
+    int64_t occluder_of(const Shape *shape, uint32_t prim) const;
+    /// Occluder `i` as a triangle (its vertices, unnormalised normal n = (p1 - p0) x (p2 - p0)
+    /// and |n|): false if it is not one.
+    bool triangle(int64_t i, double p[3][3], double n[3], double *n_len) const;
+    bool is_sphere(int64_t i) const { return m_prims[size_t(i)].kind == Kind::Sphere; }
+    /// The box that holds every occluder.
+    const double *lower() const { return m_lo; }
+    const double *upper() const { return m_hi; }
 
 private:
     enum class Kind : uint32_t { Triangle, Sphere, Box };
@@ -68,6 +98,17 @@ private:
         double lo[3], hi[3];
     };
     bool prim_may_block(const Prim &prim, const SegmentBundle &b) const;
+    bool prim_may_block(const Prim &prim, const ConvexRegion &r) const;
+    /// Depth-first walk of the tree: `keep(inner node)` gives the children to visit (a mask
+    /// of 4 lanes), `leaf(prim index)` is true when the primitive may block (stops the walk).
+    template <class Keep, class Leaf> bool walk(Keep keep, Leaf leaf) const;
+    /// Per shape, the first occluder index of its triangles or its sphere, and their count.
+    struct ShapeOccluders {
+        int64_t first = -1;
+        uint32_t count = 0;
+    };
+    std::unordered_map<const Shape *, ShapeOccluders> m_shape_occluders;
+    double m_lo[3] = {0, 0, 0}, m_hi[3] = {0, 0, 0};
 
     std::vector<Prim> m_prims;
     RTCBVH m_bvh = nullptr;
