@@ -156,13 +156,22 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     const MvCandidates &c = sc.cand;
     const size_t m = c.size;
     if (m < 2) return;
+    // Every candidate's lens point is on the native lens point's side of the surface (§3
+    // orientation test), so all visibility rays leave from one offset origin.
+    const Point3f o = si.offset_p(c.lens_point(0) - si.p);
+    if (!selected_only && ctx.rig && ctx.rig->unblocked(o, si.shape, si.prim)) {
+        // y's cell sees the whole rig: every candidate is visible (sc.visible is all 1), no
+        // segment is built; those with room to block count as visibility rays, as when traced.
+        for (size_t i = 1; i < m; ++i) {
+            counters.shadow_rays += c.vis[i] > 0.f;
+            if (st_l && !sc.selected[i]) ++st_l->rejected[int(ShiftTest::Selection)];
+        }
+        return;
+    }
     auto &seg = sc.segments;
     const size_t padded = whole_lanes(m - 1); // whole vectors, and whole packets for occluded_segments
     grow(seg, 4 * padded);
     float *dx = seg.data(), *dy = dx + padded, *dz = dy + padded, *t_max = dz + padded;
-    // Every candidate's lens point is on the native lens point's side of the surface (§3
-    // orientation test), so all visibility rays leave from one offset origin.
-    const Point3f o = si.offset_p(c.lens_point(0) - si.p);
     visibility_segments(c, o, si.p, dx, dy, dz, t_max);
     if (selected_only)
         for (size_t i = 1; i < m; ++i)
@@ -173,10 +182,7 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
             }
     auto &blocked = sc.blocked;
     grow(blocked, m);
-    if (ctx.rig && ctx.rig->unblocked(o, si.shape, si.prim)) // y's cell sees the whole rig
-        std::fill(blocked.begin(), blocked.begin() + long(m - 1), uint8_t(0));
-    else
-        ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data(), ctx.across);
+    ctx.scene->occluded_segments(o, dx, dy, dz, t_max, m - 1, t, blocked.data(), ctx.across);
     for (size_t i = 1; i < m; ++i) {
         if (selected_only && !sc.selected[i]) continue;
         counters.shadow_rays += t_max[i - 1] > 0.f;
