@@ -22,15 +22,46 @@ inline constexpr double SplatScale = 0x1p30;
 /// Largest magnitude a single contribution may have (larger ones are dropped and counted).
 inline constexpr double SplatMax = 0x1p32;
 
-/// One pixel of a splat buffer: one cache line.
-struct alignas(64) SplatPixel {
-    int64_t c[SplatChannels] = {};
+/// What every shared contribution adds to a pixel: W*L and W, half a cache line (the
+/// contributions of a sample land in as many views' pixels: a smaller buffer misses less).
+struct alignas(32) SplatPixel {
+    int64_t lw[3] = {}, w = 0;
 };
 
 /// A value rounded to the fixed-point grid (to nearest, in the default rounding mode).
 inline int64_t to_fixed(double x) { return std::llrint(x * SplatScale); }
 
-/// One thread's splat buffer: per view, one SplatPixel per pixel, allocated on first use.
+/// One view's part of a splat buffer: per pixel W*L and W, the native-only radiance E
+/// (added once per native sample) and the number of contributions, in separate arrays.
+struct SplatView {
+    std::vector<SplatPixel> shared;
+    std::vector<int64_t> native; ///< E, 3 per pixel
+    std::vector<uint32_t> count;
+    bool empty() const { return shared.empty(); }
+    void allocate(size_t pixels) {
+        shared.assign(pixels, SplatPixel{});
+        native.assign(3 * pixels, 0);
+        count.assign(pixels, 0);
+    }
+    /// Channel c (SplatChannels' order) of pixel p.
+    int64_t channel(size_t p, int c) const {
+        return c < 3 ? shared[p].lw[c] : c < 6 ? native[3 * p + size_t(c - 3)] : c == 6 ? shared[p].w : int64_t(count[p]);
+    }
+    /// Adds `o` (of the same size) into this view and zeroes it.
+    void take(SplatView &o) {
+        for (size_t p = 0; p < shared.size(); ++p) {
+            for (int c = 0; c < 3; ++c) shared[p].lw[c] += o.shared[p].lw[c];
+            shared[p].w += o.shared[p].w;
+            count[p] += o.count[p];
+        }
+        for (size_t i = 0; i < native.size(); ++i) native[i] += o.native[i];
+        std::fill(o.shared.begin(), o.shared.end(), SplatPixel{});
+        std::fill(o.native.begin(), o.native.end(), 0);
+        std::fill(o.count.begin(), o.count.end(), 0u);
+    }
+};
+
+/// One thread's splat buffer: per view, a SplatView allocated on first use.
 class SplatBuffer {
 public:
     explicit SplatBuffer(const std::vector<size_t> &pixels_per_view) : m_pixels(pixels_per_view), m_data(pixels_per_view.size()) {}
@@ -53,31 +84,32 @@ public:
     }
     /// Add W*L (per channel) and W that fit, and count the contribution.
     void add_fitting(int slot, uint32_t pixel, float lw_r, float lw_g, float lw_b, float w) {
-        int64_t *p = pixel_of(slot, pixel);
-        p[0] += to_fixed(lw_r);
-        p[1] += to_fixed(lw_g);
-        p[2] += to_fixed(lw_b);
-        p[6] += to_fixed(w);
-        p[7] += 1;
+        SplatView &v = view_of(slot);
+        SplatPixel &p = v.shared[pixel];
+        p.lw[0] += to_fixed(lw_r);
+        p.lw[1] += to_fixed(lw_g);
+        p.lw[2] += to_fixed(lw_b);
+        p.w += to_fixed(w);
+        ++v.count[pixel];
     }
     /// Add the native-only radiance E that fits.
     void add_native(int slot, uint32_t pixel, const Spectrum &e) {
-        int64_t *p = pixel_of(slot, pixel);
-        p[3] += to_fixed(e[0]);
-        p[4] += to_fixed(e[1]);
-        p[5] += to_fixed(e[2]);
+        int64_t *p = &view_of(slot).native[3 * size_t(pixel)];
+        p[0] += to_fixed(e[0]);
+        p[1] += to_fixed(e[1]);
+        p[2] += to_fixed(e[2]);
     }
     /// The buffer of view `slot` (empty if nothing was splatted there).
-    std::vector<SplatPixel> &view(int slot) { return m_data[slot]; }
+    SplatView &view(int slot) { return m_data[slot]; }
 
 private:
-    int64_t *pixel_of(int slot, uint32_t pixel) {
-        std::vector<SplatPixel> &buf = m_data[slot];
-        if (buf.empty()) buf.resize(m_pixels[slot]);
-        return buf[pixel].c;
+    SplatView &view_of(int slot) {
+        SplatView &v = m_data[slot];
+        if (v.empty()) v.allocate(m_pixels[slot]);
+        return v;
     }
     std::vector<size_t> m_pixels;
-    std::vector<std::vector<SplatPixel>> m_data;
+    std::vector<SplatView> m_data;
 };
 
 /// Where one thread's contributions go: its splat buffer, and per view a count of the

@@ -149,20 +149,18 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                 MvFilm &mf = m_mv_films[slot];
                 FilmBuffer &fb = m_films[slot];
                 const size_t n = pixels[slot];
-                std::vector<SplatPixel> total(n);
+                SplatView total;
+                total.allocate(n);
                 for (MvThreadState &ts : state) {
-                    std::vector<SplatPixel> &buf = ts.buffer.view(int(slot));
-                    if (buf.empty()) continue;
-                    for (size_t p = 0; p < n; ++p)
-                        for (int c = 0; c < SplatChannels; ++c) total[p].c[c] += buf[p].c[c];
-                    std::fill(buf.begin(), buf.end(), SplatPixel{});
+                    SplatView &buf = ts.buffer.view(int(slot));
+                    if (!buf.empty()) total.take(buf);
                 }
                 for (size_t p = 0; p < n; ++p) {
-                    const int64_t *t = total[p].c;
-                    double w = double(t[6]) / SplatScale;
+                    const SplatPixel &t = total.shared[p];
+                    double w = double(t.w) / SplatScale;
                     double e_lum = 0.0, v_lum = 0.0;
                     for (int c = 0; c < 3; ++c) {
-                        double lw = double(t[c]) / SplatScale, e = double(t[3 + c]) / SplatScale;
+                        double lw = double(t.lw[c]) / SplatScale, e = double(total.native[3 * p + c]) / SplatScale;
                         // The balance estimate of this pass, lw + e, plus the control variate
                         // beta (1 - sum W): E[sum W] = 1 exactly when D sums over every valid
                         // strategy, and beta, the ratio estimate of the earlier passes, is
@@ -182,7 +180,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                     mf.e_sq[p] += e_lum * e_lum;
                     mf.s_sum[p] += v_lum - e_lum;
                     mf.s_sq[p] += (v_lum - e_lum) * (v_lum - e_lum);
-                    mf.received[p] += uint64_t(t[7]);
+                    mf.received[p] += total.count[p];
                     mf.native[p] += mf.map[p];
                     ++fb.count[p];
                 }

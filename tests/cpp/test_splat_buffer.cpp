@@ -12,7 +12,7 @@ using namespace mvpt;
 
 namespace {
 /// Channel c of pixel p of view 0 (0 while nothing was splatted: the buffer is allocated on use).
-int64_t value_at(SplatBuffer &b, size_t p, int c) { return b.view(0).empty() ? 0 : b.view(0)[p].c[c]; }
+int64_t value_at(SplatBuffer &b, size_t p, int c) { return b.view(0).empty() ? 0 : b.view(0).channel(p, c); }
 } // namespace
 
 TEST(SplatBuffer, SumsAreExactAndOrderFree) {
@@ -20,10 +20,10 @@ TEST(SplatBuffer, SumsAreExactAndOrderFree) {
     const float v[3] = {0.1f, 1e-7f, 3.5f};
     for (int i = 0; i < 3; ++i) a.add(0, 2, Spectrum(v[i], 2 * v[i], 0.f), v[i]);
     for (int i = 2; i >= 0; --i) b.add(0, 2, Spectrum(v[i], 2 * v[i], 0.f), v[i]);
-    for (int c = 0; c < SplatChannels; ++c) EXPECT_EQ(a.view(0)[2].c[c], b.view(0)[2].c[c]) << "channel " << c;
-    EXPECT_EQ(a.view(0)[2].c[7], 3);
-    EXPECT_EQ(a.view(0)[2].c[6], to_fixed(0.1f) + to_fixed(1e-7f) + to_fixed(3.5f));
-    EXPECT_EQ(a.view(0)[1].c[0], 0); // other pixels untouched
+    for (int c = 0; c < SplatChannels; ++c) EXPECT_EQ(a.view(0).channel(2, c), b.view(0).channel(2, c)) << "channel " << c;
+    EXPECT_EQ(a.view(0).channel(2, 7), 3);
+    EXPECT_EQ(a.view(0).channel(2, 6), to_fixed(0.1f) + to_fixed(1e-7f) + to_fixed(3.5f));
+    EXPECT_EQ(a.view(0).channel(1, 0), 0); // other pixels untouched
 }
 
 TEST(SplatBuffer, RejectsWholeContributionsThatDoNotFit) {
@@ -44,5 +44,5 @@ TEST(SplatBuffer, RejectsWholeContributionsThatDoNotFit) {
         }
     SplatBuffer ok({1});
     EXPECT_TRUE(ok.add(0, 0, Spectrum(std::nextafter(big, 0.f)), 1.f, Spectrum(-1.f)));
-    EXPECT_EQ(ok.view(0)[0].c[3], to_fixed(-1.f));
+    EXPECT_EQ(ok.view(0).channel(0, 3), to_fixed(-1.f));
 }
