@@ -13,7 +13,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <stdexcept>
 #include <tuple>
 
@@ -84,10 +83,8 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         for (const MvView &v : m_mv.views)
             for (Vec2f xi : {Vec2f(-1.f, -1.f), Vec2f(1.f, -1.f), Vec2f(-1.f, 1.f), Vec2f(1.f, 1.f)})
                 lens.push_back(v.camera->lens_point(v.t0, xi));
-        const char *cells = std::getenv("MVPT_RIG_CELLS");
-        const int n_cells = cells ? std::atoi(cells) : cfg.rig_cells;
-        if (n_cells > 0)
-            m_mv.rig = std::make_shared<RigVisibility>(*m_scene.occluder_bvh(), lens, m_mv.across, n_cells);
+        if (cfg.rig_cells > 0)
+            m_mv.rig = std::make_shared<RigVisibility>(*m_scene.occluder_bvh(), lens, m_mv.across, cfg.rig_cells);
     }
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
