@@ -439,8 +439,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         wi_s = wis.data();
     }
     const auto &lights = scene.lights();
-    auto &f_nee = sc.nee_f;
-    grow(f_nee, ns);
+    // The sharing views' BSDF values go straight into the queue (splatted once the suffix is known).
+    const size_t first = pending.add_entries(ns);
+    Spectrum *const f_nee = pending.f_nee.data() + first;
     Spectrum nee_weight(0.f); // light weight times MIS weight, zero when no view reflects the light
     int32_t nee_shadow = -1;  // its shadow ray, traced in mv_finish_samples
     if (!lights.empty()) {
@@ -451,9 +452,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             Vec3f wo = si.to_local(ls.d);
             auto &pdf = sc.view_pdf;
             grow(pdf, ns);
-            bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee.data(), pdf.data());
+            bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee, pdf.data());
             const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
-            if (max_over_views(f_nee.data(), ns) > 0.f) { // some view reflects light this way
+            if (max_over_views(f_nee, ns) > 0.f) { // some view reflects light this way
                 nee_shadow = int32_t(pending.shadow_rays.size());
                 pending.shadow_rays.push_back(std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p));
                 ++counters.shadow_rays;
@@ -465,11 +466,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
 
     // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
     sampler.set_dimension(DimBounceView);
-    auto &fs = sc.mixture_f;
-    grow(fs, ns);
+    Spectrum *const fs = pending.f_bounce.data() + first;
     grow(sc.view_pdf, ns);
     MixtureSample mix =
-        sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs.data(), sc.view_pdf.data());
+        sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     MvPendingSamples::Sample rec;
@@ -481,7 +481,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         if (mix.delta) {
             t_max = mix.weight.max_value() * float(ns);
         } else {
-            t_max = max_over_views(fs.data(), ns) / mix.pdf;
+            t_max = max_over_views(fs, ns) / mix.pdf;
         }
         b_scale = mix.delta ? 1.f : 1.f / mix.pdf;
         bool alive = t_max > 0.f;
@@ -508,7 +508,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
 
     // ---------------- Each sharing view's share, L_i / D_i, splatted once the suffix is known ----------------
     // The native view is sharing[0] (candidate 0, always visible and selected).
-    rec.first = uint32_t(pending.add_entries(ns));
+    rec.first = uint32_t(first);
     rec.count = uint32_t(ns);
     rec.delta_view = mix.delta ? int32_t(mix.view) : -1;
     rec.shadow = nee_shadow;
@@ -525,8 +525,6 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         pending.w[j] = 1.f / sc.d[k];
     }
     // (f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.)
-    std::copy(f_nee.begin(), f_nee.begin() + long(ns), pending.f_nee.begin() + rec.first);
-    std::copy(fs.begin(), fs.begin() + long(ns), pending.f_bounce.begin() + rec.first);
     pending.samples.push_back(rec);
     st_l.sharing += ns;
     st_l.rays += counters.rays + counters.shadow_rays - rays_before;

@@ -81,7 +81,6 @@ struct MvScratch {
     float alpha = 1.f;     ///< roughness at the current shared vertex
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
-    std::vector<Spectrum> mixture_f, nee_f;
     std::vector<float> view_pdf;
 };
 
