@@ -44,6 +44,8 @@ struct ScatterVertex {
     uint32_t path;
     /// The BSDF at the vertex (looked up once).
     const Bsdf *bsdf;
+    /// A Lambertian BSDF's reflectance at the vertex (evaluated once, read by the NEE and sampling loops).
+    Color3f refl;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
     std::pair<LightSample, Spectrum> emitter_sample;
@@ -294,6 +296,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             const size_t j = n_scatter++;
             scatter[j].path = uint32_t(k);
             scatter[j].bsdf = si.shape->bsdf.get();
+            if (const LambertInfo *lam = scatter[j].bsdf->lambert()) scatter[j].refl = lambert_reflectance(*lam, si);
             if (independent) {
                 buf.u_hash[j] = sampler.sample_hash();
                 buf.u_dim[j] = sampler.dimension();
@@ -377,7 +380,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         };
         // One lane of lq_col columns: the vertex, its throughput, the emitter's numbers and table row.
         auto gather = [&](SoaColumns &c, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
-                          const Spectrum &beta, size_t j, int row) {
+                          const Color3f &refl, const Spectrum &beta, size_t j, int row) {
             using namespace lq_col;
             float *col = c.data.data() + m;
             constexpr size_t st = LambertChunk; // == c.stride (resize to LambertChunk lanes): columns at fixed offsets
@@ -386,7 +389,6 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
             col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
             col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-            const Color3f refl = lambert_reflectance(lam, si);
             col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
             col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
             col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
@@ -420,14 +422,14 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 if (quad_of_light[idx] >= 0) {
                     v.nee = false; // handled by the kernel
                     buf.quad_index[n_quad] = v.path;
-                    gather(qc, n_quad++, si, *lam, paths[v.path].throughput, j, quad_of_light[idx]);
+                    gather(qc, n_quad++, si, *lam, v.refl, paths[v.path].throughput, j, quad_of_light[idx]);
                     if (n_quad == LambertChunk) flush_quad();
                     continue;
                 }
                 if (const int row = sphere_of_light[idx]; row >= 0 && outside_sphere(row, si.p)) {
                     v.nee = false;
                     buf.sphere_index[n_sph] = v.path;
-                    gather(sc, n_sph++, si, *lam, paths[v.path].throughput, j, row);
+                    gather(sc, n_sph++, si, *lam, v.refl, paths[v.path].throughput, j, row);
                     if (n_sph == LambertChunk) flush_sphere();
                     continue;
                 }
@@ -509,7 +511,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
                 col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
                 col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                const Color3f refl = lambert_reflectance(*lam, si);
+                const Color3f &refl = v.refl;
                 col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
                 put_emitter_sample<Ldx>(col, st, ls, weight);
@@ -602,7 +604,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
                 col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
                 col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                const Color3f refl = lambert_reflectance(*lam, si);
+                const Color3f &refl = v.refl;
                 col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
                 col[Eta * st] = p.eta, col[URr * st] = u[6][j];
