@@ -44,6 +44,8 @@ struct ScatterVertex {
     uint32_t path;
     /// The BSDF at the vertex (looked up once).
     const Bsdf *bsdf;
+    /// A Lambertian BSDF's reflectance at the vertex (evaluated once, read by the NEE and sampling loops).
+    Color3f refl;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
     std::pair<LightSample, Spectrum> emitter_sample;
@@ -187,6 +189,9 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     buf.sphere_index.resize(LambertChunk);
     buf.conductor_index.resize(LambertChunk);
     buf.conductor_sphere_index.resize(LambertChunk);
+    uint32_t *const lambert_index = buf.lambert_index.data(), *const quad_index = buf.quad_index.data(),
+                   *const sphere_index = buf.sphere_index.data(), *const conductor_index = buf.conductor_index.data(),
+                   *const conductor_sphere_index = buf.conductor_sphere_index.data();
     // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
     QuadTable quads;
     std::vector<int> &quad_of_light = buf.quad_of_light;
@@ -215,6 +220,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         sphere_radius_adj2[ns] = radius_adj * radius_adj;
         sphere_of_light[l] = int(ns++);
     }
+    // Loop invariants in locals: the loops' byte stores (flags) would make GCC reload them from memory.
+    const size_t n_lights = lights.size();
+    const float n_lights_f = float(n_lights);
+    const int *const quad_row = quad_of_light.data(), *const sphere_row = sphere_of_light.data();
     // The parameter and frame columns shared by both rough conductor kernels (rs_col and rn_col agree up to Nz).
     static_assert(size_t(rs_col::Alpha) == size_t(rn_col::Alpha) && size_t(rs_col::SpB) == size_t(rn_col::SpB));
     auto gather_conductor = [](float *col, size_t st, const SurfaceInteraction &si, const RoughConductorInfo &rc) {
@@ -294,6 +303,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             const size_t j = n_scatter++;
             scatter[j].path = uint32_t(k);
             scatter[j].bsdf = si.shape->bsdf.get();
+            if (const LambertInfo *lam = scatter[j].bsdf->lambert()) scatter[j].refl = lambert_reflectance(*lam, si);
             if (independent) {
                 buf.u_hash[j] = sampler.sample_hash();
                 buf.u_dim[j] = sampler.dimension();
@@ -336,7 +346,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         sc.resize(lq_col::Count, LambertChunk);
         // The next-event estimates of a kernel's lanes wait for their shadow rays (columns from
         // O0: origin, direction, t_max, contribution, whether it counts).
-        auto take_shadow_rays = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0) {
+        auto take_shadow_rays = [&](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0) {
             constexpr size_t O0 = decltype(o0)::value;
             const float *const cd = cols.data.data(); // LambertChunk lanes per column
             for (size_t m = 0; m < count; ++m) {
@@ -365,19 +375,19 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         };
         auto flush_quad = [&] {
             if (n_quad == 0) return;
-            lambert_quad_nee_kernel(qc, n_quad, quads, float(lights.size()));
-            collect(qc, buf.quad_index.data(), n_quad);
+            lambert_quad_nee_kernel(qc, n_quad, quads, n_lights_f);
+            collect(qc, quad_index, n_quad);
             n_quad = 0;
         };
         auto flush_sphere = [&] {
             if (n_sph == 0) return;
-            lambert_sphere_nee_kernel(sc, n_sph, spheres, float(lights.size()));
-            collect(sc, buf.sphere_index.data(), n_sph);
+            lambert_sphere_nee_kernel(sc, n_sph, spheres, n_lights_f);
+            collect(sc, sphere_index, n_sph);
             n_sph = 0;
         };
         // One lane of lq_col columns: the vertex, its throughput, the emitter's numbers and table row.
         auto gather = [&](SoaColumns &c, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
-                          const Spectrum &beta, size_t j, int row) {
+                          const Color3f &refl, const Spectrum &beta, size_t j, int row) {
             using namespace lq_col;
             float *col = c.data.data() + m;
             constexpr size_t st = LambertChunk; // == c.stride (resize to LambertChunk lanes): columns at fixed offsets
@@ -386,7 +396,6 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
             col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
             col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-            const Color3f refl = lambert_reflectance(lam, si);
             col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
             col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
             col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
@@ -398,8 +407,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         csc.resize(rsn_col::Count, LambertChunk);
         auto flush_conductor_sphere = [&] {
             if (n_csph == 0) return;
-            rough_conductor_sphere_nee_kernel(csc, n_csph, spheres, float(lights.size()));
-            take_shadow_rays(csc, buf.conductor_sphere_index, n_csph, std::integral_constant<size_t, rn_col::Ox>{});
+            rough_conductor_sphere_nee_kernel(csc, n_csph, spheres, n_lights_f);
+            take_shadow_rays(csc, conductor_sphere_index, n_csph, std::integral_constant<size_t, rn_col::Ox>{});
         };
         // Whether p is outside sphere emitter `row` (Sphere::sample_solid_angle's test).
         auto outside_sphere = [&](int row, Point3f p) {
@@ -413,29 +422,29 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             ScatterVertex &v = scatter[j];
             const SurfaceInteraction &si = sis[v.path];
             const Bsdf &bsdf = *v.bsdf;
-            v.nee = bsdf.has_smooth() && !lights.empty();
+            v.nee = bsdf.has_smooth() && n_lights != 0;
             if (!v.nee) continue;
-            size_t idx = std::min(size_t(u[0][j] * float(lights.size())), lights.size() - 1);
+            size_t idx = std::min(size_t(u[0][j] * n_lights_f), n_lights - 1);
             if (const LambertInfo *lam = bsdf.lambert()) {
-                if (quad_of_light[idx] >= 0) {
+                if (quad_row[idx] >= 0) {
                     v.nee = false; // handled by the kernel
-                    buf.quad_index[n_quad] = v.path;
-                    gather(qc, n_quad++, si, *lam, paths[v.path].throughput, j, quad_of_light[idx]);
+                    quad_index[n_quad] = v.path;
+                    gather(qc, n_quad++, si, *lam, v.refl, paths[v.path].throughput, j, quad_row[idx]);
                     if (n_quad == LambertChunk) flush_quad();
                     continue;
                 }
-                if (const int row = sphere_of_light[idx]; row >= 0 && outside_sphere(row, si.p)) {
+                if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
                     v.nee = false;
-                    buf.sphere_index[n_sph] = v.path;
-                    gather(sc, n_sph++, si, *lam, paths[v.path].throughput, j, row);
+                    sphere_index[n_sph] = v.path;
+                    gather(sc, n_sph++, si, *lam, v.refl, paths[v.path].throughput, j, row);
                     if (n_sph == LambertChunk) flush_sphere();
                     continue;
                 }
             } else if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
-                if (const int row = sphere_of_light[idx]; row >= 0 && outside_sphere(row, si.p)) {
+                if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
                     v.nee = false;
                     const size_t m = n_csph++;
-                    buf.conductor_sphere_index[m] = uint32_t(j);
+                    conductor_sphere_index[m] = uint32_t(j);
                     float *col = csc.data.data() + m;
                     constexpr size_t st = LambertChunk;
                     gather_conductor_nee(col, st, si, *cond, paths[v.path].throughput);
@@ -480,16 +489,16 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         lc.resize(ln_col::Count, LambertChunk);
         auto flush_nee = [&] {
             if (n_lam == 0) return;
-            lambert_nee_kernel(lc, n_lam, float(lights.size()));
-            take_shadow_rays(lc, buf.lambert_index, n_lam, std::integral_constant<size_t, ln_col::Ox>{});
+            lambert_nee_kernel(lc, n_lam, n_lights_f);
+            take_shadow_rays(lc, lambert_index, n_lam, std::integral_constant<size_t, ln_col::Ox>{});
         };
         size_t n_rc = 0;
         SoaColumns &rc = buf.conductor;
         rc.resize(std::max<size_t>(rn_col::Count, rs_col::Count), LambertChunk);
         auto flush_rc_nee = [&] {
             if (n_rc == 0) return;
-            rough_conductor_nee_kernel(rc, n_rc, float(lights.size()));
-            take_shadow_rays(rc, buf.conductor_index, n_rc, std::integral_constant<size_t, rn_col::Ox>{});
+            rough_conductor_nee_kernel(rc, n_rc, n_lights_f);
+            take_shadow_rays(rc, conductor_index, n_rc, std::integral_constant<size_t, rn_col::Ox>{});
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = scatter[j];
@@ -500,7 +509,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const LambertInfo *lam = bsdf.lambert()) {
                 using namespace ln_col;
                 const size_t m = n_lam++;
-                buf.lambert_index[m] = uint32_t(j);
+                lambert_index[m] = uint32_t(j);
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = lc.data.data() + m;
                 constexpr size_t st = LambertChunk;
@@ -509,7 +518,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
                 col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
                 col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                const Color3f refl = lambert_reflectance(*lam, si);
+                const Color3f &refl = v.refl;
                 col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
                 put_emitter_sample<Ldx>(col, st, ls, weight);
@@ -519,7 +528,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
                 using namespace rn_col;
                 const size_t m = n_rc++;
-                buf.conductor_index[m] = uint32_t(j);
+                conductor_index[m] = uint32_t(j);
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = rc.data.data() + m;
                 constexpr size_t st = LambertChunk;
@@ -529,14 +538,14 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 continue;
             }
             Spectrum weight = v.emitter_sample.second;
-            weight *= float(lights.size());
+            weight *= n_lights_f;
             Vec3f wo = si.to_local(ls.d);
             Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
             if (!f.is_black()) {
                 const Ray r = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
                 const float ray_cols[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmax, r.time};
                 for (size_t q = 0; q < 8; ++q) shadow[q][n_shadow] = ray_cols[q];
-                float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
+                float w = ls.delta ? 1.f : mis_power(ls.pdf / n_lights_f, bsdf.pdf(ctx, si, si.wi, wo));
                 shadows[n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
             }
         }
@@ -548,7 +557,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
         // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
         // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
-        auto take_samples = [&](SoaColumns &cols, const std::vector<uint32_t> &index, size_t &count, auto o0, auto b0) {
+        auto take_samples = [&](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0, auto b0) {
             constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
             const float *const cd = cols.data.data(); // LambertChunk lanes per column
             for (size_t m = 0; m < count; ++m) {
@@ -572,13 +581,13 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         auto flush_sample = [&] {
             if (n_lam == 0) return;
             lambert_sample_kernel(lc, n_lam);
-            take_samples(lc, buf.lambert_index, n_lam, std::integral_constant<size_t, ls_col::Ox>{},
+            take_samples(lc, lambert_index, n_lam, std::integral_constant<size_t, ls_col::Ox>{},
                          std::integral_constant<size_t, ls_col::Br>{});
         };
         auto flush_rc_sample = [&] {
             if (n_rc == 0) return;
             rough_conductor_sample_kernel(rc, n_rc);
-            take_samples(rc, buf.conductor_index, n_rc, std::integral_constant<size_t, rs_col::Ox>{},
+            take_samples(rc, conductor_index, n_rc, std::integral_constant<size_t, rs_col::Ox>{},
                          std::integral_constant<size_t, rs_col::Br>{});
         };
         for (size_t j = 0; j < n_scatter; ++j) {
@@ -590,7 +599,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const LambertInfo *lam = bsdf.lambert()) {
                 using namespace ls_col;
                 const size_t m = n_lam++;
-                buf.lambert_index[m] = uint32_t(k);
+                lambert_index[m] = uint32_t(k);
                 const Frame &f = si.sh_frame;
                 float *col = lc.data.data() + m;
                 constexpr size_t st = LambertChunk;
@@ -602,7 +611,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
                 col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
                 col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                const Color3f refl = lambert_reflectance(*lam, si);
+                const Color3f &refl = v.refl;
                 col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
                 col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
                 col[Eta * st] = p.eta, col[URr * st] = u[6][j];
@@ -613,7 +622,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
                 using namespace rs_col;
                 const size_t m = n_rc++;
-                buf.conductor_index[m] = uint32_t(k);
+                conductor_index[m] = uint32_t(k);
                 float *col = rc.data.data() + m;
                 constexpr size_t st = LambertChunk;
                 gather_conductor(col, st, si, *cond);
