@@ -12,7 +12,7 @@
 //     <integer name="adaptive_warmup" value="4"/> <integer name="adaptive_max" value="16"/>
 //     <float name="adaptive_budget" value="1.25"/>           mean native samples per pixel and pass
 //     <float name="adaptive_eps" value="0.01"/>              eps of the relative error the maps even out
-//     <integer name="rig_cells" value="64"/>                  cells proven to see the rig unblocked (0: off)
+//     <integer name="rig_cells" value="128"/>                 cells proven to see the rig unblocked (0: off)
 //   </integrator>
 #include "mvpath.h"
 
@@ -57,7 +57,7 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     cfg.adaptive_eps = props.get_float("adaptive_eps", 0.01f);
     if (!(cfg.adaptive_eps >= 0.f && cfg.adaptive_eps < INFINITY))
         props.fail("adaptive_eps", "'adaptive_eps' must be a finite number >= 0");
-    cfg.rig_cells = int(props.get_int("rig_cells", 64));
+    cfg.rig_cells = int(props.get_int("rig_cells", 128));
     if (cfg.rig_cells < 0 || cfg.rig_cells > 1024) props.fail("rig_cells", "'rig_cells' must be in [0, 1024]");
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
 }

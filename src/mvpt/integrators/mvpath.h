@@ -52,7 +52,7 @@ struct MvConfig {
     float adaptive_eps = 0.01f;
     /// Visibility cells (scene/rig_visibility.h) along the scene's longest side; 0 turns them
     /// off. Static scenes and cameras only.
-    int rig_cells = 64;
+    int rig_cells = 128;
 };
 
 /// The `mvpath` integrator: path tracing whose first vertex is shared between views.

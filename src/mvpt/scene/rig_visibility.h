@@ -20,7 +20,7 @@ public:
     /// `lens_points`: points whose convex hull holds every lens point of every view (for a
     /// thin lens, the corners of the square around its disk); `across` orients the bounds of
     /// a cell's segments (a row of the rig). `cells`: finest grid cells along the occluders' longest side.
-    RigVisibility(const OccluderBvh &occluders, const std::vector<Point3f> &lens_points, Vec3f across, int cells = 64);
+    RigVisibility(const OccluderBvh &occluders, const std::vector<Point3f> &lens_points, Vec3f across, int cells = 128);
     ~RigVisibility();
 
     /// True when no occluder can block a segment from `o` (a vertex offset off its surface
