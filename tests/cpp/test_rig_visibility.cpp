@@ -84,7 +84,9 @@ TEST(RigVisibility, UnblockedCellsSeeTheWholeRig) {
             if (!scene->intersect(Ray{from, d, 0.f, Infinity, 0.f}, si)) continue;
             const Point3f o = si.offset_p(from - si.p);
             const bool unblocked = vis.unblocked(o, si.shape, si.prim);
+            const size_t evaluated = vis.evaluated();
             ASSERT_EQ(unblocked, vis.unblocked(o, si.shape, si.prim)) << "the cache answers differently";
+            ASSERT_EQ(vis.evaluated(), evaluated) << "a second lookup of the same cell is not served by the cache";
             bool any = false;
             for (int k = 0; k < 24; ++k) {
                 const Point3f lens = rig.sample(rng);

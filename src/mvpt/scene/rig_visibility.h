@@ -33,7 +33,7 @@ public:
         return unblocked(o, m_occ.occluder_of(shape, prim));
     }
 
-    /// Keys evaluated so far (each costs one tree query) and lookups answered from the cache.
+    /// Keys evaluated so far (each costs one tree query; a key is evaluated once).
     size_t evaluated() const { return m_evaluated.load(std::memory_order_relaxed); }
 
 private:
