@@ -320,23 +320,27 @@ OccluderBvh::~OccluderBvh() {
     if (m_bvh) rtcReleaseBVH(m_bvh);
 }
 
+bool OccluderBvh::plane_separates(const Prim &tri, const double (*vertex)[3], int n, double eps) {
+    // Every vertex strictly on one side, by more than eps |n|.
+    const double *p0 = tri.p[0], *nt = tri.n;
+    const double tol = eps * tri.n_len;
+    int above = 0, below = 0;
+    for (int v = 0; v < n; ++v) {
+        const double *q = vertex[v];
+        const double s = nt[0] * (q[0] - p0[0]) + nt[1] * (q[1] - p0[1]) + nt[2] * (q[2] - p0[2]);
+        above += s > tol;
+        below += s < -tol;
+    }
+    return above == n || below == n;
+}
+
 bool OccluderBvh::prim_may_block(const Prim &prim, const SegmentBundle &b) const {
     const double eps = b.eps;
     for (int c = 0; c < 3; ++c) // the primitive's box against the end points' box
         if (prim.lo[c] > b.hi[c] || prim.hi[c] < b.lo[c]) return false;
     if (prim.kind == Kind::Triangle) {
-        // Separated by the triangle's plane: every pyramid vertex strictly on one side (first:
-        // it settles the triangle that y lies on).
-        const double *p0 = prim.p[0], *nt = prim.n;
-        const double tol = eps * prim.n_len;
-        int above = 0, below = 0;
-        for (int v = 0; v < 5; ++v) {
-            const double s = nt[0] * (b.vertex[v][0] - p0[0]) + nt[1] * (b.vertex[v][1] - p0[1]) +
-                             nt[2] * (b.vertex[v][2] - p0[2]);
-            above += s > tol;
-            below += s < -tol;
-        }
-        if (above == 5 || below == 5) return false;
+        // Separated by the triangle's plane (first: it settles the triangle that y lies on).
+        if (plane_separates(prim, b.vertex, 5, eps)) return false;
         // Separated by a plane of the pyramid: all three vertices beyond it, by more than eps |n|.
         double q[3][3];
         for (int v = 0; v < 3; ++v)
@@ -465,17 +469,7 @@ bool OccluderBvh::prim_may_block(const Prim &prim, const ConvexRegion &r) const 
         if (prim.lo[c] > r.hi[c] || prim.hi[c] < r.lo[c]) return false;
     auto beyond = [&](int k, const double *p) { return dot3(r.normal[k], p) - r.offset[k] > eps * r.normal_len[k]; };
     if (prim.kind == Kind::Triangle) {
-        // Separated by the triangle's plane: every vertex of the region strictly on one side.
-        const double *p0 = prim.p[0], *nt = prim.n;
-        const double tol = eps * prim.n_len;
-        int above = 0, below = 0;
-        for (int v = 0; v < r.vertices; ++v) {
-            const double *q = r.vertex[v];
-            const double s = nt[0] * (q[0] - p0[0]) + nt[1] * (q[1] - p0[1]) + nt[2] * (q[2] - p0[2]);
-            above += s > tol;
-            below += s < -tol;
-        }
-        if (above == r.vertices || below == r.vertices) return false;
+        if (plane_separates(prim, r.vertex, r.vertices, eps)) return false;
         for (int k = 0; k < r.planes; ++k) // or by a half-space of the region
             if (beyond(k, prim.p[0]) && beyond(k, prim.p[1]) && beyond(k, prim.p[2])) return false;
         return true;

@@ -99,6 +99,8 @@ private:
     };
     bool prim_may_block(const Prim &prim, const SegmentBundle &b) const;
     bool prim_may_block(const Prim &prim, const ConvexRegion &r) const;
+    /// True when triangle `tri`'s plane has all `n` vertices strictly on one side.
+    static bool plane_separates(const Prim &tri, const double (*vertex)[3], int n, double eps);
     /// Depth-first walk of the tree: `keep(inner node)` gives the children to visit (a mask
     /// of 4 lanes), `leaf(prim index)` is true when the primitive may block (stops the walk).
     template <class Keep, class Leaf> bool walk(Keep keep, Leaf leaf) const;
