@@ -160,3 +160,53 @@ TEST(MvCandidates, BalanceSumsMatchDirectSums) {
         }
     }
 }
+
+// select_by_jacobian (one vector loop) makes, candidate by candidate, the draw the sampler
+// makes at the view's selection dimension and the choice of the scalar rule: s = s_J(G_0 ->
+// G_i) (1 without the Jacobian term), selected when s >= 1 or u < s; with zero, negative and
+// non-finite densities among the candidates.
+TEST(MvCandidates, SelectionLoopEqualsSamplerDraws) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    const size_t views = 70;
+    std::vector<uint32_t> scene_index(views);
+    std::vector<uint64_t> keys(views);
+    for (size_t v = 0; v < views; ++v) {
+        scene_index[v] = uint32_t(rng() % 1000);
+        keys[v] = Sampler::dimension_key(DimSelectBase + scene_index[v]);
+    }
+    size_t drawn = 0, rejected = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        MvCandidates c;
+        c.reserve(views);
+        c.size = 1 + rng() % views;
+        for (size_t i = 0; i < c.size; ++i) {
+            c.slot[i] = int32_t(rng() % views);
+            const float r = u(rng);
+            c.g[i] = r < 0.05f ? 0.f : r < 0.08f ? -1.f : r < 0.1f ? INFINITY : std::exp(2.f * u(rng) - 1.f);
+        }
+        Sampler sampler(SamplerKind::Independent, 7);
+        sampler.start(rng() % 4, rng() % 64, rng() % 64, uint32_t(trial));
+        for (bool jacobian : {false, true}) {
+            std::vector<float> s(c.size, -1.f);
+            std::vector<uint32_t> selected(c.size, 7u);
+            select_by_jacobian(c, keys.data(), sampler.sample_hash(), jacobian, s.data(), selected.data());
+            for (size_t i = 1; i < c.size; ++i) {
+                const float s_ref = jacobian ? jacobian_similarity(c.g[0], c.g[i]) : 1.f;
+                bool sel_ref = true;
+                if (!(s_ref >= 1.f)) {
+                    Sampler draw = sampler;
+                    draw.set_dimension(DimSelectBase + scene_index[size_t(c.slot[i])]);
+                    sel_ref = draw.next_1d() < s_ref;
+                    ++drawn;
+                    rejected += !sel_ref;
+                }
+                ASSERT_TRUE(same_bits(s[i], s_ref)) << "trial " << trial << ", candidate " << i;
+                ASSERT_EQ(selected[i], uint32_t(sel_ref)) << "trial " << trial << ", candidate " << i;
+            }
+            EXPECT_EQ(selected[0], 7u) << "the native view is not drawn";
+        }
+    }
+    EXPECT_GT(drawn, 1000u);
+    EXPECT_GT(rejected, 100u); // both outcomes of the draws occur
+}

@@ -81,9 +81,9 @@ public:
     /// the independent sampler's numbers without the sampler (batched draws, sampler_batch.h).
     uint64_t sample_hash() const { return m_sample_hash; }
     /// 64 random bits of the independent sampler for dimension `dim` of the sample `hash`.
-    static uint64_t independent_bits(uint64_t hash, uint32_t dim) {
-        return mix_bits(hash + 0x9e3779b97f4a7c15ULL * (uint64_t(dim) + 1));
-    }
+    static uint64_t independent_bits(uint64_t hash, uint32_t dim) { return mix_bits(hash + dimension_key(dim)); }
+    /// What independent_bits adds to a sample's hash for dimension `dim`.
+    static constexpr uint64_t dimension_key(uint32_t dim) { return 0x9e3779b97f4a7c15ULL * (uint64_t(dim) + 1); }
 
     float next_1d() {
         if (m_kind == SamplerKind::Independent) return bits_to_unit_float(uint32_t(independent_bits()));

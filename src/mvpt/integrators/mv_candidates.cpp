@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "../core/multi_isa.h"
+#include "../core/sampler.h"
 #include "../render/interaction.h"
 
 namespace mvpt {
@@ -116,6 +117,19 @@ MVPT_MULTI_ISA void balance_kernel(const float *__restrict g, const float *__res
     }
 }
 
+MVPT_MULTI_ISA void selection_kernel(const float *__restrict g, float g0, const int32_t *__restrict slot,
+                                     const uint64_t *__restrict keys, uint64_t hash, size_t n, bool jacobian,
+                                     float *__restrict s_sel, uint32_t *__restrict selected) {
+    for (size_t i = 0; i < n; ++i) {
+        const float r = g0 / g[i];
+        const float s_j = select(g[i] > 0.f, select(r < 1.f, r, 1.f), 0.f); // jacobian_similarity(g0, g[i])
+        const float s = select(jacobian, s_j, 1.f);
+        const float u = bits_to_unit_float(uint32_t(mix_bits(hash + keys[slot[i]])));
+        s_sel[i] = s;
+        selected[i] = u < s;
+    }
+}
+
 } // namespace
 
 uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const FilmDesc &film, uint32_t *pixel) {
@@ -149,6 +163,13 @@ void visibility_segments(const MvCandidates &c, Point3f o, Point3f y, float *dx,
     const size_t n = c.size - 1, padded = whole_lanes(n);
     segment_kernel(c.lx.data() + 1, c.ly.data() + 1, c.lz.data() + 1, c.vis.data() + 1, padded, o, y, dx, dy, dz, t_max);
     std::fill(t_max + n, t_max + padded, -1.f); // the padding is not traced
+}
+
+void select_by_jacobian(const MvCandidates &c, const uint64_t *slot_keys, uint64_t sample_hash, bool jacobian,
+                        float *s_sel, uint32_t *selected) {
+    if (c.size < 2) return;
+    selection_kernel(c.g.data() + 1, c.g[0], c.slot.data() + 1, slot_keys, sample_hash, c.size - 1, jacobian,
+                     s_sel + 1, selected + 1);
 }
 
 void balance_sums(const float *g, const float *n, size_t valid, const float *g_targets, size_t padded_targets,

@@ -104,6 +104,13 @@ void viewing_directions(MvCandidates &c, Point3f p, const Frame &frame);
 /// in the padding.
 void visibility_segments(const MvCandidates &c, Point3f o, Point3f y, float *dx, float *dy, float *dz, float *t_max);
 
+/// The selection draws of §6 with the Jacobian similarity alone, for candidates [1, size) in one
+/// vector loop: s_sel[i] = s_J(G_0 -> G_i) (1 without `jacobian`) and selected[i] = u_i < s_sel[i],
+/// u_i the independent sampler's number of the sample `sample_hash` at the dimension whose key
+/// (Sampler::dimension_key) `slot_keys` holds for view cand.slot[i]. (s >= 1 selects whatever u is.)
+void select_by_jacobian(const MvCandidates &c, const uint64_t *slot_keys, uint64_t sample_hash, bool jacobian,
+                        float *s_sel, uint32_t *selected);
+
 /// Balance sums of §5 without pairwise terms, for every target: with r_j = G_j / G_k,
 ///   D_k = sum_j n_j r_j min(1, r_j)  (`jacobian`, s_J of §6)   or   sum_j n_j r_j,
 /// over the `valid` strategies j (arrays g, n), summed in the order of j (deterministic).

@@ -1,30 +1,41 @@
 #include "mv_mixture.h"
 
+#include "../core/multi_isa.h"
+
 #include <algorithm>
 
 namespace mvpt {
 
-float sum_over_views(const float *v, size_t n) {
-    constexpr size_t Lanes = 8;
-    float acc[Lanes] = {};
+namespace {
+/// Eight running values, lane q taking the entries q, q + 8, ... (the order of the scalar loops).
+typedef float F8 __attribute__((vector_size(32)));
+F8 load8(const float *v) {
+    F8 x;
+    __builtin_memcpy(&x, v, sizeof(x));
+    return x;
+}
+} // namespace
+
+MVPT_MULTI_ISA float sum_over_views(const float *v, size_t n) {
+    F8 acc = {};
     size_t i = 0;
-    for (; i + Lanes <= n; i += Lanes)
-        for (size_t q = 0; q < Lanes; ++q) acc[q] += v[i + q];
+    for (; i + 8 <= n; i += 8) acc += load8(v + i);
     for (size_t q = 0; i + q < n; ++q) acc[q] += v[i + q];
     return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
 }
 
-float max_over_views(const Spectrum *f, size_t n) {
+MVPT_MULTI_ISA float max_over_views(const Spectrum *f, size_t n) {
     static_assert(sizeof(Spectrum) == 3 * sizeof(float));
     const float *v = &f[0].r; // the channels of all views as one array
-    constexpr size_t Lanes = 8;
-    float acc[Lanes] = {};
+    F8 acc = {};
     size_t i = 0;
-    for (; i + Lanes <= 3 * n; i += Lanes)
-        for (size_t q = 0; q < Lanes; ++q) acc[q] = acc[q] > v[i + q] ? acc[q] : v[i + q];
+    for (; i + 8 <= 3 * n; i += 8) {
+        const F8 x = load8(v + i);
+        acc = acc > x ? acc : x; // MAXPS: the scalar loop's choice, lane by lane
+    }
     for (size_t q = 0; i + q < 3 * n; ++q) acc[q] = acc[q] > v[i + q] ? acc[q] : v[i + q];
     float m = 0.f;
-    for (float a : acc) m = m > a ? m : a;
+    for (int q = 0; q < 8; ++q) m = m > acc[q] ? m : acc[q];
     return m;
 }
 

@@ -28,6 +28,8 @@ void MvContext::prepare() {
             all_time_compatible &= time_compatible(a, b, scene_moves);
             all_time_compatible_equal_dt &= a.dt == b.dt;
         }
+    select_keys.clear();
+    for (const MvView &v : views) select_keys.push_back(Sampler::dimension_key(DimSelectBase + v.scene_index));
     std::vector<CameraProjection> proj;
     static_shift = !scene_moves && all_time_compatible;
     for (const MvView &v : views) {
@@ -162,10 +164,10 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     if (!selected_only && ctx.rig && ctx.rig->unblocked(o, si.shape, si.prim)) {
         // y's cell sees the whole rig: every candidate is visible (sc.visible is all 1), no
         // segment is built; those with room to block count as visibility rays, as when traced.
-        for (size_t i = 1; i < m; ++i) {
-            counters.shadow_rays += c.vis[i] > 0.f;
-            if (st_l && !sc.selected[i]) ++st_l->rejected[int(ShiftTest::Selection)];
-        }
+        uint64_t rays = 0, unselected = 0;
+        for (size_t i = 1; i < m; ++i) rays += c.vis[i] > 0.f, unselected += sc.selected[i] == 0;
+        counters.shadow_rays += rays;
+        if (st_l) st_l->rejected[int(ShiftTest::Selection)] += unselected;
         return;
     }
     auto &seg = sc.segments;
@@ -402,12 +404,16 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     gather_shifts(ctx, slot_l, pixel_l, y, bsdf, si, sc, &st_l);
     const MvCandidates &cand = sc.cand;
     const size_t m = cand.size;
-    for (size_t i = 1; i < m; ++i) {
-        sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
-        if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)
-        sampler.set_dimension(DimSelectBase + ctx.views[cand.slot[i]].scene_index);
-        sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
-    }
+    if (!sc.material && sampler.kind() == SamplerKind::Independent) // the same draws, in one vector loop
+        select_by_jacobian(cand, ctx.select_keys.data(), sampler.sample_hash(), ctx.cfg.select_jacobian,
+                           sc.s_sel.data(), sc.selected.data());
+    else
+        for (size_t i = 1; i < m; ++i) {
+            sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
+            if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)
+            sampler.set_dimension(DimSelectBase + ctx.views[cand.slot[i]].scene_index);
+            sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
+        }
     // The balance estimator needs the visibility of every candidate (it enters D); the
     // published variant only that of the selected ones.
     trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
@@ -517,12 +523,20 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     rec.b_scale = b_scale;
     if (mix.delta) rec.delta_bounce = mix.weight * b_scale;
     rec.e = le_y * (1.f / n_l);
-    for (size_t i = 0; i < ns; ++i) {
-        const int k = sharing[i];
-        const size_t j = rec.first + i;
-        pending.slot[j] = cand.slot[k];
-        pending.pixel[j] = cand.pixel[k];
-        pending.w[j] = 1.f / sc.d[k];
+    int *const slot_out = pending.slot.data() + first;
+    uint32_t *const pixel_out = pending.pixel.data() + first;
+    float *const w_out = pending.w.data() + first;
+    if (ns == m) { // every candidate shares: contiguous copies
+        std::copy_n(cand.slot.data(), ns, slot_out);
+        std::copy_n(cand.pixel.data(), ns, pixel_out);
+        for (size_t i = 0; i < ns; ++i) w_out[i] = 1.f / sc.d[i];
+    } else {
+        for (size_t i = 0; i < ns; ++i) {
+            const int k = sharing[i];
+            slot_out[i] = cand.slot[k];
+            pixel_out[i] = cand.pixel[k];
+            w_out[i] = 1.f / sc.d[k];
+        }
     }
     // (f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.)
     pending.samples.push_back(rec);

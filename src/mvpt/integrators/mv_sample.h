@@ -56,6 +56,8 @@ struct MvContext {
     bool static_shift = false;
     ProjectionTable projections;
     FilmTable films; ///< crop windows, by slot
+    /// Sampler::dimension_key of each view's selection draw (DimSelectBase + its scene index), by slot.
+    std::vector<uint64_t> select_keys;
     /// The direction from the first view's lens centre to the second's (a camera row or a
     /// grid's row): it orients the bounding pyramid of a sample's visibility segments.
     Vec3f across{1.f, 0.f, 0.f};
@@ -72,7 +74,8 @@ struct MvScratch {
     MvCandidates cand;  ///< the views that passed the cheap tests
     std::vector<ViewLobe> lobe; ///< candidates' lobes (for the material similarity only)
     std::vector<float> s_sel, d, sm;
-    std::vector<uint8_t> visible, selected, blocked;
+    std::vector<uint8_t> visible, blocked;
+    std::vector<uint32_t> selected; ///< 32-bit: written by a vector loop
     std::vector<float> segments; ///< visibility segments (directions, lengths) as arrays
     std::vector<uint32_t> valid_set;
     std::vector<float> g_valid, n_valid; ///< G and n of the valid strategies, for D
