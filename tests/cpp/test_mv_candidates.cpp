@@ -7,6 +7,7 @@
 #include "mvpt/integrators/mv_sample.h"
 #include "mvpt/render/interaction.h"
 #include "mvpt/scene/scene.h"
+#include "mvpt/scene/segment_cull.h"
 
 #include <gtest/gtest.h>
 
@@ -133,6 +134,51 @@ TEST(MvCandidates, OccludedSegmentsEqualsOccluded) {
     }
     EXPECT_GT(blocked_count, 200);
     EXPECT_GT(free_count, 200);
+}
+
+// The same with culling: bundles of 24 segments from points around the sphere's and the
+// cube's silhouettes to a small grid of lens points, so that most bundles meet one to four
+// occluders and only the packets with a segment that may meet one are traced. Every segment
+// must still get Embree's answer for its own ray.
+TEST(MvCandidates, CulledSegmentsEqualOccluded) {
+    auto scene = load_scene_string(SceneXml, ".");
+    scene->prepare_segment_culling();
+    ASSERT_NE(scene->occluder_bvh(), nullptr);
+    std::mt19937 rng(6);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    const Vec3f across(1.f, 0.f, 0.f);
+    int blocked_count = 0, free_count = 0, few_blockers = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        // Behind the sphere or the cube as seen from the grid (z ~ 3), near the floor or above it.
+        const bool sphere = trial % 2 == 0;
+        const Point3f o = sphere ? Point3f(0.1f + 0.8f * (u(rng) - 0.5f), 0.01f + 0.7f * u(rng), -0.35f - 0.5f * u(rng))
+                                 : Point3f(-0.6f + 0.5f * (u(rng) - 0.5f), 0.01f + 0.4f * u(rng), 0.05f - 0.4f * u(rng));
+        const size_t n = 24, padded = whole_lanes(n);
+        std::vector<float> dx(padded, 0.f), dy(padded, 0.f), dz(padded, 1.f), t_max(padded, -1.f);
+        for (size_t i = 0; i < n; ++i) {
+            const Point3f lens(0.06f * float(i % 5) - 0.12f, 1.0f + 0.06f * float(i / 5), 3.f);
+            const Vec3f d = lens - o;
+            const float len = norm(d);
+            dx[i] = d.x / len, dy[i] = d.y / len, dz[i] = d.z / len;
+            t_max[i] = i % 11 == 5 ? -1.f : len * 0.999f;
+        }
+        SegmentBundle bundle;
+        int64_t list[4];
+        if (bundle.build(o, across, dx.data(), dy.data(), dz.data(), t_max.data(), n)) {
+            const int k = scene->occluder_bvh()->blockers(bundle, list, 4);
+            few_blockers += k > 0;
+        }
+        std::vector<uint8_t> blocked(n, 7);
+        scene->occluded_segments(o, dx.data(), dy.data(), dz.data(), t_max.data(), n, 0.f, blocked.data(), across);
+        for (size_t i = 0; i < n; ++i) {
+            bool expect = t_max[i] > 0.f && scene->occluded(Ray{o, Vec3f(dx[i], dy[i], dz[i]), 0.f, t_max[i], 0.f});
+            ASSERT_EQ(bool(blocked[i]), expect) << "trial " << trial << ", segment " << i;
+            (expect ? blocked_count : free_count) += 1;
+        }
+    }
+    EXPECT_GT(few_blockers, 100); // the culled path is taken
+    EXPECT_GT(blocked_count, 500);
+    EXPECT_GT(free_count, 500);
 }
 
 // balance_sums (eight targets in vector lanes) against a direct double-precision sum.

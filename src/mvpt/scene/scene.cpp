@@ -254,12 +254,30 @@ void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const
     // Most bundles meet no occluder at all. Culling pays from two packets on: one packet of 8
     // traces faster than the test that would spare it (glossy Cornell box, 8 segments: +12 %
     // time with culling; 5x5 light field, 24 segments: -7 %).
+    // When one to four occluders meet the bundle (5x5 light field: most bundles that are not
+    // free), each segment is tested against them exactly and only packets with a segment
+    // that may meet one are traced (light field: a quarter of those packets, -1.6 %
+    // instructions). Untraced lanes are ones Embree would find unblocked: images do not change.
+    constexpr int MaxBlockers = 4;
+    int64_t blockers[MaxBlockers];
+    int n_blockers = -1;
     if (m_occluders && n > 8) {
         SegmentBundle bundle;
-        if (bundle.build(o, across, dx, dy, dz, t_max, n) && !m_occluders->may_block(bundle)) {
+        if (bundle.build(o, across, dx, dy, dz, t_max, n)) n_blockers = m_occluders->blockers(bundle, blockers, MaxBlockers);
+        if (n_blockers == 0) {
             std::fill(blocked, blocked + n, uint8_t(0));
             return;
         }
+    }
+    // Which segments those occluders may meet, to a margin far beyond the float rounding of
+    // Embree's tests (~1e-7 relative).
+    uint8_t maybe[128];
+    const bool culled = n_blockers > 0 && n <= sizeof(maybe);
+    if (culled) {
+        const double a[3] = {o.x, o.y, o.z};
+        const double margin = 1e-6 * (1.0 + std::max({std::abs(a[0]), std::abs(a[1]), std::abs(a[2])}));
+        std::fill(maybe, maybe + n, uint8_t(0));
+        for (int k = 0; k < n_blockers; ++k) m_occluders->may_hit(blockers[k], a, dx, dy, dz, t_max, n, margin, 1e-6, maybe);
     }
     // 8-wide packets flagged incoherent: Embree then traces these nearly parallel segments
     // faster than with the coherent flag (10 % on the glossy Cornell box) or as single rays.
@@ -283,9 +301,13 @@ void Scene::occluded_segments(Point3f o, const float *dx, const float *dy, const
         std::memcpy(p.dir_z, dz + b, sizeof(p.dir_z));
         std::memcpy(p.tfar, t_max + b, sizeof(p.tfar));
         alignas(32) int valid[Width];
-        for (size_t i = 0; i < Width; ++i) valid[i] = -int(origin_ok & (p.tfar[i] > 0.f));
-        rtcOccluded8(valid, m_scene, &ctx, &p);
         const size_t m = std::min(Width, n - b);
+        bool any = false;
+        for (size_t i = 0; i < Width; ++i) {
+            valid[i] = -int(origin_ok & (p.tfar[i] > 0.f) && i < m && (!culled || maybe[b + i]));
+            any |= valid[i] != 0;
+        }
+        if (any) rtcOccluded8(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
     }
 }

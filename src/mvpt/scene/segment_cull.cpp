@@ -11,6 +11,9 @@ namespace mvpt {
 
 namespace {
 double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+void cross3(const double *a, const double *b, double *out) {
+    out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
+}
 
 /// Relative margin of the double-precision tests: far above their rounding (~1e-15) and far
 /// below the spawn offset of a visibility ray's origin (~5e-6, interaction.h).
@@ -436,7 +439,9 @@ struct NodeTest {
 };
 } // namespace
 
-bool OccluderBvh::may_block(const SegmentBundle &b) const {
+bool OccluderBvh::may_block(const SegmentBundle &b) const { return blockers(b, nullptr, 0) != 0; }
+
+int OccluderBvh::blockers(const SegmentBundle &b, int64_t *out, int max) const {
     // The inner nodes' tests run in float: a box is cut off by a plane only when it lies beyond
     // it by more than their rounding (below 1e-6 |n|_1 (|p| + |o| + |d|) inside the scene).
     const float extent = std::max({m_extent, std::abs(b.origin_f[0]), std::abs(b.origin_f[1]), std::abs(b.origin_f[2])});
@@ -445,7 +450,72 @@ bool OccluderBvh::may_block(const SegmentBundle &b) const {
     // Only the four side planes: the box of the end points already bounds the height.
     for (int k = 0; k < 4; ++k)
         test.add(b.normal_f[k], b.limit_f[k] + 4e-6f * b.norm1_f[k] * (2.f * extent + std::abs(b.offset_f[k])));
-    return walk(test, [&](uint32_t i) { return prim_may_block(m_prims[i], b); });
+    int found = 0;
+    const bool more = walk(test, [&](uint32_t i) {
+        if (!prim_may_block(m_prims[i], b)) return false;
+        if (found == max) return true; // one too many: stop
+        out[found++] = int64_t(i);
+        return false;
+    });
+    return more ? -1 : found;
+}
+
+void OccluderBvh::may_hit(int64_t i, const double a[3], const float *dx, const float *dy, const float *dz,
+                          const float *t_max, size_t n, double margin, double per_length, uint8_t *hit) const {
+    const Prim &prim = m_prims[size_t(i)];
+    if (prim.kind == Kind::Sphere) { // the segment's point nearest to the centre (unit directions)
+        const double *c = prim.p[0], r = prim.p[1][0];
+        const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]}, ac2 = dot3(ac, ac);
+        for (size_t s = 0; s < n; ++s) {
+            const double t = t_max[s];
+            if (hit[s] || !(t > 0)) continue;
+            const double d[3] = {dx[s], dy[s], dz[s]}, dd = dot3(d, d);
+            const double rm = r + margin + per_length * t;
+            const double along = std::clamp(dot3(ac, d) / dd, 0.0, t); // parameter of the nearest point
+            const double dist2 = ac2 - 2 * along * dot3(ac, d) + along * along * dd;
+            hit[s] = dist2 <= rm * rm;
+        }
+        return;
+    }
+    for (size_t s = 0; s < n; ++s) {
+        const double t = t_max[s];
+        if (hit[s] || !(t > 0)) continue;
+        const double b[3] = {a[0] + double(dx[s]) * t, a[1] + double(dy[s]) * t, a[2] + double(dz[s]) * t};
+        hit[s] = may_hit(i, a, b, margin + per_length * t);
+    }
+}
+
+bool OccluderBvh::may_hit(int64_t i, const double a[3], const double b[3], double margin) const {
+    const Prim &prim = m_prims[size_t(i)];
+    for (int c = 0; c < 3; ++c)
+        if (std::max(a[c], b[c]) < prim.lo[c] - margin || std::min(a[c], b[c]) > prim.hi[c] + margin) return false;
+    const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double len2 = dot3(ab, ab);
+    if (prim.kind == Kind::Sphere) { // the segment's point nearest to the centre
+        const double *c = prim.p[0], r = prim.p[1][0] + margin;
+        const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        const double t = len2 > 0 ? std::clamp(dot3(ac, ab) / len2, 0.0, 1.0) : 0.0;
+        const double w[3] = {ac[0] - t * ab[0], ac[1] - t * ab[1], ac[2] - t * ab[2]};
+        return dot3(w, w) <= r * r;
+    }
+    if (prim.kind != Kind::Triangle) return true;
+    // Both ends beyond the plane on one side, or the point where the segment meets the
+    // plane (the nearest end if it stops short) beyond an edge, by more than the margin.
+    const double *p0 = prim.p[0], *n = prim.n, tol = margin * prim.n_len;
+    const double da = n[0] * (a[0] - p0[0]) + n[1] * (a[1] - p0[1]) + n[2] * (a[2] - p0[2]);
+    const double db = n[0] * (b[0] - p0[0]) + n[1] * (b[1] - p0[1]) + n[2] * (b[2] - p0[2]);
+    if ((da > tol && db > tol) || (da < -tol && db < -tol)) return false;
+    if (!(std::abs(da - db) > 1e-3 * prim.n_len * std::sqrt(len2))) return true; // nearly in the plane
+    const double t = std::clamp(da / (da - db), 0.0, 1.0);
+    const double q[3] = {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
+    for (int k = 0; k < 3; ++k) {
+        const double *p = prim.p[k], *p1 = prim.p[(k + 1) % 3];
+        const double e[3] = {p1[0] - p[0], p1[1] - p[1], p1[2] - p[2]}, w[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+        double x[3];
+        cross3(e, w, x); // (e x w).n = |e| |n| times the signed distance of q from the edge
+        if (dot3(x, n) < -margin * std::sqrt(dot3(e, e)) * prim.n_len) return false;
+    }
+    return true;
 }
 
 bool OccluderBvh::may_block(const ConvexRegion &r, int64_t skip) const {

@@ -75,6 +75,17 @@ public:
     bool may_block(const SegmentBundle &b) const;
     /// The same for a convex region, ignoring occluder `skip` (-1: none).
     bool may_block(const ConvexRegion &r, int64_t skip) const;
+    /// The occluders that may_block(b) finds may meet the bundle, up to `max` of them into
+    /// `out`: how many, or -1 when there are more.
+    int blockers(const SegmentBundle &b, int64_t *out, int max) const;
+    /// False only if occluder `i` cannot meet the segment from `a` to `b`: exact in double
+    /// precision up to the distance `margin` (boxes always may).
+    bool may_hit(int64_t i, const double a[3], const double b[3], double margin) const;
+    /// may_hit for the segments from `a` along (dx, dy, dz)[s] to length t_max[s] (those with
+    /// t_max > 0), each with margin `margin + per_length * t_max`: sets hit[s] = 1 where occluder
+    /// `i` may meet segment s (and leaves the others as they are).
+    void may_hit(int64_t i, const double a[3], const float *dx, const float *dy, const float *dz, const float *t_max,
+                 size_t n, double margin, double per_length, uint8_t *hit) const;
     size_t size() const { return m_prims.size(); }
     /// The occluder that is primitive `prim` of `shape` (a mesh triangle or a sphere), or -1.
     int64_t occluder_of(const Shape *shape, uint32_t prim) const;
