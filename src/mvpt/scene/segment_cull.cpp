@@ -481,23 +481,15 @@ void OccluderBvh::may_hit(int64_t i, const double a[3], const float *dx, const f
         const double t = t_max[s];
         if (hit[s] || !(t > 0)) continue;
         const double b[3] = {a[0] + double(dx[s]) * t, a[1] + double(dy[s]) * t, a[2] + double(dz[s]) * t};
-        hit[s] = may_hit(i, a, b, margin + per_length * t);
+        hit[s] = flat_may_hit(prim, a, b, margin + per_length * t);
     }
 }
 
-bool OccluderBvh::may_hit(int64_t i, const double a[3], const double b[3], double margin) const {
-    const Prim &prim = m_prims[size_t(i)];
+bool OccluderBvh::flat_may_hit(const Prim &prim, const double a[3], const double b[3], double margin) {
     for (int c = 0; c < 3; ++c)
         if (std::max(a[c], b[c]) < prim.lo[c] - margin || std::min(a[c], b[c]) > prim.hi[c] + margin) return false;
     const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     const double len2 = dot3(ab, ab);
-    if (prim.kind == Kind::Sphere) { // the segment's point nearest to the centre
-        const double *c = prim.p[0], r = prim.p[1][0] + margin;
-        const double ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        const double t = len2 > 0 ? std::clamp(dot3(ac, ab) / len2, 0.0, 1.0) : 0.0;
-        const double w[3] = {ac[0] - t * ab[0], ac[1] - t * ab[1], ac[2] - t * ab[2]};
-        return dot3(w, w) <= r * r;
-    }
     if (prim.kind != Kind::Triangle) return true;
     // Both ends beyond the plane on one side, or the point where the segment meets the
     // plane (the nearest end if it stops short) beyond an edge, by more than the margin.

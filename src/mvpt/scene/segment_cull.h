@@ -78,12 +78,10 @@ public:
     /// The occluders that may_block(b) finds may meet the bundle, up to `max` of them into
     /// `out`: how many, or -1 when there are more.
     int blockers(const SegmentBundle &b, int64_t *out, int max) const;
-    /// False only if occluder `i` cannot meet the segment from `a` to `b`: exact in double
-    /// precision up to the distance `margin` (boxes always may).
-    bool may_hit(int64_t i, const double a[3], const double b[3], double margin) const;
-    /// may_hit for the segments from `a` along (dx, dy, dz)[s] to length t_max[s] (those with
-    /// t_max > 0), each with margin `margin + per_length * t_max`: sets hit[s] = 1 where occluder
-    /// `i` may meet segment s (and leaves the others as they are).
+    /// For the segments from `a` along (dx, dy, dz)[s] to length t_max[s] (those with t_max > 0):
+    /// sets hit[s] = 1 unless occluder `i` provably misses segment s (exact in double precision
+    /// up to the distance `margin + per_length * t_max[s]`; boxes always may), and leaves the
+    /// other entries as they are.
     void may_hit(int64_t i, const double a[3], const float *dx, const float *dy, const float *dz, const float *t_max,
                  size_t n, double margin, double per_length, uint8_t *hit) const;
     size_t size() const { return m_prims.size(); }
@@ -110,6 +108,8 @@ private:
     };
     bool prim_may_block(const Prim &prim, const SegmentBundle &b) const;
     bool prim_may_block(const Prim &prim, const ConvexRegion &r) const;
+    /// may_hit for one segment from `a` to `b` and a triangle or box.
+    static bool flat_may_hit(const Prim &prim, const double a[3], const double b[3], double margin);
     /// True when triangle `tri`'s plane has all `n` vertices strictly on one side.
     static bool plane_separates(const Prim &tri, const double (*vertex)[3], int n, double eps);
     /// Depth-first walk of the tree: `keep(inner node)` gives the children to visit (a mask
