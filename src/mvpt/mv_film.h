@@ -101,13 +101,14 @@ public:
     }
     /// The buffer of view `slot` (empty if nothing was splatted there).
     SplatView &view(int slot) { return m_data[slot]; }
-
-private:
+    /// The buffer of view `slot`, allocated on first use: for adding to it.
     SplatView &view_of(int slot) {
         SplatView &v = m_data[slot];
         if (v.empty()) v.allocate(m_pixels[slot]);
         return v;
     }
+
+private:
     std::vector<size_t> m_pixels;
     std::vector<SplatView> m_data;
 };

@@ -293,7 +293,7 @@ size_t MvPendingSamples::add_entries(size_t n) {
     if (entries > slot.size()) { // grow geometrically: no per-sample resizing (and zero fills)
         const size_t size = std::max(entries, 2 * slot.size());
         slot.resize(size), pixel.resize(size), w.resize(size);
-        f_nee.resize(size), f_bounce.resize(size);
+        f_nee.resize(size + 1), f_bounce.resize(size + 1); // + 1: mv_splat.cpp reads 16 bytes per entry
     }
     return first;
 }

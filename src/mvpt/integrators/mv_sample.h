@@ -135,7 +135,7 @@ struct MvPendingSamples {
     std::vector<int> slot;
     std::vector<uint32_t> pixel;
     std::vector<float> w;
-    std::vector<Spectrum> f_nee, f_bounce;
+    std::vector<Spectrum> f_nee, f_bounce; ///< with one more element than the others
     size_t entries = 0; ///< entries in use (the arrays above keep their size between tiles)
     /// Room for n more entries; returns the first.
     size_t add_entries(size_t n);
@@ -148,9 +148,6 @@ struct MvPendingSamples {
     /// The shared NEE's shadow rays, traced as packets with the suffixes; results.
     std::vector<Ray> shadow_rays;
     std::vector<uint8_t> shadow_blocked;
-    /// One sample's W*L per channel and whether each entry may be splatted (mv_finish_samples).
-    std::vector<float> lw[3];
-    std::vector<uint32_t> ok;
     void clear();
 };
 
@@ -170,6 +167,25 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim);
 /// contributions that need no suffix are splatted now, the others join `pending`.
 void mv_native_sample(const MvContext &ctx, int slot, MvPrimaries &prim, size_t i, MvScratch &scratch,
                       MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
+
+/// What the entries of one pending sample have in common once its suffix is traced.
+struct MvSplatTerms {
+    Spectrum nee_weight, suffix;
+    float b_scale;
+    bool nee, bounce, valid; ///< the light sample is unblocked; the bounce serves every view; a valid sample
+};
+
+/// W·L of one entry (§7): ([nee] f_nee * nee_weight + [bounce] (f_bounce * b_scale) * suffix) W,
+/// zero when the sample is not valid.
+Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w);
+
+/// Adds entries [begin, end) of one sample to `buffer`: W·L (mv_entry_value) and W into pixel
+/// pixels[i] of view slots[i], the same bits as SplatBuffer::add; entries that do not fit are
+/// counted in dropped[slot]. f_nee and f_bounce are read 16 bytes per entry: one Spectrum past
+/// `end` must be readable.
+void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
+                      const float *w, const int *slots, const uint32_t *pixels, size_t begin, size_t end,
+                      uint64_t *dropped);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
 /// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).

@@ -7,40 +7,71 @@
 
 #include <algorithm>
 
+#include <xmmintrin.h>
+#include <emmintrin.h>
+
 namespace mvpt {
 
-namespace {
-
-/// What one sample's entries have in common (MvPendingSamples::Sample, with its suffix known).
-struct SampleTerms {
-    float nee_weight[3], b_scale, suffix[3];
-    bool nee, bounce, valid;
-};
-
-/// W·L of n entries (§7), per channel:
-///   L = [nee] f_nee * nee_weight + [bounce] (f_bounce * b_scale) * suffix,  W·L = [valid] L * W,
-/// the sums in the order of the scalar definition, so the bits do not depend on the CPU; and
-/// whether W·L and W fit the splat buffers.
-MVPT_MULTI_ISA void contribution_kernel(const Spectrum *__restrict f_nee, const Spectrum *__restrict f_bounce,
-                                        const float *__restrict w, size_t n, const SampleTerms &t,
-                                        float *__restrict o0, float *__restrict o1, float *__restrict o2,
-                                        uint32_t *__restrict ok) {
-    const bool nee = t.nee, bounce = t.bounce, valid = t.valid;
-    const float nw0 = t.nee_weight[0], nw1 = t.nee_weight[1], nw2 = t.nee_weight[2], bs = t.b_scale;
-    const float s0 = t.suffix[0], s1 = t.suffix[1], s2 = t.suffix[2];
-    for (size_t i = 0; i < n; ++i) {
-        const Spectrum fn = f_nee[i], fb = f_bounce[i];
-        const float l0 = select(nee, fn.r * nw0, 0.f) + select(bounce, fb.r * bs * s0, 0.f);
-        const float l1 = select(nee, fn.g * nw1, 0.f) + select(bounce, fb.g * bs * s1, 0.f);
-        const float l2 = select(nee, fn.b * nw2, 0.f) + select(bounce, fb.b * bs * s2, 0.f);
-        const float v0 = select(valid, l0 * w[i], 0.f), v1 = select(valid, l1 * w[i], 0.f), v2 = select(valid, l2 * w[i], 0.f);
-        o0[i] = v0, o1[i] = v1, o2[i] = v2;
-        ok[i] = uint32_t(SplatBuffer::fits(v0)) & uint32_t(SplatBuffer::fits(v1)) & uint32_t(SplatBuffer::fits(v2)) &
-                uint32_t(SplatBuffer::fits(w[i]));
-    }
+Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w) {
+    Spectrum L = t.nee ? f_nee * t.nee_weight : Spectrum(0.f);
+    if (t.bounce) L += f_bounce * t.b_scale * t.suffix;
+    return t.valid ? L * w : Spectrum(0.f);
 }
 
-} // namespace
+// Per entry, the four values in the lanes of one vector, masked as mv_entry_value selects,
+// then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer (to nearest even) in its
+// low bits: exactly to_fixed's llrint when |v| < 2^21. Other values that fit take to_fixed per
+// channel.
+MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
+                                     const Spectrum *__restrict f_bounce, const float *__restrict w,
+                                     const int *__restrict slots, const uint32_t *__restrict pixels, size_t begin,
+                                     size_t end, uint64_t *__restrict dropped) {
+    typedef double D4 __attribute__((vector_size(32)));
+    typedef int64_t I4 __attribute__((vector_size(32)));
+    static_assert(sizeof(Spectrum) == 12, "entries are read as 16 bytes from each Spectrum");
+    for (size_t i = begin; i < end; ++i) buffer.view_of(slots[i]); // allocated here: no call in the loop
+    const __m128i lanes3 = _mm_set_epi32(0, -1, -1, -1), lane3 = _mm_set_epi32(-1, 0, 0, 0);
+    const __m128 nee_mask = _mm_castsi128_ps(t.nee ? lanes3 : _mm_setzero_si128());
+    const __m128 bounce_mask = _mm_castsi128_ps(t.bounce ? lanes3 : _mm_setzero_si128());
+    const __m128 valid_mask = _mm_castsi128_ps(t.valid ? lanes3 : _mm_setzero_si128());
+    const __m128 nw = _mm_setr_ps(t.nee_weight[0], t.nee_weight[1], t.nee_weight[2], 0.f);
+    const __m128 bs = _mm_set1_ps(t.b_scale), sfx = _mm_setr_ps(t.suffix[0], t.suffix[1], t.suffix[2], 0.f);
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 exact = _mm_set1_ps(0x1p21f), fits = _mm_set1_ps(float(SplatMax));
+    const D4 scale = {SplatScale, SplatScale, SplatScale, SplatScale};
+    const D4 magic = {0x1.8p52, 0x1.8p52, 0x1.8p52, 0x1.8p52};
+    I4 magic_bits;
+    __builtin_memcpy(&magic_bits, &magic, sizeof(magic));
+    for (size_t i = begin; i < end; ++i) {
+        const __m128 fn = _mm_loadu_ps(&f_nee[i].r), fb = _mm_loadu_ps(&f_bounce[i].r);
+        const __m128 L = _mm_add_ps(_mm_and_ps(_mm_mul_ps(fn, nw), nee_mask),
+                                    _mm_and_ps(_mm_mul_ps(_mm_mul_ps(fb, bs), sfx), bounce_mask));
+        const __m128 wi = _mm_set1_ps(w[i]);
+        const __m128 v = _mm_or_ps(_mm_and_ps(_mm_mul_ps(L, wi), valid_mask), _mm_and_ps(wi, _mm_castsi128_ps(lane3)));
+        const __m128 mag = _mm_and_ps(v, abs_mask);
+        SplatView &view = buffer.view(slots[i]);
+        SplatPixel &p = view.shared[pixels[i]];
+        if (_mm_movemask_ps(_mm_cmplt_ps(mag, exact)) == 0xf) {
+            float f[4];
+            _mm_storeu_ps(f, v);
+            const D4 x = D4{f[0], f[1], f[2], f[3]} * scale + magic;
+            I4 fixed, sum;
+            __builtin_memcpy(&fixed, &x, sizeof(fixed));
+            __builtin_memcpy(&sum, &p, sizeof(sum));
+            sum += fixed - magic_bits;
+            __builtin_memcpy(static_cast<void *>(&p), &sum, sizeof(sum));
+        } else if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) == 0xf) {
+            float f[4];
+            _mm_storeu_ps(f, v);
+            for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(f[c]);
+            p.w += to_fixed(f[3]);
+        } else {
+            ++dropped[slots[i]];
+            continue;
+        }
+        ++view.count[pixels[i]];
+    }
+}
 
 void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
                        RayCounters &counters, MvViewStats *stats) {
@@ -57,45 +88,32 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
     if (!pending.shadow_rays.empty())
         ctx.scene->occluded(pending.shadow_rays.data(), pending.shadow_rays.size(), pending.shadow_blocked.data());
 
-    uint32_t most = 0;
-    for (const MvPendingSamples::Sample &rec : pending.samples) most = std::max(most, rec.count);
-    for (int c = 0; c < 3; ++c) pending.lw[c].resize(most);
-    pending.ok.resize(most);
-    float *const lw[3] = {pending.lw[0].data(), pending.lw[1].data(), pending.lw[2].data()};
-    SplatBuffer &buffer = sink.buffer;
     for (const MvPendingSamples::Sample &rec : pending.samples) {
         const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
         const bool bounce = !suffix.is_black();
-        SampleTerms t;
-        for (int c = 0; c < 3; ++c) t.nee_weight[c] = rec.nee_weight[c], t.suffix[c] = suffix[c];
-        t.b_scale = rec.b_scale;
-        t.nee = rec.nee && rec.shadow >= 0 && !pending.shadow_blocked[rec.shadow];
-        t.bounce = bounce && rec.delta_view < 0;
-        t.valid = rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid;
+        const MvSplatTerms t{rec.nee_weight, suffix, rec.b_scale, rec.nee && rec.shadow >= 0 && !pending.shadow_blocked[rec.shadow],
+                            bounce && rec.delta_view < 0, rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
         const uint32_t first = rec.first, n = rec.count;
         const Spectrum *f_nee = pending.f_nee.data() + first, *f_bounce = pending.f_bounce.data() + first;
         const float *w = pending.w.data() + first;
-        contribution_kernel(f_nee, f_bounce, w, n, t, lw[0], lw[1], lw[2], pending.ok.data());
-        if (bounce && rec.delta_view >= 0) { // a delta lobe's direction serves its view only
-            const uint32_t i = uint32_t(rec.delta_view);
-            Spectrum L = t.nee ? f_nee[i] * rec.nee_weight : Spectrum(0.f);
-            L += rec.delta_bounce * suffix;
-            const Spectrum v = t.valid ? L * w[i] : Spectrum(0.f);
-            for (int c = 0; c < 3; ++c) lw[c][i] = v[c];
-            pending.ok[i] = SplatBuffer::fits(v) & SplatBuffer::fits(w[i]);
-        }
         const int *slots = pending.slot.data() + first;
         const uint32_t *pixels = pending.pixel.data() + first;
-        // The native view's entry (i = 0) also carries E.
-        pending.ok[0] &= uint32_t(SplatBuffer::fits(rec.e));
-        for (uint32_t i = 0; i < n; ++i) {
-            if (!pending.ok[i]) {
-                ++sink.dropped[slots[i]];
-                continue;
-            }
-            buffer.add_fitting(slots[i], pixels[i], lw[0][i], lw[1][i], lw[2][i], w[i]);
-        }
-        if (pending.ok[0]) buffer.add_native(slots[0], pixels[0], rec.e);
+        // Two entries on their own: a delta lobe's direction serves its view only, and the
+        // native view's entry (i = 0) also carries E.
+        const int delta = bounce ? rec.delta_view : -1;
+        auto value = [&](int i) {
+            if (i != delta) return mv_entry_value(t, f_nee[i], f_bounce[i], w[i]);
+            Spectrum L = t.nee ? f_nee[i] * rec.nee_weight : Spectrum(0.f);
+            L += rec.delta_bounce * suffix;
+            return t.valid ? L * w[i] : Spectrum(0.f);
+        };
+        sink.native(slots[0], pixels[0], value(0), w[0], rec.e);
+        if (delta > 0) {
+            sink.shared(slots[delta], pixels[delta], value(delta), w[delta]);
+            mv_splat_entries(sink.buffer, t, f_nee, f_bounce, w, slots, pixels, 1, size_t(delta), sink.dropped);
+            mv_splat_entries(sink.buffer, t, f_nee, f_bounce, w, slots, pixels, size_t(delta) + 1, n, sink.dropped);
+        } else
+            mv_splat_entries(sink.buffer, t, f_nee, f_bounce, w, slots, pixels, 1, n, sink.dropped);
     }
     pending.clear();
 }

@@ -1,0 +1,75 @@
+// mv_splat_entries (one vector per entry, rounded by adding 1.5 * 2^52) against
+// mv_entry_value + SplatBuffer::add (llrint per channel): the same integers in every channel,
+// the same contributions dropped, for values that take each of its three paths.
+#include "mvpt/integrators/mv_sample.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+using namespace mvpt;
+
+TEST(MvSplat, EntryKernelEqualsScalarAdds) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    // Mostly ordinary values; some beyond 2^21 (to_fixed per channel), beyond SplatMax or not
+    // finite (dropped), negative, zero.
+    auto value = [&]() -> float {
+        float r = u(rng);
+        if (r < 0.70f) return 4.f * u(rng);
+        if (r < 0.80f) return -4.f * u(rng);
+        if (r < 0.88f) return std::ldexp(1.f + u(rng), 21 + int(rng() % 8)); // [2^21, 2^29): fits
+        if (r < 0.91f) return std::ldexp(1.f + u(rng), 32);                  // >= SplatMax
+        if (r < 0.93f) return (rng() & 1) ? INFINITY : nan;
+        return 0.f;
+    };
+    const std::vector<size_t> pixels_per_view = {5, 9, 3};
+    int paths[3] = {}; // vector, per channel, dropped (by the values the reference adds)
+    for (int trial = 0; trial < 1000; ++trial) {
+        const size_t n = 1 + rng() % 40, begin = rng() % n, end = begin + rng() % (n - begin + 1);
+        std::vector<Spectrum> f_nee(n + 1), f_bounce(n + 1); // + 1: read 16 bytes per entry
+        std::vector<float> w(n);
+        std::vector<int> slots(n);
+        std::vector<uint32_t> pixels(n);
+        for (size_t i = 0; i <= n; ++i) {
+            f_nee[i] = Spectrum(value(), value(), value());
+            f_bounce[i] = Spectrum(value(), value(), value());
+        }
+        for (size_t i = 0; i < n; ++i) {
+            w[i] = u(rng) < 0.9f ? u(rng) : value();
+            slots[i] = int(rng() % pixels_per_view.size());
+            pixels[i] = uint32_t(rng() % pixels_per_view[size_t(slots[i])]);
+        }
+        MvSplatTerms t{Spectrum(u(rng), 2.f * u(rng), u(rng)), Spectrum(value(), u(rng), u(rng)), 0.5f + u(rng),
+                       (rng() % 4) != 0, (rng() % 4) != 0, (rng() % 8) != 0};
+        SplatBuffer ref(pixels_per_view), got(pixels_per_view);
+        std::vector<uint64_t> ref_dropped(pixels_per_view.size()), got_dropped(pixels_per_view.size());
+        for (size_t i = begin; i < end; ++i) {
+            const Spectrum v = mv_entry_value(t, f_nee[i], f_bounce[i], w[i]);
+            const bool added = ref.add(slots[i], pixels[i], v, w[i]);
+            ref_dropped[size_t(slots[i])] += !added;
+            const bool exact = std::abs(v[0]) < 0x1p21f && std::abs(v[1]) < 0x1p21f && std::abs(v[2]) < 0x1p21f &&
+                               std::abs(w[i]) < 0x1p21f;
+            ++paths[!added ? 2 : exact ? 0 : 1];
+        }
+        mv_splat_entries(got, t, f_nee.data(), f_bounce.data(), w.data(), slots.data(), pixels.data(), begin, end,
+                         got_dropped.data());
+        for (size_t s = 0; s < pixels_per_view.size(); ++s) {
+            ASSERT_EQ(got_dropped[s], ref_dropped[s]) << "trial " << trial << ", view " << s;
+            // (A view is allocated when an entry is due there, even if it is dropped.)
+            SplatView &g = got.view(int(s)), &r = ref.view(int(s));
+            if (g.empty()) ASSERT_TRUE(r.empty());
+            else
+                for (size_t p = 0; p < pixels_per_view[s]; ++p)
+                    for (int c = 0; c < SplatChannels; ++c)
+                        ASSERT_EQ(g.channel(p, c), r.empty() ? 0 : r.channel(p, c))
+                        << "trial " << trial << ", view " << s << ", pixel " << p << ", channel " << c;
+        }
+    }
+    EXPECT_GT(paths[0], 3000);
+    EXPECT_GT(paths[1], 1000);
+    EXPECT_GT(paths[2], 500);
+}
