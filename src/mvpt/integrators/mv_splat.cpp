@@ -7,8 +7,10 @@
 
 #include <algorithm>
 
-#include <xmmintrin.h>
+#if defined(__SSE2__)
 #include <emmintrin.h>
+#include <xmmintrin.h>
+#endif
 
 namespace mvpt {
 
@@ -26,6 +28,10 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t,
                                      const Spectrum *__restrict f_bounce, const float *__restrict w,
                                      const int *__restrict slots, const uint32_t *__restrict pixels, size_t begin,
                                      size_t end, uint64_t *__restrict dropped) {
+#if !defined(__SSE2__) // not x86-64: entry by entry
+    for (size_t i = begin; i < end; ++i)
+        if (!buffer.add(slots[i], pixels[i], mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i])) ++dropped[slots[i]];
+#else
     typedef double D4 __attribute__((vector_size(32)));
     typedef int64_t I4 __attribute__((vector_size(32)));
     static_assert(sizeof(Spectrum) == 12, "entries are read as 16 bytes from each Spectrum");
@@ -71,6 +77,7 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t,
         }
         ++view.count[pixels[i]];
     }
+#endif
 }
 
 void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
