@@ -102,7 +102,8 @@ MVPT_MULTI_ISA void segment_kernel(const float *__restrict lx, const float *__re
 /// (Always inlined: a call would pass the vectors through memory in the default ISA.)
 template <int Blocks, typename F8>
 [[gnu::always_inline]] inline void balance_blocks(const float *__restrict g, const float *__restrict nn, size_t nv,
-                           const float *__restrict g_targets, size_t t0, bool jacobian, float *__restrict d) {
+                                                  const float *__restrict g_targets, size_t t0, bool jacobian,
+                                                  float *__restrict d) {
     F8 inv_gk[Blocks], acc[Blocks];
     for (int b = 0; b < Blocks; ++b) {
         F8 gk;

@@ -114,8 +114,8 @@ void select_by_jacobian(const MvCandidates &c, const uint64_t *slot_keys, uint64
 /// Balance sums of §5 without pairwise terms, for every target: with r_j = G_j / G_k,
 ///   D_k = sum_j n_j r_j min(1, r_j)  (`jacobian`, s_J of §6)   or   sum_j n_j r_j,
 /// over the `valid` strategies j (arrays g, n), summed in the order of j (deterministic), as
-/// (1/G_k) sum_j min(n_j G_j, n_j G_j^2 / G_k) (n_j >= 0, G_j > 0). `g_targets`: the G_k of the targets, padded to a multiple of 8 with positive values; d gets
-/// as many entries.
+/// (1/G_k) sum_j min(n_j G_j, n_j G_j^2 / G_k) (n_j >= 0, G_j > 0). `g_targets`: the G_k of
+/// the targets, padded to a multiple of 8 with positive values; d gets as many entries.
 void balance_sums(const float *g, const float *n, size_t valid, const float *g_targets, size_t padded_targets,
                   bool jacobian, float *d);
 
