@@ -37,6 +37,8 @@ struct SplatView {
     std::vector<SplatPixel> shared;
     std::vector<int64_t> native; ///< E, 3 per pixel
     std::vector<uint32_t> count;
+    /// Bytes per pixel of an allocated view (for memory estimates).
+    static constexpr size_t bytes_per_pixel = sizeof(SplatPixel) + 3 * sizeof(int64_t) + sizeof(uint32_t);
     bool empty() const { return shared.empty(); }
     void allocate(size_t pixels) {
         shared.assign(pixels, SplatPixel{});

@@ -44,7 +44,7 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     double per_pixel = 6 * sizeof(double) + sizeof(uint32_t) + 7 * sizeof(float);
     if (mv) per_pixel += 11 * sizeof(double) + sizeof(uint32_t) + sizeof(uint64_t) + sizeof(uint16_t) +
-                         2 * sizeof(float) + double(threads) * (sizeof(SplatPixel) + 3 * sizeof(int64_t) + sizeof(uint32_t));
+                         2 * sizeof(float) + double(threads) * double(SplatView::bytes_per_pixel);
     for (int v : m_views) {
         const FilmDesc &f = cams[v]->film;
         bytes += double(f.crop_width) * f.crop_height * per_pixel;

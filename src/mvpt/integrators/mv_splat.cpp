@@ -57,9 +57,9 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t,
         const __m128 mag = _mm_and_ps(v, abs_mask);
         SplatView &view = buffer.view(slots[i]);
         SplatPixel &p = view.shared[pixels[i]];
+        float f[4];
+        _mm_storeu_ps(f, v);
         if (_mm_movemask_ps(_mm_cmplt_ps(mag, exact)) == 0xf) {
-            float f[4];
-            _mm_storeu_ps(f, v);
             const D4 x = D4{f[0], f[1], f[2], f[3]} * scale + magic;
             I4 fixed, sum;
             __builtin_memcpy(&fixed, &x, sizeof(fixed));
@@ -67,8 +67,6 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t,
             sum += fixed - magic_bits;
             __builtin_memcpy(static_cast<void *>(&p), &sum, sizeof(sum));
         } else if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) == 0xf) {
-            float f[4];
-            _mm_storeu_ps(f, v);
             for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(f[c]);
             p.w += to_fixed(f[3]);
         } else {
