@@ -404,7 +404,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     gather_shifts(ctx, slot_l, pixel_l, y, bsdf, si, sc, &st_l);
     const MvCandidates &cand = sc.cand;
     const size_t m = cand.size;
-    if (!sc.material && sampler.kind() == SamplerKind::Independent) // the same draws, in one vector loop
+    if (!sc.material && !ctx.cfg.select_jacobian) {
+        // No selection term: every candidate is selected (gather_shifts set s = 1), no draws.
+    } else if (!sc.material && sampler.kind() == SamplerKind::Independent) // the same draws, in one vector loop
         select_by_jacobian(cand, ctx.select_keys.data(), sampler.sample_hash(), ctx.cfg.select_jacobian,
                            sc.s_sel.data(), sc.selected.data());
     else

@@ -5,7 +5,7 @@
 //     <string name="estimator" value="balance"/>             balance | weighted (§5)
 //     <boolean name="control_variate" value="true"/>         balance + beta (1 - sum W), unbiased
 //     <string name="mis_set" value="all"/>                   all | selected (published, biased)
-//     <boolean name="select_jacobian" value="true"/>          s_J of §6
+//     <boolean name="select_jacobian" value="false"/>         s_J of §6 (default true with mis_set=selected)
 //     <boolean name="select_material" value="false"/>         s_M of §6 (off: see mvpath.h)
 //     <string name="tv" value="peak"/>                        peak | montecarlo (§6)
 //     <boolean name="adaptive" value="true"/>                 native-sample maps (§8)
@@ -39,7 +39,7 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     if (set == "all") cfg.mis_selected_only = false;
     else if (set == "selected") cfg.mis_selected_only = true;
     else props.fail("mis_set", "'mis_set' must be 'all' or 'selected', got '" + set + "'");
-    cfg.select_jacobian = props.get_bool("select_jacobian", true);
+    cfg.select_jacobian = props.get_bool("select_jacobian", cfg.mis_selected_only);
     cfg.select_material = props.get_bool("select_material", false);
     std::string tv = props.get_string("tv", "peak");
     if (tv == "peak") cfg.tv = MvTotalVariation::PeakRatio;
