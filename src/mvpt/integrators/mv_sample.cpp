@@ -365,6 +365,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     ++counters.rays;
     SurfaceInteraction &si = prim.si[i_prim];
     const bool hit = prim.hit[i_prim] != 0;
+    if (ctx.rig && i_prim + 1 < prim.size() && prim.hit[i_prim + 1]) { // the next sample's rig cells start loading
+        const SurfaceInteraction &next = prim.si[i_prim + 1];
+        ctx.rig->prefetch(next.p, next.shape, next.prim);
+    }
 
     // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
     // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.

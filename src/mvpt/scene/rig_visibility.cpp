@@ -4,6 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace mvpt {
 
@@ -84,37 +89,79 @@ RigVisibility::RigVisibility(const OccluderBvh &occluders, const std::vector<Poi
         m_keyed[i] = occluders.is_sphere(int64_t(i)) ||
                      (occluders.triangle(int64_t(i), p, n, &n_len) && 0.5 * n_len >= 0.25 * m_size * m_size);
     }
-    m_table.reset(new std::atomic<uint64_t>[size_t(1) << TableBits]);
-    for (size_t i = 0; i < (size_t(1) << TableBits); ++i) m_table[i].store(0, std::memory_order_relaxed);
+    m_table = TableMemory(size_t(1) << TableBits);
 }
 
 RigVisibility::~RigVisibility() = default;
 
-bool RigVisibility::unblocked(Point3f o, int64_t own) const {
-    if (own < 0 || !m_keyed[size_t(own)]) return false;
+RigVisibility::TableMemory::TableMemory(size_t entries) : m_bytes(entries * sizeof(std::atomic<uint64_t>)) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    // Anonymous pages (zero-filled: every entry empty), in 2 MB pages where the kernel allows:
+    // the entries are read at random, and with 4 KB pages nearly every read also missed the TLB.
+    constexpr size_t Huge = size_t(2) << 20;
+    m_mapped = m_bytes + Huge;
+    void *p = mmap(nullptr, m_mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) throw std::bad_alloc();
+    m_base = p;
+    char *aligned = reinterpret_cast<char *>((reinterpret_cast<uintptr_t>(p) + Huge - 1) & ~uintptr_t(Huge - 1));
+    madvise(aligned, m_bytes, MADV_HUGEPAGE); // a hint: without it the table still works
+    m_entries = reinterpret_cast<std::atomic<uint64_t> *>(aligned);
+    for (size_t i = 0; i < entries; ++i) new (m_entries + i) std::atomic<uint64_t>(0);
+#else
+    m_entries = new std::atomic<uint64_t>[entries];
+    for (size_t i = 0; i < entries; ++i) m_entries[i].store(0, std::memory_order_relaxed);
+#endif
+}
+
+RigVisibility::TableMemory &RigVisibility::TableMemory::operator=(TableMemory &&o) noexcept {
+    std::swap(m_entries, o.m_entries), std::swap(m_base, o.m_base);
+    std::swap(m_bytes, o.m_bytes), std::swap(m_mapped, o.m_mapped);
+    return *this;
+}
+
+RigVisibility::TableMemory::~TableMemory() {
+    if (!m_entries) return;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    munmap(m_base, m_mapped);
+#else
+    delete[] m_entries;
+#endif
+}
+
+bool RigVisibility::finest_cell(Point3f o, int64_t finest[3]) const {
     const float fx = (o.x - m_lo_f[0]) * m_inv_size_f, fy = (o.y - m_lo_f[1]) * m_inv_size_f,
                 fz = (o.z - m_lo_f[2]) * m_inv_size_f;
     // (Negated comparisons: NaN fails them.)
     if (!(fx >= 0.f && fy >= 0.f && fz >= 0.f && fx < float(m_dims[0]) && fy < float(m_dims[1]) &&
           fz < float(m_dims[2])))
         return false;
-    const int64_t finest[3] = {int64_t(fx), int64_t(fy), int64_t(fz)};
+    finest[0] = int64_t(fx), finest[1] = int64_t(fy), finest[2] = int64_t(fz);
+    return true;
+}
+
+uint64_t RigVisibility::cell_key(const int64_t finest[3], int level, int64_t own, int64_t idx[3]) const {
+    const int shift = Levels - 1 - level;
+    int64_t dims[3];
+    for (int c = 0; c < 3; ++c) idx[c] = finest[c] >> shift, dims[c] = (m_dims[c] + (1 << shift) - 1) >> shift;
     const uint64_t cells = uint64_t(m_dims[0]) * uint64_t(m_dims[1]) * uint64_t(m_dims[2]);
-    const uint64_t mask = (uint64_t(1) << TableBits) - 1;
+    const uint64_t cell = uint64_t((idx[2] * dims[1] + idx[1]) * dims[0] + idx[0]);
+    return ((uint64_t(level) * cells + cell) * uint64_t(m_occ.size()) + uint64_t(own)) + 1;
+}
+
+bool RigVisibility::unblocked(Point3f o, int64_t own) const {
+    int64_t finest[3];
+    if (own < 0 || !m_keyed[size_t(own)] || !finest_cell(o, finest)) return false;
     // From coarse to fine: a coarse cell that is unblocked settles it; otherwise its sub-cell
     // holding o may still be.
     for (int level = 0; level < Levels; ++level) {
-        const int shift = Levels - 1 - level;
-        int64_t idx[3], dims[3];
-        for (int c = 0; c < 3; ++c) idx[c] = finest[c] >> shift, dims[c] = (m_dims[c] + (1 << shift) - 1) >> shift;
-        const uint64_t cell = uint64_t((idx[2] * dims[1] + idx[1]) * dims[0] + idx[0]);
-        const uint64_t key = ((uint64_t(level) * cells + cell) * uint64_t(m_occ.size()) + uint64_t(own)) + 1;
+        int64_t idx[3];
+        const uint64_t key = cell_key(finest, level, own, idx);
         bool found = false, free = false;
-        for (uint64_t probe = 0, slot = mix_bits(key) & mask; probe < MaxProbes && !found;
-             ++probe, slot = (slot + 1) & mask) {
+        for (uint64_t probe = 0, slot = mix_bits(key) & TableMask; probe < MaxProbes && !found;
+             ++probe, slot = (slot + 1) & TableMask) {
             uint64_t e = m_table[slot].load(std::memory_order_relaxed);
             if (e == 0) {
-                free = evaluate(idx, shift, own);
+                free = evaluate(idx, Levels - 1 - level, own);
                 if (m_table[slot].compare_exchange_strong(e, key << 1 | uint64_t(free), std::memory_order_relaxed)) {
                     found = true;
                     break;
@@ -122,10 +169,17 @@ bool RigVisibility::unblocked(Point3f o, int64_t own) const {
             }
             if (e >> 1 == key) found = true, free = (e & 1) != 0;
         }
-        if (!found) free = evaluate(idx, shift, own); // the table is full around this key: not cached
+        if (!found) free = evaluate(idx, Levels - 1 - level, own); // the table is full around this key: not cached
         if (free) return true;
     }
     return false;
+}
+
+void RigVisibility::prefetch(Point3f o, int64_t own) const {
+    int64_t finest[3], idx[3];
+    if (own < 0 || !m_keyed[size_t(own)] || !finest_cell(o, finest)) return;
+    for (int level = 0; level < Levels; ++level)
+        __builtin_prefetch(&m_table[mix_bits(cell_key(finest, level, own, idx)) & TableMask]);
 }
 
 bool RigVisibility::evaluate(const int64_t idx[3], int shift, int64_t own) const {
