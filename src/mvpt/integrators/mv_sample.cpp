@@ -365,7 +365,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     ++counters.rays;
     SurfaceInteraction &si = prim.si[i_prim];
     const bool hit = prim.hit[i_prim] != 0;
-    if (ctx.rig && i_prim + 1 < prim.size() && prim.hit[i_prim + 1]) { // the next sample's rig cells start loading
+    // The next sample's rig cells start loading (trace_visibility consults them unless only
+    // the selected views are traced).
+    if (ctx.rig && !ctx.cfg.mis_selected_only && i_prim + 1 < prim.size() && prim.hit[i_prim + 1]) {
         const SurfaceInteraction &next = prim.si[i_prim + 1];
         ctx.rig->prefetch(next.p, next.shape, next.prim);
     }
@@ -408,12 +410,11 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     gather_shifts(ctx, slot_l, pixel_l, y, bsdf, si, sc, &st_l);
     const MvCandidates &cand = sc.cand;
     const size_t m = cand.size;
-    if (!sc.material && !ctx.cfg.select_jacobian) {
-        // No selection term: every candidate is selected (gather_shifts set s = 1), no draws.
-    } else if (!sc.material && sampler.kind() == SamplerKind::Independent) // the same draws, in one vector loop
-        select_by_jacobian(cand, ctx.select_keys.data(), sampler.sample_hash(), ctx.cfg.select_jacobian,
-                           sc.s_sel.data(), sc.selected.data());
-    else
+    // Without a selection term every candidate stays selected (gather_shifts set s = 1): no draws.
+    if (!sc.material && ctx.cfg.select_jacobian && sampler.kind() == SamplerKind::Independent)
+        select_by_jacobian(cand, ctx.select_keys.data(), sampler.sample_hash(), true, sc.s_sel.data(),
+                           sc.selected.data()); // the same draws, in one vector loop
+    else if (sc.material || ctx.cfg.select_jacobian)
         for (size_t i = 1; i < m; ++i) {
             sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
             if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)

@@ -10,7 +10,6 @@
 #include "segment_cull.h"
 
 #include <atomic>
-#include <memory>
 #include <vector>
 
 namespace mvpt {
