@@ -48,6 +48,8 @@ struct ScatterVertex {
     Color3f refl;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
     bool nee = false;
+    /// Whether the BSDF was sampled already (with next-event estimation, by a Lambertian emitter kernel).
+    bool sampled = false;
     std::pair<LightSample, Spectrum> emitter_sample;
 };
 
@@ -251,6 +253,51 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     };
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
+    // One lane of lam_col columns (LambertChunk lanes each) from scattering vertex j: everything
+    // BSDF sampling reads, which includes what next-event estimation reads.
+    auto gather_lambert = [&](float *col, const SurfaceInteraction &si, const LambertInfo &lam, const Color3f &refl,
+                              const WavePath &p, size_t j) {
+        using namespace ls_col;
+        constexpr size_t st = LambertChunk; // the columns' stride (resized to LambertChunk lanes)
+        const Frame &f = si.sh_frame;
+        col[WiZ * st] = si.wi.z;
+        col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
+        col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
+        col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
+        col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
+        col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
+        col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+        col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+        col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
+        col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
+        col[Eta * st] = p.eta, col[URr * st] = u[6][j];
+        col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+    };
+
+    // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
+    // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
+    // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
+    auto take_samples = [&](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0, auto b0) {
+        constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
+        const float *const cd = cols.data.data(); // LambertChunk lanes per column
+        for (size_t m = 0; m < count; ++m) {
+            auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
+            const uint32_t k = index[m];
+            WavePath &p = paths[k];
+            p.valid = true;
+            if (!(at(O0 + 7) > 0.f)) continue;
+            const SurfaceInteraction &si = sis[k];
+            rays[k] = Ray{{at(O0), at(O0 + 1), at(O0 + 2)},
+                              {at(O0 + 3), at(O0 + 4), at(O0 + 5)}, 0.f, Infinity, si.time};
+            p.throughput = Spectrum(at(B0), at(B0 + 1), at(B0 + 2));
+            p.prev_p = si.p;
+            p.prev_bsdf_pdf = at(O0 + 6);
+            p.prev_bsdf_delta = false;
+            ++p.depth;
+            alive[k] = 1;
+        }
+        count = 0;
+    };
 
     // Each vertex runs as a few loops over all paths, one step of li's loop body each, so
     // that the paths' long dependency chains (square roots, divisions, virtual calls)
@@ -302,6 +349,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
             const size_t j = n_scatter++;
             scatter[j].path = uint32_t(k);
+            scatter[j].sampled = false;
             scatter[j].bsdf = si.shape->bsdf.get();
             if (const LambertInfo *lam = scatter[j].bsdf->lambert()) scatter[j].refl = lambert_reflectance(*lam, si);
             if (independent) {
@@ -373,33 +421,31 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 shadows[n_shadow++] = {k, Spectrum(at(Cr), at(Cg), at(Cb))};
             }
         };
+        // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
         auto flush_quad = [&] {
             if (n_quad == 0) return;
             lambert_quad_nee_kernel(qc, n_quad, quads, n_lights_f);
             collect(qc, quad_index, n_quad);
-            n_quad = 0;
+            lambert_sample_kernel(qc, n_quad);
+            take_samples(qc, quad_index, n_quad, std::integral_constant<size_t, ls_col::Ox>{},
+                         std::integral_constant<size_t, ls_col::Br>{});
         };
         auto flush_sphere = [&] {
             if (n_sph == 0) return;
             lambert_sphere_nee_kernel(sc, n_sph, spheres, n_lights_f);
             collect(sc, sphere_index, n_sph);
-            n_sph = 0;
+            lambert_sample_kernel(sc, n_sph);
+            take_samples(sc, sphere_index, n_sph, std::integral_constant<size_t, ls_col::Ox>{},
+                         std::integral_constant<size_t, ls_col::Br>{});
         };
-        // One lane of lq_col columns: the vertex, its throughput, the emitter's numbers and table row.
+        // One lane of lam_col columns: the vertex, its throughput, the emitter's numbers and table row.
         auto gather = [&](SoaColumns &c, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
-                          const Color3f &refl, const Spectrum &beta, size_t j, int row) {
-            using namespace lq_col;
+                          const Color3f &refl, const WavePath &p, size_t j, int row) {
+            gather_lambert(c.data.data() + m, si, lam, refl, p, j);
+            constexpr size_t st = LambertChunk;
             float *col = c.data.data() + m;
-            constexpr size_t st = LambertChunk; // == c.stride (resize to LambertChunk lanes): columns at fixed offsets
-            col[WiZ * st] = si.wi.z;
-            col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
-            col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
-            col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-            col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-            col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
-            col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
-            col[Ux * st] = u[1][j], col[Uy * st] = u[2][j];
-            col[Quad * st] = float(row);
+            col[lam_col::LightUx * st] = u[1][j], col[lam_col::LightUy * st] = u[2][j];
+            col[lam_col::Emitter * st] = float(row);
         };
         // Rough conductor vertices that chose a sphere emitter seen from outside: a kernel too.
         size_t n_csph = 0;
@@ -427,16 +473,18 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             size_t idx = std::min(size_t(u[0][j] * n_lights_f), n_lights - 1);
             if (const LambertInfo *lam = bsdf.lambert()) {
                 if (quad_row[idx] >= 0) {
-                    v.nee = false; // handled by the kernel
+                    v.nee = false; // handled by the kernel, BSDF sampling too
+                    v.sampled = true;
                     quad_index[n_quad] = v.path;
-                    gather(qc, n_quad++, si, *lam, v.refl, paths[v.path].throughput, j, quad_row[idx]);
+                    gather(qc, n_quad++, si, *lam, v.refl, paths[v.path], j, quad_row[idx]);
                     if (n_quad == LambertChunk) flush_quad();
                     continue;
                 }
                 if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
                     v.nee = false;
+                    v.sampled = true;
                     sphere_index[n_sph] = v.path;
-                    gather(sc, n_sph++, si, *lam, v.refl, paths[v.path].throughput, j, row);
+                    gather(sc, n_sph++, si, *lam, v.refl, paths[v.path], j, row);
                     if (n_sph == LambertChunk) flush_sphere();
                     continue;
                 }
@@ -554,30 +602,6 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
 
         // ---------------- BSDF sampling and Russian roulette ----------------
         lc.resize(ls_col::Count, LambertChunk);
-        // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
-        // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
-        // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
-        auto take_samples = [&](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0, auto b0) {
-            constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
-            const float *const cd = cols.data.data(); // LambertChunk lanes per column
-            for (size_t m = 0; m < count; ++m) {
-                auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
-                const uint32_t k = index[m];
-                WavePath &p = paths[k];
-                p.valid = true;
-                if (!(at(O0 + 7) > 0.f)) continue;
-                const SurfaceInteraction &si = sis[k];
-                rays[k] = Ray{{at(O0), at(O0 + 1), at(O0 + 2)},
-                                  {at(O0 + 3), at(O0 + 4), at(O0 + 5)}, 0.f, Infinity, si.time};
-                p.throughput = Spectrum(at(B0), at(B0 + 1), at(B0 + 2));
-                p.prev_p = si.p;
-                p.prev_bsdf_pdf = at(O0 + 6);
-                p.prev_bsdf_delta = false;
-                ++p.depth;
-                alive[k] = 1;
-            }
-            count = 0;
-        };
         auto flush_sample = [&] {
             if (n_lam == 0) return;
             lambert_sample_kernel(lc, n_lam);
@@ -592,30 +616,15 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             const ScatterVertex &v = scatter[j];
+            if (v.sampled) continue;
             const size_t k = v.path;
             WavePath &p = paths[k];
             const SurfaceInteraction &si = sis[k];
             const Bsdf &bsdf = *v.bsdf;
             if (const LambertInfo *lam = bsdf.lambert()) {
-                using namespace ls_col;
                 const size_t m = n_lam++;
                 lambert_index[m] = uint32_t(k);
-                const Frame &f = si.sh_frame;
-                float *col = lc.data.data() + m;
-                constexpr size_t st = LambertChunk;
-                col[WiZ * st] = si.wi.z;
-                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
-                col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
-                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
-                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
-                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
-                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                const Color3f &refl = v.refl;
-                col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
-                col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
-                col[Eta * st] = p.eta, col[URr * st] = u[6][j];
-                col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+                gather_lambert(lc.data.data() + m, si, *lam, v.refl, p, j);
                 if (n_lam == LambertChunk) flush_sample();
                 continue;
             }

@@ -23,18 +23,30 @@ struct SoaColumns {
     float *operator[](size_t c) { return data.data() + c * stride; }
 };
 
-/// Columns of `lambert_sample_kernel`: inputs, then outputs (flags are 0 or 1).
-namespace ls_col {
+/// The columns of a Lambertian vertex, one layout for all its kernels: the emitter-sampling NEE
+/// kernels (lq_col) and the BSDF-sampling kernel (ls_col) read the same gathered vertex, so a
+/// vertex that samples a quad or sphere emitter is gathered once for both. Inputs, then the
+/// BSDF sample's outputs, then next-event estimation's.
+namespace lam_col {
 enum : size_t {
-    WiZ, TwoSided, Ux, Uy,
+    WiZ, TwoSided,
     Sx, Sy, Sz, Tx, Ty, Tz, Nx, Ny, Nz, // shading frame
     Px, Py, Pz, Gx, Gy, Gz,             // position, geometric normal
     Rr, Rg, Rb,                         // reflectance
-    Br, Bg, Bb,                         // throughput (updated in place)
+    Br, Bg, Bb,                         // throughput (read by NEE, then updated in place by sampling)
     Eta, URr, RrOn,                     // Russian roulette: eta, its number, whether it applies
-    Ox, Oy, Oz, Dx, Dy, Dz, Pdf, Alive, // outputs: the next ray, its density, whether the path continues
+    DirUx, DirUy,                       // the BSDF sample's numbers
+    LightUx, LightUy, Emitter,          // the emitter sample's numbers, the emitter's table row
+    Ox, Oy, Oz, Dx, Dy, Dz, Pdf, Alive, // BSDF sample: the next ray, its density, whether the path continues
+    SOx, SOy, SOz, SDx, SDy, SDz, STMax, Cr, Cg, Cb, Ok, // NEE: shadow ray, contribution, whether it counts
     Count
 };
+}
+
+/// Columns of `lambert_sample_kernel` (flags are 0 or 1): lam_col's.
+namespace ls_col {
+using namespace lam_col;
+enum : size_t { Ux = DirUx, Uy = DirUy };
 }
 
 // Blocks that kernel::next_ray_and_roulette reads and writes.
@@ -69,17 +81,16 @@ static_assert(ln_col::Gz == ln_col::Px + 5 && ln_col::LDelta == ln_col::Ldx + 8 
 /// sample_li). `light_count` is the number of lights (uniform selection).
 void lambert_nee_kernel(SoaColumns &c, size_t n, float light_count);
 
-/// Columns of `lambert_quad_nee_kernel`: inputs, then outputs.
+/// Columns of `lambert_quad_nee_kernel` and `lambert_sphere_nee_kernel`: lam_col's, with the
+/// emitter sample's numbers and table row as inputs and the NEE outputs.
 namespace lq_col {
+using lam_col::WiZ, lam_col::TwoSided, lam_col::Nx, lam_col::Ny, lam_col::Nz, lam_col::Px, lam_col::Py, lam_col::Pz,
+    lam_col::Gx, lam_col::Gy, lam_col::Gz, lam_col::Rr, lam_col::Rg, lam_col::Rb, lam_col::Br, lam_col::Bg,
+    lam_col::Bb, lam_col::Cr, lam_col::Cg, lam_col::Cb, lam_col::Ok, lam_col::Count;
 enum : size_t {
-    WiZ, TwoSided,
-    Nx, Ny, Nz,             // shading normal
-    Px, Py, Pz, Gx, Gy, Gz, // position, geometric normal
-    Rr, Rg, Rb,             // reflectance
-    Br, Bg, Bb,             // throughput
-    Ux, Uy, Quad,           // the emitter sample's numbers, the emitter's index in the QuadTable
-    Ox, Oy, Oz, Dx, Dy, Dz, TMax, Cr, Cg, Cb, Ok, // outputs: shadow ray, contribution, whether it counts
-    Count
+    Ux = lam_col::LightUx, Uy = lam_col::LightUy, Quad = lam_col::Emitter,
+    Ox = lam_col::SOx, Oy = lam_col::SOy, Oz = lam_col::SOz, Dx = lam_col::SDx, Dy = lam_col::SDy, Dz = lam_col::SDz,
+    TMax = lam_col::STMax
 };
 }
 
