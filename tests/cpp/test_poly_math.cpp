@@ -1,4 +1,4 @@
-// The polynomial exp, log, erf and erfinv of core/poly_math.h against double-precision libm
+// The polynomial exp, log, erf, erfinv and atan2 of core/poly_math.h against double-precision libm
 // over their domains, at the accuracy the header states.
 #include "mvpt/core/poly_math.h"
 
@@ -57,4 +57,24 @@ TEST(PolyMath, ErfinvInvertsErf) {
     }
     EXPECT_LT(worst, 1e-5);
     EXPECT_EQ(erfinv_poly(0.f), 0.f);
+}
+
+TEST(PolyMath, Atan2AbsoluteError) {
+    // Directions all around the circle, at several radii (the result depends on y/x only),
+    // and the axes and zeros with std::atan2's signs.
+    double worst = 0.0;
+    for (int i = 0; i < 400000; ++i) {
+        double a = -3.14159265358979 + 6.28318530717959 * (double(i) + 0.5) / 400000.0;
+        for (float radius : {1e-3f, 1.f, 7.5f, 1e4f}) {
+            float x = float(radius * std::cos(a)), y = float(radius * std::sin(a));
+            worst = std::max(worst, std::abs(double(atan2_poly(y, x)) - std::atan2(double(y), double(x))));
+        }
+    }
+    EXPECT_LT(worst, 3e-7);
+    for (float y : {0.f, -0.f, 1.f, -1.f, 3e-30f})
+        for (float x : {0.f, -0.f, 1.f, -1.f, 2e-30f})
+            EXPECT_NEAR(atan2_poly(y, x), std::atan2(y, x), 3e-7f) << y << ", " << x;
+    EXPECT_EQ(std::signbit(atan2_poly(-0.f, 1.f)), true);
+    EXPECT_EQ(atan2_poly(0.f, -0.f), Pi);
+    EXPECT_EQ(atan2_poly(-0.f, -1.f), -Pi);
 }

@@ -1,9 +1,9 @@
-// Single-precision exp, log and erf as branch-free polynomials [Moshier, Cephes 1984-1992,
-// expf/logf/erff/erfcf]: inline, so that GCC vectorises them inside the multi-ISA kernels,
+// Single-precision exp, log, erf and atan2 as branch-free polynomials [Moshier, Cephes 1984-1992,
+// expf/logf/erff/erfcf/atanf]: inline, so that GCC vectorises them inside the multi-ISA kernels,
 // and shared by the scalar code, so that a kernel and the scalar path it replaces give the
 // same bits (the build has no FMA contraction). Accuracy (checked against double precision
 // in tests/cpp/test_poly_math.cpp): exp and log within 1e-7 relative, erf within 2e-7
-// absolute. Not libm replacements: the domains are those stated per function.
+// absolute, atan2 within 3e-7 absolute. Not libm replacements: the domains are those stated per function.
 #pragma once
 
 #include <bit>
@@ -84,6 +84,24 @@ namespace mvpt {
     float tail = poly8(std::sqrt(w) - 3.f, 2.83297682f, 1.00167406f, 0.00943887047f, -0.0076224613f, 0.00573950773f,
                        -0.00367342844f, 0.00134934322f, 0.000100950558f, -0.000200214257f);
     return select(w < 5.f, central, tail) * x;
+}
+
+/// atan2(y, x) in [-pi, pi], with std::atan2's signs at zeros (atan2(+-0, -0) = +-pi) and 0
+/// for (0, 0); x and y finite. atan of min/max(|x|, |y|) in [0, 1] (above tan(pi/8) through
+/// atan(t) = pi/4 + atan((t - 1) / (t + 1))), then the octant.
+[[gnu::always_inline]] inline float atan2_poly(float y, float x) {
+    float ax = std::abs(x), ay = std::abs(y);
+    bool y_major = ay > ax;
+    float hi = select(y_major, ay, ax), lo = select(y_major, ax, ay);
+    float t = select(hi > 0.f, lo / hi, 0.f);
+    bool upper = t > 0.414213562373095f;
+    t = select(upper, (t - 1.f) / (t + 1.f), t);
+    float z = t * t;
+    float r = (((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z * t + t;
+    r = r + select(upper, Pi / 4.f, 0.f);
+    r = select(y_major, Pi / 2.f - r, r);
+    r = select(std::signbit(x), Pi - r, r);
+    return std::copysign(r, y);
 }
 
 } // namespace mvpt

@@ -8,6 +8,8 @@
 // Pixel column x sits at u = (x + 1/2) / W (periodic in u); pixel row y sits at
 // v = y / (H - 1), so the first and last rows are the poles.
 #include "../../core/bilinear_distribution.h"
+#include "../../core/poly_math.h"
+#include "../../core/warp.h"
 #include "../../io/image_io.h"
 #include "../../scene/plugin.h"
 #include "../light.h"
@@ -106,8 +108,8 @@ public:
             for (size_t i = 0; i < m; ++i) {
                 v[i] = m_to_local.vector(d[i0 + i]);
                 uv[i] = direction_to_uv(v[i]);
-                prefetch_lookup(uv[i]);
             }
+            for (size_t i = 0; i < m; ++i) prefetch_lookup(uv[i]);
             if (pdf)
                 for (size_t i = 0; i < m; ++i) pdf[i0 + i] = pdf_local(v[i], uv[i]);
             for (size_t i = 0; i < m; ++i) le[i0 + i] = lookup(uv[i]);
@@ -167,15 +169,19 @@ private:
         return m_distr.pdf(uv) * inv_sin_theta * (1.f / (2.f * Pi * Pi));
     }
 
+    /// The trigonometry of both maps is libm-free and branch-free (warp::sincos_turn,
+    /// atan2_poly: within 4e-7 of libm), so that the batch loops vectorise.
     static Vec3f uv_to_direction(Vec2f uv, float &inv_sin_theta) {
-        float theta = uv.y * Pi, phi = uv.x * 2.f * Pi;
-        float sin_theta = std::sin(theta), cos_theta = std::cos(theta);
+        // theta = pi v is half a turn of v, phi = 2 pi u a whole turn of u.
+        const Vec2f theta = warp::sincos_turn(0.5f * uv.y), phi = warp::sincos_turn(uv.x);
+        const float sin_theta = theta.x, cos_theta = theta.y;
         inv_sin_theta = 1.f / std::max(sin_theta, Epsilon);
-        return {std::sin(phi) * sin_theta, cos_theta, -std::cos(phi) * sin_theta};
+        return {phi.x * sin_theta, cos_theta, -phi.y * sin_theta};
     }
 
+    /// theta = acos(d.y) as atan2(|d.xz|, d.y): the same angle for a unit d, and accurate near the poles.
     static Vec2f direction_to_uv(Vec3f d) {
-        return {std::atan2(d.x, -d.z) * InvTwoPi, safe_acos(d.y) * InvPi};
+        return {atan2_poly(d.x, -d.z) * InvTwoPi, atan2_poly(std::sqrt(d.x * d.x + d.z * d.z), d.y) * InvPi};
     }
 
     /// Bilinear texel lookup at lat-long coordinates `uv` (wrapped as Mitsuba does).
