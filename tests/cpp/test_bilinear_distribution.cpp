@@ -72,3 +72,42 @@ TEST(BilinearDistribution2D, SampleLinearInvertsTheCdf) {
             }
         }
 }
+
+TEST(BilinearDistribution2D, NeverSamplesZeroPatches) {
+    // A zero row of patches and a zero column of patches (their vertices all zero) between
+    // positive ones: the alias tables must never pick them.
+    const int w = 7, h = 6;
+    std::vector<float> v(size_t(w) * h, 1.f);
+    for (int x = 0; x < w; ++x) v[size_t(2) * w + x] = v[size_t(3) * w + x] = 0.f; // patch row 2
+    for (int y = 0; y < h; ++y) v[size_t(y) * w + 4] = v[size_t(y) * w + 5] = 0.f;  // patch column 4
+    BilinearDistribution2D d(v, w, h);
+    Sampler s(SamplerKind::Independent, 4);
+    for (uint32_t i = 0; i < 100000; ++i) {
+        s.start(0, 0, 0, i);
+        float pdf;
+        Vec2f p = d.sample(s.next_2d(), &pdf);
+        ASSERT_GT(pdf, 0.f) << p.x << ", " << p.y;
+        ASSERT_NE(int(p.y * (h - 1)), 2);
+        ASSERT_NE(int(p.x * (w - 1)), 4);
+    }
+    // The batch gives the same points.
+    Vec2f u[3] = {{0.f, 0.f}, {0.5f, 0.41f}, {OneMinusEpsilon, OneMinusEpsilon}}, p[3];
+    float pdf[3];
+    d.sample_batch(3, u, p, pdf, [](size_t, int, int) {});
+    for (int i = 0; i < 3; ++i) {
+        float ref_pdf;
+        Vec2f ref = d.sample(u[i], &ref_pdf);
+        EXPECT_EQ(p[i].x, ref.x);
+        EXPECT_EQ(p[i].y, ref.y);
+        EXPECT_EQ(pdf[i], ref_pdf);
+    }
+}
+
+TEST(BilinearDistribution2D, BlackMapSamplesDensityZero) {
+    BilinearDistribution2D d(std::vector<float>(12, 0.f), 4, 3);
+    EXPECT_TRUE(d.empty());
+    float pdf = 1.f;
+    Vec2f p = d.sample({0.3f, 0.7f}, &pdf);
+    EXPECT_EQ(pdf, 0.f);
+    EXPECT_TRUE(p.x >= 0.f && p.x < 1.f && p.y >= 0.f && p.y < 1.f);
+}

@@ -1,10 +1,12 @@
 // Piecewise-bilinear 2D density on [0,1]^2: the density of Mitsuba 3's
 // Hierarchical2D (core/distr_2d.h, no conditioning parameters), which the
 // envmap emitter samples. Values sit on a w x h vertex grid; each of the
-// (w-1) x (h-1) patches interpolates its four corners bilinearly.
+// (w-1) x (h-1) patches interpolates its four corners bilinearly. A patch is chosen by
+// alias tables (a row by its mass, then a patch of the row), its point by inverting the
+// bilinear density with the numbers that choice leaves over.
 #pragma once
 
-#include "distribution.h"
+#include "alias_table.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,7 +38,7 @@ public:
             row_sums[y] = float(m_rows[y].sum());
             total += m_rows[y].sum();
         }
-        m_marginal.build(row_sums);
+        m_marginal.build(row_sums); // all zero (a black map): any patch, of density 0
         // Scale so the interpolant integrates to one over the unit square.
         float scale = total > 0 ? float(double(nx) * double(ny) / total) : 0.f;
         for (float &v : m_values) v *= scale;
@@ -49,8 +51,8 @@ public:
     /// vertices are read (a caller can prefetch its own data of that patch meanwhile).
     template <typename OnCell> Vec2f sample(Vec2f u, float *pdf, OnCell &&on_cell) const {
         float uy, ux;
-        size_t py = m_marginal.sample(u.y, nullptr, &uy);
-        size_t px = m_rows[py].sample(u.x, nullptr, &ux);
+        size_t py = m_marginal.sample(u.y, &uy);
+        size_t px = m_rows[py].sample(u.x, &ux);
         const int x = int(px), y = int(py);
         on_cell(x, y);
         return sample_in_cell(x, y, ux, uy, pdf);
@@ -61,30 +63,30 @@ public:
 
     /// `sample` for `n` points at once (p[i], pdf[i] from u[i]), as stages over the lanes so
     /// that their independent table reads overlap instead of each point's chain of dependent
-    /// cache misses (row CDF, then column guide and CDF, then patch vertices) running alone.
-    /// Each lane's arithmetic is `sample`'s; `on_cell(i, x, y)` is called when lane i's patch
-    /// is chosen, a stage before its vertices are read.
+    /// cache misses (row table, then patch vertices) running alone. Each lane's arithmetic is
+    /// `sample`'s; `on_cell(i, x, y)` is called when lane i's patch is chosen, a stage before
+    /// its vertices are read.
     template <typename OnCell> void sample_batch(size_t n, const Vec2f *u, Vec2f *p, float *pdf, OnCell &&on_cell) const {
-        uint32_t cell_y[BatchChunk], start[BatchChunk], cell_x[BatchChunk];
+        uint32_t cell_y[BatchChunk], slot[BatchChunk], cell_x[BatchChunk];
         float uy[BatchChunk], ux[BatchChunk];
         for (size_t i0 = 0; i0 < n; i0 += BatchChunk) {
             const size_t m = std::min(BatchChunk, n - i0);
-            // Stage 1: the rows, from the marginal (a small table, mostly cached).
-            for (size_t i = 0; i < m; ++i) cell_y[i] = uint32_t(m_marginal.sample(u[i0 + i].y, nullptr, &uy[i]));
-            // Stage 2: where each row's search starts (guide tables), fetching the CDF entries there.
+            // Stage 1: the rows, from the marginal (a small table, mostly cached), and the slot
+            // of each row's table, fetched.
             for (size_t i = 0; i < m; ++i) {
-                const DiscreteDistribution &row = m_rows[cell_y[i]];
-                start[i] = uint32_t(row.search_start(u[i0 + i].x));
-                __builtin_prefetch(row.search_data(start[i]));
+                cell_y[i] = m_marginal.sample(u[i0 + i].y, &uy[i]);
+                const AliasTable &row = m_rows[cell_y[i]];
+                slot[i] = uint32_t(row.slot_of(u[i0 + i].x));
+                __builtin_prefetch(row.entry(slot[i]));
             }
-            // Stage 3: the columns, fetching the patches' vertices.
+            // Stage 2: the columns, fetching the patches' vertices.
             for (size_t i = 0; i < m; ++i) {
                 const uint32_t y = cell_y[i];
-                cell_x[i] = uint32_t(m_rows[y].sample_from(start[i], u[i0 + i].x, nullptr, &ux[i]));
+                cell_x[i] = m_rows[y].sample_from(slot[i], u[i0 + i].x, &ux[i]);
                 on_cell(i0 + i, int(cell_x[i]), int(y));
                 prefetch_cell(int(cell_x[i]), int(y));
             }
-            // Stage 4: the points in their patches, as in `sample`.
+            // Stage 3: the points in their patches, as in `sample`.
             for (size_t i = 0; i < m; ++i) p[i0 + i] = sample_in_cell(int(cell_x[i]), int(cell_y[i]), ux[i], uy[i], &pdf[i0 + i]);
         }
     }
@@ -105,7 +107,7 @@ public:
         return bilerp(vertex(x, y), vertex(x + 1, y), vertex(x, y + 1), vertex(x + 1, y + 1), px - float(x), py - float(y));
     }
 
-    bool empty() const { return m_marginal.size() == 0 || m_marginal.sum() <= 0; }
+    bool empty() const { return m_marginal.size() == 0 || m_marginal.empty(); }
 
 private:
     float vertex(int x, int y) const { return m_values[size_t(y) * m_w + x]; }
@@ -125,8 +127,8 @@ private:
     int m_w = 0, m_h = 0;
     /// Vertex values normalized so that the interpolant is a density.
     std::vector<float> m_values;
-    std::vector<DiscreteDistribution> m_rows;
-    DiscreteDistribution m_marginal;
+    std::vector<AliasTable> m_rows;
+    AliasTable m_marginal;
 };
 
 } // namespace mvpt
