@@ -304,9 +304,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     // overlap; every path still sees li's operations in li's order.
     size_t active = n;
     for (bool first = true; active > 0; first = false) {
-        // No reset of the interactions first: a hit's fill_interaction sets every field that
-        // li reads (Shape::fill_interaction's contract; wi is set below), and misses are reset
-        // in the emission loop.
+        // No reset of the interactions: a hit's fill_interaction sets every field that li reads
+        // (Shape::fill_interaction's contract; wi is set below), and a miss's is never read.
         counters.rays += active;
         scene.intersect(rays, active, sis, hits, first && !states); // camera rays: coherent
 
@@ -322,7 +321,6 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             const Ray &ray = rays[k];
             alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
-            if (!hit) sis[k] = SurfaceInteraction();
 
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
             if (emitter && !m_cfg.hide_emitters && hit) p.valid = true;
