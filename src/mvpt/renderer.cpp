@@ -94,77 +94,95 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     auto t_start = clock::now();
     double last_pass = 0.0;
 
-    // One sample per pixel of every tile: called for each tile and pass of a chunk.
-    auto render_tile_pass = [&](const Tile &tile, int pass, RayCounters &rc) {
+    // The samples of a pass group [pass0, pass1) of a tile, as batches of up to BatchPaths
+    // paths. One pass: the tile's pixels row by row. Several: pixel by pixel in 4x4 blocks,
+    // each pixel's passes in a row, so that a 16-wide Embree packet holds one pixel's samples
+    // (its camera rays nearly coincide, its bounce and shadow rays leave from nearly one point:
+    // matpreview -16 % time). Every pixel still sums its samples in pass order, so the images
+    // are those of pass-by-pass rendering; and as the groups depend only on the film size and
+    // options (below), so do the batches.
+    auto render_tile = [&](const Tile &tile, int pass0, int pass1, RayCounters &rc) {
         int view = m_views[tile.view_slot];
         const Camera &cam = *cams[view];
         const FilmDesc &film = cam.film;
         FilmBuffer &fb = m_films[tile.view_slot];
-        // Camera rays of the whole tile, then their paths as one batch.
+        const bool independent = cam.sampler_kind == SamplerKind::Independent;
+        const uint32_t seed = uint32_t(m_opts.seed ? *m_opts.seed : cam.seed); // as Sampler keeps it
+        static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
+                      "independent_start_draws draws the camera dimensions 0, 1, 2");
+        // The tile's samples in order: (pixel x, pixel y, pass).
+        thread_local std::vector<uint32_t> slot_x, slot_y, slot_pass;
+        slot_x.clear(), slot_y.clear(), slot_pass.clear();
+        auto add = [&](int x, int y, int q) {
+            slot_x.push_back(uint32_t(x + film.crop_x));
+            slot_y.push_back(uint32_t(y + film.crop_y));
+            slot_pass.push_back(uint32_t(q));
+        };
+        if (pass1 - pass0 == 1) {
+            for (int q = pass0; q < pass1; ++q)
+                for (int y = tile.y0; y < tile.y1; ++y)
+                    for (int x = tile.x0; x < tile.x1; ++x) add(x, y, q);
+        } else {
+            constexpr int Block = 4;
+            for (int by = tile.y0; by < tile.y1; by += Block)
+                for (int bx = tile.x0; bx < tile.x1; bx += Block)
+                    for (int y = by; y < std::min(by + Block, tile.y1); ++y)
+                        for (int x = bx; x < std::min(bx + Block, tile.x1); ++x)
+                            for (int q = pass0; q < pass1; ++q) add(x, y, q);
+        }
         thread_local std::vector<Sampler> samplers;
         thread_local std::vector<Ray> rays;
         thread_local std::vector<Spectrum> radiance;
-        size_t n = size_t(tile.x1 - tile.x0) * size_t(tile.y1 - tile.y0);
-        samplers.assign(n, Sampler(cam.sampler_kind, m_opts.seed ? *m_opts.seed : cam.seed));
         thread_local std::vector<Vec2f> film_positions, lens_points;
         thread_local std::vector<float> times;
-        rays.resize(n);
-        radiance.resize(n);
-        film_positions.resize(n);
-        lens_points.resize(n);
-        times.resize(n);
-        static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
-                      "independent_start_draws draws the camera dimensions 0, 1, 2");
-        const bool independent = cam.sampler_kind == SamplerKind::Independent;
-        thread_local std::vector<uint32_t> row_px;
         thread_local std::vector<uint64_t> pixel_hash, sample_hash;
         thread_local std::vector<float> draws[5];
-        const size_t width = size_t(tile.x1 - tile.x0);
-        for (int y = tile.y0, i = 0; y < tile.y1; ++y) {
-            int py = y + film.crop_y;
+        constexpr size_t BatchPaths = 256;
+        for (size_t b0 = 0; b0 < slot_x.size(); b0 += BatchPaths) {
+            const size_t n = std::min(BatchPaths, slot_x.size() - b0);
+            const uint32_t *sx = slot_x.data() + b0, *sy = slot_y.data() + b0, *sq = slot_pass.data() + b0;
+            samplers.assign(n, Sampler(cam.sampler_kind, seed));
+            rays.resize(n);
+            radiance.resize(n);
+            film_positions.resize(n);
+            lens_points.resize(n);
+            times.resize(n);
             if (independent) {
-                // The row's sampler starts and camera numbers in one vector loop (sampler_batch.h).
-                row_px.resize(width);
-                pixel_hash.resize(width);
-                sample_hash.resize(width);
-                for (auto &d : draws) d.resize(width);
-                for (size_t c = 0; c < width; ++c) row_px[c] = uint32_t(tile.x0 + int(c) + film.crop_x);
+                // The samplers' starts and camera numbers in one vector loop (sampler_batch.h).
+                pixel_hash.resize(n);
+                sample_hash.resize(n);
+                for (auto &d : draws) d.resize(n);
                 float *const out[5] = {draws[0].data(), draws[1].data(), draws[2].data(), draws[3].data(), draws[4].data()};
-                independent_start_draws(samplers[i].seed(), uint32_t(view), row_px.data(), uint32_t(py), uint32_t(pass),
-                                        width, pixel_hash.data(), sample_hash.data(), out);
+                independent_start_draws(seed, uint32_t(view), sx, sy, sq, n, pixel_hash.data(), sample_hash.data(), out);
             }
-            for (int x = tile.x0, c = 0; x < tile.x1; ++x, ++i, ++c) {
-                int px = x + film.crop_x;
+            for (size_t i = 0; i < n; ++i) {
                 Sampler &sampler = samplers[i];
                 Vec2f u_film, u_lens;
                 float u_time;
                 if (independent) {
-                    sampler.start_from(pixel_hash[c], sample_hash[c], uint32_t(pass), DimCameraEnd);
-                    u_film = {draws[0][c], draws[1][c]};
-                    u_lens = {draws[2][c], draws[3][c]};
-                    u_time = draws[4][c];
+                    sampler.start_from(pixel_hash[i], sample_hash[i], sq[i], DimCameraEnd);
+                    u_film = {draws[0][i], draws[1][i]};
+                    u_lens = {draws[2][i], draws[3][i]};
+                    u_time = draws[4][i];
                 } else {
-                    sampler.start(uint32_t(view), uint32_t(px), uint32_t(py), uint32_t(pass));
+                    sampler.start(uint32_t(view), sx[i], sy[i], sq[i]);
                     sampler.set_dimension(DimFilm);
                     u_film = sampler.next_2d();
                     u_lens = sampler.next_2d();
                     u_time = sampler.next_1d();
                 }
                 Vec2f offset = film.filter->sample(u_film);
-                Vec2f film_pos(float(px) + 0.5f + offset.x, float(py) + 0.5f + offset.y);
-                film_positions[i] = film_pos;
+                film_positions[i] = Vec2f(float(sx[i]) + 0.5f + offset.x, float(sy[i]) + 0.5f + offset.y);
                 lens_points[i] = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
                 times[i] = cam.sample_time(u_time);
             }
-        }
-        cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
-        rc.camera_rays += n;
-        integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
-        for (int y = tile.y0, i = 0; y < tile.y1; ++y)
-            for (int x = tile.x0; x < tile.x1; ++x, ++i) {
-                int px = x + film.crop_x, py = y + film.crop_y;
+            cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
+            rc.camera_rays += n;
+            integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
+            for (size_t i = 0; i < n; ++i) {
+                const int px = int(sx[i]), py = int(sy[i]), pass = int(sq[i]);
                 Spectrum L = radiance[i];
-                size_t pi = size_t(y) * film.crop_width + x;
+                size_t pi = size_t(py - film.crop_y) * film.crop_width + size_t(px - film.crop_x);
                 if (!L.is_finite()) {
                     // Never reaches the film: counted, and the first one kept for replay.
                     ++rc.nonfinite;
@@ -185,6 +203,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                 }
                 ++fb.count[pi];
             }
+        }
     };
 
     // Passes run in chunks: each task renders one tile for all passes of the chunk, in pass
@@ -193,9 +212,19 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     // (on a loaded machine a descheduled thread holds up every pass boundary). Without a
     // time budget a chunk grows to about a quarter of a second (the cancellation latency);
     // with one, chunks stay single passes so that the budget is checked after each.
+    // A chunk is a whole number of pass groups (render_tile's batches): 16 passes, halved
+    // while a group of all views would exceed GroupPaths paths (so that the first chunk, one
+    // group, stays short on large films); single passes under a time budget.
     constexpr double ChunkSeconds = 0.25;
     constexpr int MaxChunk = 16;
-    int chunk = 1;
+    constexpr uint64_t GroupPaths = uint64_t(1) << 20;
+    int group = 1;
+    if (m_opts.time_budget == 0.0) {
+        uint64_t pixels = 0;
+        for (const Tile &t : all_tiles) pixels += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
+        for (group = MaxChunk; group > 1 && uint64_t(group) * pixels > GroupPaths;) group /= 2;
+    }
+    int chunk = group;
     for (int pass = 0; pass < max_target;) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
@@ -212,7 +241,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                 RayCounters &rc = counters.local();
                 for (size_t ti = r.begin(); ti != r.end(); ++ti) {
                     const Tile &tile = *tiles[ti];
-                    for (int q = pass; q < pass_end && q < target[tile.view_slot]; ++q) render_tile_pass(tile, q, rc);
+                    const int end = std::min(pass_end, target[tile.view_slot]);
+                    for (int g = pass; g < end; g += group) render_tile(tile, g, std::min(g + group, end), rc);
                 }
             });
         });
@@ -226,7 +256,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         }
         pass = pass_end;
         if (m_opts.time_budget == 0.0 && last_pass > 0.0)
-            chunk = int(std::clamp(ChunkSeconds / last_pass, 1.0, double(MaxChunk)));
+            chunk = std::max(group, int(std::clamp(ChunkSeconds / last_pass, 1.0, double(MaxChunk))) / group * group);
     }
     m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     for (const RayCounters &c : counters) m_stats.counters += c;
