@@ -119,9 +119,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             slot_pass.push_back(uint32_t(q));
         };
         if (pass1 - pass0 == 1) {
-            for (int q = pass0; q < pass1; ++q)
-                for (int y = tile.y0; y < tile.y1; ++y)
-                    for (int x = tile.x0; x < tile.x1; ++x) add(x, y, q);
+            for (int y = tile.y0; y < tile.y1; ++y)
+                for (int x = tile.x0; x < tile.x1; ++x) add(x, y, pass0);
         } else {
             constexpr int Block = 4;
             for (int by = tile.y0; by < tile.y1; by += Block)
