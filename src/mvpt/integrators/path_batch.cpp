@@ -253,6 +253,16 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     };
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
+    // The vertex columns of rough_conductor_sample_kernel (cond_col: those of the NEE kernels
+    // too) from scattering vertex j.
+    auto gather_conductor_sample = [&](float *col, size_t st, const SurfaceInteraction &si,
+                                       const RoughConductorInfo &rc, const WavePath &p, size_t j) {
+        using namespace rs_col;
+        gather_conductor_nee(col, st, si, rc, p.throughput);
+        col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
+        col[Eta * st] = p.eta, col[URr * st] = u[6][j];
+        col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+    };
     // One lane of lam_col columns (LambertChunk lanes each) from scattering vertex j: everything
     // BSDF sampling reads, which includes what next-event estimation reads.
     auto gather_lambert = [&](float *col, const SurfaceInteraction &si, const LambertInfo &lam, const Color3f &refl,
@@ -390,40 +400,25 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         size_t n_sph = 0;
         SoaColumns &sc = buf.sphere;
         sc.resize(lq_col::Count, LambertChunk);
-        // The next-event estimates of a kernel's lanes wait for their shadow rays (columns from
-        // O0: origin, direction, t_max, contribution, whether it counts).
-        auto take_shadow_rays = [&](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0) {
+        // The next-event estimates of a kernel's lanes (paths index[m]) wait for their shadow
+        // rays (columns from O0: origin, direction, t_max, contribution, whether it counts).
+        auto take_shadow_rays = [&](SoaColumns &cols, const uint32_t *index, size_t count, auto o0) {
             constexpr size_t O0 = decltype(o0)::value;
             const float *const cd = cols.data.data(); // LambertChunk lanes per column
             for (size_t m = 0; m < count; ++m) {
                 auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
                 if (!(at(O0 + 10) > 0.f)) continue;
-                const uint32_t k = scatter[index[m]].path;
+                const uint32_t k = index[m];
                 for (size_t q = 0; q < 7; ++q) shadow[q][n_shadow] = at(O0 + q);
                 shadow[7][n_shadow] = sis[k].time;
                 shadows[n_shadow++] = {k, Spectrum(at(O0 + 7), at(O0 + 8), at(O0 + 9))};
-            }
-            count = 0;
-        };
-        // Shadow rays and contributions of a kernel's lanes whose estimate counts.
-        auto collect = [&](SoaColumns &c, const uint32_t *index, size_t count) {
-            using namespace lq_col;
-            const float *const cd = c.data.data(); // LambertChunk lanes per column
-            for (size_t m = 0; m < count; ++m) {
-                auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
-                if (!(at(Ok) > 0.f)) continue;
-                const uint32_t k = index[m];
-                static_assert(TMax == Ox + 6);
-                for (size_t q = 0; q < 7; ++q) shadow[q][n_shadow] = at(Ox + q);
-                shadow[7][n_shadow] = sis[k].time;
-                shadows[n_shadow++] = {k, Spectrum(at(Cr), at(Cg), at(Cb))};
             }
         };
         // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
         auto flush_quad = [&] {
             if (n_quad == 0) return;
             lambert_quad_nee_kernel(qc, n_quad, quads, n_lights_f);
-            collect(qc, quad_index, n_quad);
+            take_shadow_rays(qc, quad_index, n_quad, std::integral_constant<size_t, lq_col::Ox>{});
             lambert_sample_kernel(qc, n_quad);
             take_samples(qc, quad_index, n_quad, std::integral_constant<size_t, ls_col::Ox>{},
                          std::integral_constant<size_t, ls_col::Br>{});
@@ -431,7 +426,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         auto flush_sphere = [&] {
             if (n_sph == 0) return;
             lambert_sphere_nee_kernel(sc, n_sph, spheres, n_lights_f);
-            collect(sc, sphere_index, n_sph);
+            take_shadow_rays(sc, sphere_index, n_sph, std::integral_constant<size_t, lq_col::Ox>{});
             lambert_sample_kernel(sc, n_sph);
             take_samples(sc, sphere_index, n_sph, std::integral_constant<size_t, ls_col::Ox>{},
                          std::integral_constant<size_t, ls_col::Br>{});
@@ -448,11 +443,15 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // Rough conductor vertices that chose a sphere emitter seen from outside: a kernel too.
         size_t n_csph = 0;
         SoaColumns &csc = buf.conductor_sphere;
-        csc.resize(rsn_col::Count, LambertChunk);
+        csc.resize(cond_col::Count, LambertChunk);
+        // Their lanes hold the whole vertex (cond_col): the BSDF is sampled right after NEE.
         auto flush_conductor_sphere = [&] {
             if (n_csph == 0) return;
             rough_conductor_sphere_nee_kernel(csc, n_csph, spheres, n_lights_f);
             take_shadow_rays(csc, conductor_sphere_index, n_csph, std::integral_constant<size_t, rn_col::Ox>{});
+            rough_conductor_sample_kernel(csc, n_csph);
+            take_samples(csc, conductor_sphere_index, n_csph, std::integral_constant<size_t, rs_col::Ox>{},
+                         std::integral_constant<size_t, rs_col::Br>{});
         };
         // Whether p is outside sphere emitter `row` (Sphere::sample_solid_angle's test).
         auto outside_sphere = [&](int row, Point3f p) {
@@ -488,12 +487,13 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 }
             } else if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
                 if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
-                    v.nee = false;
+                    v.nee = false; // handled by the kernel, BSDF sampling too
+                    v.sampled = true;
                     const size_t m = n_csph++;
-                    conductor_sphere_index[m] = uint32_t(j);
+                    conductor_sphere_index[m] = v.path;
                     float *col = csc.data.data() + m;
                     constexpr size_t st = LambertChunk;
-                    gather_conductor_nee(col, st, si, *cond, paths[v.path].throughput);
+                    gather_conductor_sample(col, st, si, *cond, paths[v.path], j);
                     col[rsn_col::Ux * st] = u[1][j], col[rsn_col::Uy * st] = u[2][j];
                     col[rsn_col::Sphere * st] = float(row);
                     if (n_csph == LambertChunk) flush_conductor_sphere();
@@ -537,14 +537,16 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (n_lam == 0) return;
             lambert_nee_kernel(lc, n_lam, n_lights_f);
             take_shadow_rays(lc, lambert_index, n_lam, std::integral_constant<size_t, ln_col::Ox>{});
+            n_lam = 0;
         };
         size_t n_rc = 0;
         SoaColumns &rc = buf.conductor;
-        rc.resize(std::max<size_t>(rn_col::Count, rs_col::Count), LambertChunk);
+        rc.resize(cond_col::Count, LambertChunk);
         auto flush_rc_nee = [&] {
             if (n_rc == 0) return;
             rough_conductor_nee_kernel(rc, n_rc, n_lights_f);
             take_shadow_rays(rc, conductor_index, n_rc, std::integral_constant<size_t, rn_col::Ox>{});
+            n_rc = 0;
         };
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = scatter[j];
@@ -555,7 +557,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const LambertInfo *lam = bsdf.lambert()) {
                 using namespace ln_col;
                 const size_t m = n_lam++;
-                lambert_index[m] = uint32_t(j);
+                lambert_index[m] = v.path;
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = lc.data.data() + m;
                 constexpr size_t st = LambertChunk;
@@ -574,7 +576,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
                 using namespace rn_col;
                 const size_t m = n_rc++;
-                conductor_index[m] = uint32_t(j);
+                conductor_index[m] = v.path;
                 const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
                 float *col = rc.data.data() + m;
                 constexpr size_t st = LambertChunk;
@@ -627,22 +629,9 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                 continue;
             }
             if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
-                using namespace rs_col;
                 const size_t m = n_rc++;
                 conductor_index[m] = uint32_t(k);
-                float *col = rc.data.data() + m;
-                constexpr size_t st = LambertChunk;
-                gather_conductor(col, st, si, *cond);
-                const Frame &f = si.sh_frame;
-                col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
-                col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
-                col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
-                col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
-                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
-                col[Eta * st] = p.eta, col[URr * st] = u[6][j];
-                col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
+                gather_conductor_sample(rc.data.data() + m, LambertChunk, si, *cond, p, j);
                 if (n_rc == LambertChunk) flush_rc_sample();
                 continue;
             }

@@ -118,19 +118,31 @@ struct SphereTable {
 /// SphereTable row): Sphere::sample_solid_angle's cone sampling, then AreaLight::sample_li.
 void lambert_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count);
 
-/// Columns of `rough_conductor_sample_kernel`: inputs, then outputs (flags are 0 or 1).
-namespace rs_col {
+/// The columns of a constant rough conductor vertex, one layout for all its kernels (as
+/// lam_col): the NEE kernels (rn_col, rsn_col) and the sampling kernel (rs_col) read the same
+/// gathered vertex. Inputs, then the BSDF sample's outputs, then next-event estimation's.
+namespace cond_col {
 enum : size_t {
     WiX, WiY, WiZ, TwoSided, Beckmann, Alpha, // local wi; RoughConductorInfo
     EtaR, EtaG, EtaB, KR, KG, KB, SpR, SpG, SpB,
-    Ux, Uy,
     Sx, Sy, Sz, Tx, Ty, Tz, Nx, Ny, Nz, // shading frame
     Px, Py, Pz, Gx, Gy, Gz,             // position, geometric normal
-    Br, Bg, Bb,                         // throughput (updated in place)
+    Br, Bg, Bb,                         // throughput (read by NEE, then updated in place by sampling)
     Eta, URr, RrOn,                     // Russian roulette: eta, its number, whether it applies
-    Ox, Oy, Oz, Dx, Dy, Dz, Pdf, Alive, // outputs: the next ray, its density, whether the path continues
+    DirUx, DirUy,                       // the BSDF sample's numbers
+    Ldx, Ldy, Ldz, Lpx, Lpy, Lpz, LDist, LPdf, LDelta, // emitter sample (direction, point, distance, density)
+    Wr, Wg, Wb,                                        // emitter weight L/pdf
+    LightUx, LightUy, SphereRow,        // a sphere emitter's sample numbers and SphereTable row
+    Ox, Oy, Oz, Dx, Dy, Dz, Pdf, Alive, // BSDF sample: the next ray, its density, whether the path continues
+    SOx, SOy, SOz, SDx, SDy, SDz, STMax, Cr, Cg, Cb, Ok, // NEE: shadow ray, contribution, whether f > 0
     Count
 };
+}
+
+/// Columns of `rough_conductor_sample_kernel` (flags are 0 or 1): cond_col's.
+namespace rs_col {
+using namespace cond_col;
+enum : size_t { Ux = DirUx, Uy = DirUy };
 }
 
 static_assert(rs_col::Nz == rs_col::Sx + 8 && rs_col::Gz == rs_col::Px + 5 && rs_col::RrOn == rs_col::Br + 5 &&
@@ -141,18 +153,18 @@ static_assert(rs_col::Nz == rs_col::Sx + 8 && rs_col::Gz == rs_col::Px + 5 && rs
 /// "Russian roulette" through RoughConductor::sample (and TwoSidedBsdf's mirroring).
 void rough_conductor_sample_kernel(SoaColumns &c, size_t n);
 
-/// Columns of `rough_conductor_nee_kernel`: inputs, then outputs.
+/// Columns of `rough_conductor_nee_kernel`: cond_col's, with the NEE outputs.
 namespace rn_col {
+using cond_col::WiX, cond_col::WiY, cond_col::WiZ, cond_col::TwoSided, cond_col::Beckmann, cond_col::Alpha,
+    cond_col::EtaR, cond_col::EtaG, cond_col::EtaB, cond_col::KR, cond_col::KG, cond_col::KB, cond_col::SpR,
+    cond_col::SpG, cond_col::SpB, cond_col::Sx, cond_col::Sy, cond_col::Sz, cond_col::Tx, cond_col::Ty, cond_col::Tz,
+    cond_col::Nx, cond_col::Ny, cond_col::Nz, cond_col::Px, cond_col::Py, cond_col::Pz, cond_col::Gx, cond_col::Gy,
+    cond_col::Gz, cond_col::Br, cond_col::Bg, cond_col::Bb, cond_col::Ldx, cond_col::Ldy, cond_col::Ldz,
+    cond_col::Lpx, cond_col::Lpy, cond_col::Lpz, cond_col::LDist, cond_col::LPdf, cond_col::LDelta, cond_col::Wr,
+    cond_col::Wg, cond_col::Wb, cond_col::Cr, cond_col::Cg, cond_col::Cb, cond_col::Ok, cond_col::Count;
 enum : size_t {
-    WiX, WiY, WiZ, TwoSided, Beckmann, Alpha,
-    EtaR, EtaG, EtaB, KR, KG, KB, SpR, SpG, SpB,
-    Sx, Sy, Sz, Tx, Ty, Tz, Nx, Ny, Nz,
-    Px, Py, Pz, Gx, Gy, Gz,
-    Br, Bg, Bb,
-    Ldx, Ldy, Ldz, Lpx, Lpy, Lpz, LDist, LPdf, LDelta, // emitter sample (direction, point, distance, density)
-    Wr, Wg, Wb,                                        // emitter weight L/pdf
-    Ox, Oy, Oz, Dx, Dy, Dz, TMax, Cr, Cg, Cb, Ok,      // outputs: shadow ray, contribution, whether f > 0
-    Count
+    Ox = cond_col::SOx, Oy = cond_col::SOy, Oz = cond_col::SOz, Dx = cond_col::SDx, Dy = cond_col::SDy,
+    Dz = cond_col::SDz, TMax = cond_col::STMax
 };
 }
 
@@ -164,9 +176,9 @@ static_assert(rn_col::Gz == rn_col::Px + 5 && rn_col::LDelta == rn_col::Ldx + 8 
 void rough_conductor_nee_kernel(SoaColumns &c, size_t n, float light_count);
 
 /// Columns of `rough_conductor_sphere_nee_kernel`: rn_col's (the emitter sample's columns are
-/// filled by the kernel), then the emitter sample's numbers and the emitter's SphereTable row.
+/// filled by the kernel), with the emitter sample's numbers and the emitter's SphereTable row.
 namespace rsn_col {
-enum : size_t { Ux = rn_col::Count, Uy, Sphere, Count };
+enum : size_t { Ux = cond_col::LightUx, Uy = cond_col::LightUy, Sphere = cond_col::SphereRow };
 }
 
 /// `rough_conductor_nee_kernel` towards sphere emitters seen from outside, emitter sampling
