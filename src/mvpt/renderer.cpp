@@ -209,11 +209,12 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     // order, so every pixel accumulates its samples in the same order as pass by pass (the
     // images are identical) while the threads meet once per chunk instead of once per pass
     // (on a loaded machine a descheduled thread holds up every pass boundary). Without a
-    // time budget a chunk grows to about a quarter of a second (the cancellation latency);
-    // with one, chunks stay single passes so that the budget is checked after each.
+    // time budget a chunk grows to about a quarter of a second (the cancellation latency).
     // A chunk is a whole number of pass groups (render_tile's batches): 16 passes, halved
     // while a group of all views would exceed GroupPaths paths (so that the first chunk, one
-    // group, stays short on large films); single passes under a time budget.
+    // group, stays short on large films). Under a time budget the first chunk is one pass;
+    // then groups are as long as fits in ChunkSeconds (the budget's granularity), and each
+    // chunk is one group or, near the end, the passes that still fit in the budget.
     constexpr double ChunkSeconds = 0.25;
     constexpr int MaxChunk = 16;
     constexpr uint64_t GroupPaths = uint64_t(1) << 20;
@@ -227,7 +228,11 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     for (int pass = 0; pass < max_target;) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
-        if (pass > 0 && m_opts.time_budget > 0.0 && elapsed + last_pass > m_opts.time_budget) break;
+        if (pass > 0 && m_opts.time_budget > 0.0) {
+            const int fit = int(std::min((m_opts.time_budget - elapsed) / last_pass, double(MaxChunk)));
+            if (fit < 1) break;
+            chunk = std::min(group, fit);
+        }
         const int pass_end = std::min(max_target, pass + chunk);
         auto t_chunk = clock::now();
 
@@ -256,6 +261,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         pass = pass_end;
         if (m_opts.time_budget == 0.0 && last_pass > 0.0)
             chunk = std::max(group, int(std::clamp(ChunkSeconds / last_pass, 1.0, double(MaxChunk))) / group * group);
+        else if (m_opts.time_budget > 0.0 && pass == 1)
+            for (group = MaxChunk; group > 1 && double(group) * last_pass > ChunkSeconds;) group /= 2;
     }
     m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     for (const RayCounters &c : counters) m_stats.counters += c;
