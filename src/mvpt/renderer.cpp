@@ -99,8 +99,9 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     // each pixel's passes in a row, so that a 16-wide Embree packet holds one pixel's samples
     // (its camera rays nearly coincide, its bounce and shadow rays leave from nearly one point:
     // matpreview -16 % time). Every pixel still sums its samples in pass order, so the images
-    // are those of pass-by-pass rendering; and as the groups depend only on the film size and
-    // options (below), so do the batches.
+    // are those of pass-by-pass rendering; and without a time budget the groups depend only on
+    // the film size and options (below), so the batches do too (under a budget the number of
+    // passes depends on timing anyway).
     auto render_tile = [&](const Tile &tile, int pass0, int pass1, RayCounters &rc) {
         int view = m_views[tile.view_slot];
         const Camera &cam = *cams[view];

@@ -21,7 +21,7 @@ public:
     };
 
     AliasTable() = default;
-    /// `weights`: non-negative, not all zero.
+    /// `weights`: non-negative (all zero: an empty table, whose samples are item 0).
     explicit AliasTable(const std::vector<float> &weights) { build(weights); }
 
     void build(const std::vector<float> &weights) {

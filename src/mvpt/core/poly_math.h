@@ -1,9 +1,10 @@
-// Single-precision exp, log, erf and atan2 as branch-free polynomials [Moshier, Cephes 1984-1992,
-// expf/logf/erff/erfcf/atanf]: inline, so that GCC vectorises them inside the multi-ISA kernels,
-// and shared by the scalar code, so that a kernel and the scalar path it replaces give the
-// same bits (the build has no FMA contraction). Accuracy (checked against double precision
-// in tests/cpp/test_poly_math.cpp): exp and log within 1e-7 relative, erf within 2e-7
-// absolute, atan2 within 3e-7 absolute. Not libm replacements: the domains are those stated per function.
+// Single-precision exp, log, erf and atan2 as branch-free polynomials [Moshier, Cephes
+// 1984-1992, expf/logf/erff/erfcf/atanf]: inline, so that GCC vectorises them inside the
+// multi-ISA kernels and batch loops, and shared by the scalar code, so that a kernel and the
+// scalar path it replaces give the same bits (the build has no FMA contraction). Accuracy
+// (checked against double precision in tests/cpp/test_poly_math.cpp): exp and log within
+// 1e-7 relative, erf within 2e-7 absolute, atan2 within 3e-7 absolute. Not libm
+// replacements: the domains are those stated per function.
 #pragma once
 
 #include <bit>
