@@ -70,6 +70,18 @@ inline void put_emitter_sample(float *col, size_t st, const LightSample &ls, con
     col[(Ldx + 9) * st] = weight.r, col[(Ldx + 10) * st] = weight.g, col[(Ldx + 11) * st] = weight.b;
 }
 
+/// One lane's shading frame (columns S0 .. S0 + 8), position and geometric normal (P0 .. P0 + 5)
+/// and throughput (B0 .. B0 + 2), where the kernels' column blocks hold them.
+template <size_t S0, size_t P0, size_t B0>
+inline void put_vertex(float *col, size_t st, const SurfaceInteraction &si, const Spectrum &beta) {
+    const Frame &f = si.sh_frame;
+    const float v[9] = {f.s.x, f.s.y, f.s.z, f.t.x, f.t.y, f.t.z, f.n.x, f.n.y, f.n.z};
+    for (size_t q = 0; q < 9; ++q) col[(S0 + q) * st] = v[q];
+    col[P0 * st] = si.p.x, col[(P0 + 1) * st] = si.p.y, col[(P0 + 2) * st] = si.p.z;
+    col[(P0 + 3) * st] = si.n.x, col[(P0 + 4) * st] = si.n.y, col[(P0 + 5) * st] = si.n.z;
+    col[B0 * st] = beta.r, col[(B0 + 1) * st] = beta.g, col[(B0 + 2) * st] = beta.b;
+}
+
 /// The reflectance of a Lambertian vertex: its texture at the hit's uv (as DiffuseBsdf
 /// evaluates it), or the constant.
 inline Color3f lambert_reflectance(const LambertInfo &lam, const SurfaceInteraction &si) {
@@ -241,15 +253,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     // The vertex columns of rough_conductor_nee_kernel (also those of its sphere variant).
     auto gather_conductor_nee = [&](float *col, size_t st, const SurfaceInteraction &si, const RoughConductorInfo &rc,
                                     const Spectrum &beta) {
-        using namespace rn_col;
         gather_conductor(col, st, si, rc);
-        const Frame &f = si.sh_frame;
-        col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
-        col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
-        col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
-        col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-        col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-        col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+        put_vertex<rn_col::Sx, rn_col::Px, rn_col::Br>(col, st, si, beta);
     };
     float *const u[7] = {buf.u[0].data(), buf.u[1].data(), buf.u[2].data(), buf.u[3].data(),
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
@@ -269,17 +274,11 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                               const WavePath &p, size_t j) {
         using namespace ls_col;
         constexpr size_t st = LambertChunk; // the columns' stride (resized to LambertChunk lanes)
-        const Frame &f = si.sh_frame;
         col[WiZ * st] = si.wi.z;
         col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
         col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
-        col[Sx * st] = f.s.x, col[Sy * st] = f.s.y, col[Sz * st] = f.s.z;
-        col[Tx * st] = f.t.x, col[Ty * st] = f.t.y, col[Tz * st] = f.t.z;
-        col[Nx * st] = f.n.x, col[Ny * st] = f.n.y, col[Nz * st] = f.n.z;
-        col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-        col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+        put_vertex<Sx, Px, Br>(col, st, si, p.throughput);
         col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
-        col[Br * st] = p.throughput.r, col[Bg * st] = p.throughput.g, col[Bb * st] = p.throughput.b;
         col[Eta * st] = p.eta, col[URr * st] = u[6][j];
         col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
     };
