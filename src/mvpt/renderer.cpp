@@ -219,20 +219,27 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     constexpr double ChunkSeconds = 0.25;
     constexpr int MaxChunk = 16;
     constexpr uint64_t GroupPaths = uint64_t(1) << 20;
+    // The longest group of up to MaxChunk passes, halved while `too_long(group)`.
+    auto longest_group = [](auto &&too_long) {
+        int g = MaxChunk;
+        while (g > 1 && too_long(g)) g /= 2;
+        return g;
+    };
     int group = 1;
     if (m_opts.time_budget == 0.0) {
         uint64_t pixels = 0;
         for (const Tile &t : all_tiles) pixels += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
-        for (group = MaxChunk; group > 1 && uint64_t(group) * pixels > GroupPaths;) group /= 2;
+        group = longest_group([&](int g) { return uint64_t(g) * pixels > GroupPaths; });
     }
     int chunk = group;
     for (int pass = 0; pass < max_target;) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
         if (pass > 0 && m_opts.time_budget > 0.0) {
-            const int fit = int(std::min((m_opts.time_budget - elapsed) / last_pass, double(MaxChunk)));
-            if (fit < 1) break;
-            chunk = std::min(group, fit);
+            // Passes that still fit (checked as a double: the quotient may be infinite or NaN).
+            const double fit = std::min((m_opts.time_budget - elapsed) / last_pass, double(MaxChunk));
+            if (!(fit >= 1.0)) break;
+            chunk = std::min(group, int(fit));
         }
         const int pass_end = std::min(max_target, pass + chunk);
         auto t_chunk = clock::now();
@@ -263,7 +270,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         if (m_opts.time_budget == 0.0 && last_pass > 0.0)
             chunk = std::max(group, int(std::clamp(ChunkSeconds / last_pass, 1.0, double(MaxChunk))) / group * group);
         else if (m_opts.time_budget > 0.0 && pass == 1)
-            for (group = MaxChunk; group > 1 && double(group) * last_pass > ChunkSeconds;) group /= 2;
+            group = longest_group([&](int g) { return double(g) * last_pass > ChunkSeconds; });
     }
     m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     for (const RayCounters &c : counters) m_stats.counters += c;
