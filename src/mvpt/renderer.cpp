@@ -137,7 +137,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         thread_local std::vector<float> times;
         thread_local std::vector<uint64_t> pixel_hash, sample_hash;
         thread_local std::vector<float> draws[5];
-        constexpr size_t BatchPaths = 256;
+        // 1024 rather than 256: fuller packets and kernel chunks at the deep, sparse bounces (cbox -2.6 %).
+        constexpr size_t BatchPaths = 1024;
         for (size_t b0 = 0; b0 < slot_x.size(); b0 += BatchPaths) {
             const size_t n = std::min(BatchPaths, slot_x.size() - b0);
             const uint32_t *sx = slot_x.data() + b0, *sy = slot_y.data() + b0, *sq = slot_pass.data() + b0;

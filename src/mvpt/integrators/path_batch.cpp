@@ -260,7 +260,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                          buf.u[4].data(), buf.u[5].data(), buf.u[6].data()};
     // The vertex columns of rough_conductor_sample_kernel (cond_col: those of the NEE kernels
     // too) from scattering vertex j.
-    auto gather_conductor_sample = [&](float *col, size_t st, const SurfaceInteraction &si,
+    auto gather_conductor_sample = [&, u](float *col, size_t st, const SurfaceInteraction &si,
                                        const RoughConductorInfo &rc, const WavePath &p, size_t j) {
         using namespace rs_col;
         gather_conductor_nee(col, st, si, rc, p.throughput);
@@ -270,7 +270,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     };
     // One lane of lam_col columns (LambertChunk lanes each) from scattering vertex j: everything
     // BSDF sampling reads, which includes what next-event estimation reads.
-    auto gather_lambert = [&](float *col, const SurfaceInteraction &si, const LambertInfo &lam, const Color3f &refl,
+    auto gather_lambert = [&, u](float *col, const SurfaceInteraction &si, const LambertInfo &lam, const Color3f &refl,
                               const WavePath &p, size_t j) {
         using namespace ls_col;
         constexpr size_t st = LambertChunk; // the columns' stride (resized to LambertChunk lanes)
@@ -286,24 +286,28 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
     // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
     // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
-    auto take_samples = [&](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0, auto b0) {
+    auto take_samples = [paths, sis, rays, alive](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0, auto b0) {
         constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
         const float *const cd = cols.data.data(); // LambertChunk lanes per column
+        // The captured pointers in locals: through the closure, GCC reloads them after every byte store.
+        WavePath *const pa = paths;
+        Ray *const ra = rays;
+        const SurfaceInteraction *const si_of = sis;
+        uint8_t *const al = alive;
         for (size_t m = 0; m < count; ++m) {
             auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
             const uint32_t k = index[m];
-            WavePath &p = paths[k];
+            WavePath &p = pa[k];
             p.valid = true;
             if (!(at(O0 + 7) > 0.f)) continue;
-            const SurfaceInteraction &si = sis[k];
-            rays[k] = Ray{{at(O0), at(O0 + 1), at(O0 + 2)},
-                              {at(O0 + 3), at(O0 + 4), at(O0 + 5)}, 0.f, Infinity, si.time};
+            const SurfaceInteraction &si = si_of[k];
+            ra[k] = Ray{{at(O0), at(O0 + 1), at(O0 + 2)}, {at(O0 + 3), at(O0 + 4), at(O0 + 5)}, 0.f, Infinity, si.time};
             p.throughput = Spectrum(at(B0), at(B0 + 1), at(B0 + 2));
             p.prev_p = si.p;
             p.prev_bsdf_pdf = at(O0 + 6);
             p.prev_bsdf_delta = false;
             ++p.depth;
-            alive[k] = 1;
+            al[k] = 1;
         }
         count = 0;
     };
@@ -322,13 +326,13 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // Escaped rays are evaluated after this loop, all at once (their densities wanted:
         // env_lane[0, n_env_mis); not wanted: env_lane[env_nomis, active)).
         size_t n_scatter = 0, n_env_mis = 0, env_nomis = active;
+        std::fill(alive, alive + active, uint8_t(0)); // before the loop: a byte store in it makes GCC reload pointers
         for (size_t k = 0; k < active; ++k) {
             WavePath &p = paths[k];
             Sampler &sampler = samplers[p.slot];
             const SurfaceInteraction &si_hit = sis[k];
             const bool hit = hits[k] != 0;
             const Ray &ray = rays[k];
-            alive[k] = 0;
             sampler.set_dimension(DimCameraEnd + p.depth * DimsPerVertex);
 
             const Light *emitter = hit ? si_hit.shape->emitter.get() : scene.environment();
@@ -380,7 +384,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         if (env_nomis < active)
             env->eval_environment_batch(active - env_nomis, buf.env_ref.data() + env_nomis,
                                         buf.env_d.data() + env_nomis, buf.env_le.data() + env_nomis, nullptr);
-        auto add_escaped = [&](size_t e, bool mis) {
+        auto add_escaped = [&, paths](size_t e, bool mis) {
             WavePath &p = paths[buf.env_lane[e]];
             const Spectrum &le = buf.env_le[e];
             if (le.is_black()) return;
@@ -401,17 +405,22 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         sc.resize(lq_col::Count, LambertChunk);
         // The next-event estimates of a kernel's lanes (paths index[m]) wait for their shadow
         // rays (columns from O0: origin, direction, t_max, contribution, whether it counts).
-        auto take_shadow_rays = [&](SoaColumns &cols, const uint32_t *index, size_t count, auto o0) {
+        auto take_shadow_rays = [&n_shadow, shadow, shadows, sis](SoaColumns &cols, const uint32_t *index, size_t count, auto o0) {
             constexpr size_t O0 = decltype(o0)::value;
             const float *const cd = cols.data.data(); // LambertChunk lanes per column
+            float *const sh[8] = {shadow[0], shadow[1], shadow[2], shadow[3], shadow[4], shadow[5], shadow[6], shadow[7]};
+            PendingShadow *const pending = shadows;
+            const SurfaceInteraction *const si_of = sis;
+            size_t ns = n_shadow;
             for (size_t m = 0; m < count; ++m) {
                 auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
                 if (!(at(O0 + 10) > 0.f)) continue;
                 const uint32_t k = index[m];
-                for (size_t q = 0; q < 7; ++q) shadow[q][n_shadow] = at(O0 + q);
-                shadow[7][n_shadow] = sis[k].time;
-                shadows[n_shadow++] = {k, Spectrum(at(O0 + 7), at(O0 + 8), at(O0 + 9))};
+                for (size_t q = 0; q < 7; ++q) sh[q][ns] = at(O0 + q);
+                sh[7][ns] = si_of[k].time;
+                pending[ns++] = {k, Spectrum(at(O0 + 7), at(O0 + 8), at(O0 + 9))};
             }
+            n_shadow = ns;
         };
         // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
         auto flush_quad = [&] {
@@ -431,11 +440,11 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                          std::integral_constant<size_t, ls_col::Br>{});
         };
         // One lane of lam_col columns: the vertex, its throughput, the emitter's numbers and table row.
-        auto gather = [&](SoaColumns &c, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
-                          const Color3f &refl, const WavePath &p, size_t j, int row) {
-            gather_lambert(c.data.data() + m, si, lam, refl, p, j);
+        auto gather = [&, u](float *cols, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
+                             const Color3f &refl, const WavePath &p, size_t j, int row) {
+            float *col = cols + m;
+            gather_lambert(col, si, lam, refl, p, j);
             constexpr size_t st = LambertChunk;
-            float *col = c.data.data() + m;
             col[lam_col::LightUx * st] = u[1][j], col[lam_col::LightUy * st] = u[2][j];
             col[lam_col::Emitter * st] = float(row);
         };
@@ -460,6 +469,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         };
         // Vertices that chose the environment sample it after this loop, all at once.
         size_t n_env = 0;
+        // The kernels' columns (sized above), in locals: GCC would reload them after each byte store.
+        float *const quad_cols = qc.data.data(), *const sphere_cols = sc.data.data(), *const csph_cols = csc.data.data();
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = scatter[j];
             const SurfaceInteraction &si = sis[v.path];
@@ -469,32 +480,32 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             size_t idx = std::min(size_t(u[0][j] * n_lights_f), n_lights - 1);
             if (const LambertInfo *lam = bsdf.lambert()) {
                 if (quad_row[idx] >= 0) {
+                    quad_index[n_quad] = v.path;
+                    gather(quad_cols, n_quad++, si, *lam, v.refl, paths[v.path], j, quad_row[idx]);
                     v.nee = false; // handled by the kernel, BSDF sampling too
                     v.sampled = true;
-                    quad_index[n_quad] = v.path;
-                    gather(qc, n_quad++, si, *lam, v.refl, paths[v.path], j, quad_row[idx]);
                     if (n_quad == LambertChunk) flush_quad();
                     continue;
                 }
                 if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
+                    sphere_index[n_sph] = v.path;
+                    gather(sphere_cols, n_sph++, si, *lam, v.refl, paths[v.path], j, row);
                     v.nee = false;
                     v.sampled = true;
-                    sphere_index[n_sph] = v.path;
-                    gather(sc, n_sph++, si, *lam, v.refl, paths[v.path], j, row);
                     if (n_sph == LambertChunk) flush_sphere();
                     continue;
                 }
             } else if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
                 if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
-                    v.nee = false; // handled by the kernel, BSDF sampling too
-                    v.sampled = true;
                     const size_t m = n_csph++;
                     conductor_sphere_index[m] = v.path;
-                    float *col = csc.data.data() + m;
+                    float *col = csph_cols + m;
                     constexpr size_t st = LambertChunk;
                     gather_conductor_sample(col, st, si, *cond, paths[v.path], j);
                     col[rsn_col::Ux * st] = u[1][j], col[rsn_col::Uy * st] = u[2][j];
                     col[rsn_col::Sphere * st] = float(row);
+                    v.nee = false; // handled by the kernel, BSDF sampling too
+                    v.sampled = true;
                     if (n_csph == LambertChunk) flush_conductor_sphere();
                     continue;
                 }

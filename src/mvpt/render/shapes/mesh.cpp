@@ -50,7 +50,13 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
         m_face_normals[i] = normalize(cross(p1 - p0, p2 - p0));
         if (!m_data.normals.empty()) {
             const Normal3f &n0 = m_data.normals[idx[0]], &n1 = m_data.normals[idx[1]], &n2 = m_data.normals[idx[2]];
-            m_flat_vertex_normals[i] = n0 == n1 && n1 == n2 && squared_norm(n0) > 0.f;
+            // Equal to within 1e-6 per component: normals computed for a planar region (angle-weighted
+            // sums, renormalised) differ in their last bits, and interpolating them moves the shading
+            // normal by less than that (1e-6 rad), far below any visible effect.
+            auto near = [](const Normal3f &a, const Normal3f &b) {
+                return std::max({std::abs(a.x - b.x), std::abs(a.y - b.y), std::abs(a.z - b.z)}) <= 1e-6f;
+            };
+            m_flat_vertex_normals[i] = near(n0, n1) && near(n1, n2) && squared_norm(n0) > 0.f;
         }
     }
     size_t n_flat = 0;

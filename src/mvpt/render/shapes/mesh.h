@@ -49,8 +49,8 @@ private:
     float m_area = 0.f, m_inv_area = 0.f;
     /// Per-triangle precomputed data (hit and emitter sampling are per-path hot spots).
     std::vector<Normal3f> m_face_normals;
-    /// Per triangle: its three vertex normals are identical and non-zero, so
-    /// interpolation and renormalisation reduce to that normal.
+    /// Per triangle: its three vertex normals agree to within 1e-6 and are non-zero, so
+    /// interpolation and renormalisation reduce to the first one.
     std::vector<uint8_t> m_flat_vertex_normals;
     /// Shading frames of the triangles whose frame is constant over them (face normals, or
     /// flat vertex normals), flip_normals applied, so that their hits and emitter samples
