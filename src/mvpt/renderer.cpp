@@ -23,6 +23,21 @@
 
 namespace mvpt {
 
+namespace {
+/// A render thread's per-tile buffers (render_tile), reused across tiles.
+struct TileBuffers {
+    /// The tile's samples in order: (pixel x, pixel y, pass).
+    std::vector<uint32_t> slot_x, slot_y, slot_pass;
+    std::vector<Sampler> samplers;
+    std::vector<Ray> rays;
+    std::vector<Spectrum> radiance;
+    std::vector<Vec2f> film_positions, lens_points;
+    std::vector<float> times;
+    std::vector<uint64_t> pixel_hash, sample_hash;
+    std::vector<float> draws[5];
+};
+} // namespace
+
 Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_opts(std::move(opts)) {
     const auto &cams = scene.cameras();
     if (m_opts.views.empty())
@@ -111,8 +126,14 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         const uint32_t seed = uint32_t(m_opts.seed ? *m_opts.seed : cam.seed); // as Sampler keeps it
         static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
                       "independent_start_draws draws the camera dimensions 0, 1, 2");
-        // The tile's samples in order: (pixel x, pixel y, pass).
-        thread_local std::vector<uint32_t> slot_x, slot_y, slot_pass;
+        // One thread_local reached through a pointer the compiler cannot see through (an empty
+        // asm): in the Python module (a shared library) each use of a thread_local would call
+        // __tls_get_addr.
+        thread_local TileBuffers tls_tile;
+        TileBuffers *tile_ptr = &tls_tile;
+        asm("" : "+r"(tile_ptr));
+        TileBuffers &tb = *tile_ptr;
+        std::vector<uint32_t> &slot_x = tb.slot_x, &slot_y = tb.slot_y, &slot_pass = tb.slot_pass;
         slot_x.clear(), slot_y.clear(), slot_pass.clear();
         auto add = [&](int x, int y, int q) {
             slot_x.push_back(uint32_t(x + film.crop_x));
@@ -130,13 +151,13 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                         for (int x = bx; x < std::min(bx + Block, tile.x1); ++x)
                             for (int q = pass0; q < pass1; ++q) add(x, y, q);
         }
-        thread_local std::vector<Sampler> samplers;
-        thread_local std::vector<Ray> rays;
-        thread_local std::vector<Spectrum> radiance;
-        thread_local std::vector<Vec2f> film_positions, lens_points;
-        thread_local std::vector<float> times;
-        thread_local std::vector<uint64_t> pixel_hash, sample_hash;
-        thread_local std::vector<float> draws[5];
+        std::vector<Sampler> &samplers = tb.samplers;
+        std::vector<Ray> &rays = tb.rays;
+        std::vector<Spectrum> &radiance = tb.radiance;
+        std::vector<Vec2f> &film_positions = tb.film_positions, &lens_points = tb.lens_points;
+        std::vector<float> &times = tb.times;
+        std::vector<uint64_t> &pixel_hash = tb.pixel_hash, &sample_hash = tb.sample_hash;
+        std::vector<float> (&draws)[5] = tb.draws;
         // 1024 rather than 256: fuller packets and kernel chunks at the deep, sparse bounces (cbox -2.6 %).
         constexpr size_t BatchPaths = 1024;
         for (size_t b0 = 0; b0 < slot_x.size(); b0 += BatchPaths) {
