@@ -1,12 +1,14 @@
 // Analytic shapes through the Embree scene: hit distances, normals, uv,
 // robustness for large/far spheres, instance transforms, and the sphere's
-// visible-cone sampling (chi^2 and analytic irradiance).
+// visible-cone sampling (chi^2 and analytic irradiance); meshes' flat-normal test.
 #include "mvpt/render/shapes/instance.h"
 #include "mvpt/scene/scene.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 using namespace mvpt;
@@ -229,4 +231,29 @@ TEST(SphereSampling, IrradianceMatchesAnalyticValue) {
         omega += 1.0 / pdf;
     }
     EXPECT_NEAR(omega / N, 4 * Pi, 0.02 * 4 * Pi);
+}
+
+// A triangle whose vertex normals agree to within 1e-6 is shaded with its first vertex
+// normal (a constant frame); one whose normals differ more is interpolated.
+TEST(MeshShading, NearlyEqualVertexNormalsCountAsFlat) {
+    namespace fs = std::filesystem;
+    auto shading_normal_at_centroid = [](const std::string &name, float nx) {
+        fs::path dir = fs::temp_directory_path() / "mvpt_shape_tests";
+        fs::create_directories(dir);
+        fs::path ply = dir / name;
+        std::ofstream(ply) << "ply\nformat ascii 1.0\nelement vertex 3\n"
+                              "property float x\nproperty float y\nproperty float z\n"
+                              "property float nx\nproperty float ny\nproperty float nz\n"
+                              "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                              "0 0 0 0 0 1\n1 0 0 " << nx << " 0 1\n0 1 0 0 0 1\n3 0 1 2\n";
+        auto s = load(R"(<shape type="ply"><string name="filename" value=")" + ply.string() + R"("/></shape>)");
+        return hit(*s, {1.f / 3.f, 1.f / 3.f, 1.f}, {0, 0, -1}).sh_frame.n;
+    };
+    // 4e-7 apart: the first vertex's normal exactly (interpolation would give x = 4e-7 / 3).
+    Normal3f flat = shading_normal_at_centroid("near_flat.ply", 4e-7f);
+    EXPECT_EQ(flat.x, 0.f);
+    EXPECT_EQ(flat.z, 1.f);
+    // 3e-3 apart (a warped quad, as cbox's red wall): interpolated.
+    Normal3f smooth = shading_normal_at_centroid("smooth.ply", 3e-3f);
+    EXPECT_NEAR(smooth.x, 1e-3f, 1e-5f);
 }

@@ -286,7 +286,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
     // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
     // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
-    auto take_samples = [paths, sis, rays, alive](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0, auto b0) {
+    auto take_samples = [paths, sis, rays, alive](SoaColumns &cols, const uint32_t *index, size_t &count, auto o0,
+                                                  auto b0) {
         constexpr size_t O0 = decltype(o0)::value, B0 = decltype(b0)::value;
         const float *const cd = cols.data.data(); // LambertChunk lanes per column
         // The captured pointers in locals: through the closure, GCC reloads them after every byte store.
@@ -405,10 +406,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         sc.resize(lq_col::Count, LambertChunk);
         // The next-event estimates of a kernel's lanes (paths index[m]) wait for their shadow
         // rays (columns from O0: origin, direction, t_max, contribution, whether it counts).
-        auto take_shadow_rays = [&n_shadow, shadow, shadows, sis](SoaColumns &cols, const uint32_t *index, size_t count, auto o0) {
+        auto take_shadow_rays = [&n_shadow, shadow, shadows, sis](SoaColumns &cols, const uint32_t *index, size_t count,
+                                                                  auto o0) {
             constexpr size_t O0 = decltype(o0)::value;
             const float *const cd = cols.data.data(); // LambertChunk lanes per column
-            float *const sh[8] = {shadow[0], shadow[1], shadow[2], shadow[3], shadow[4], shadow[5], shadow[6], shadow[7]};
+            float *const sh[8] = {shadow[0], shadow[1], shadow[2], shadow[3],
+                                  shadow[4], shadow[5], shadow[6], shadow[7]};
             PendingShadow *const pending = shadows;
             const SurfaceInteraction *const si_of = sis;
             size_t ns = n_shadow;
@@ -470,7 +473,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // Vertices that chose the environment sample it after this loop, all at once.
         size_t n_env = 0;
         // The kernels' columns (sized above), in locals: GCC would reload them after each byte store.
-        float *const quad_cols = qc.data.data(), *const sphere_cols = sc.data.data(), *const csph_cols = csc.data.data();
+        float *const quad_cols = qc.data.data(), *const sphere_cols = sc.data.data(),
+                    *const csph_cols = csc.data.data();
         for (size_t j = 0; j < n_scatter; ++j) {
             ScatterVertex &v = scatter[j];
             const SurfaceInteraction &si = sis[v.path];
