@@ -123,6 +123,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         const FilmDesc &film = cam.film;
         FilmBuffer &fb = m_films[tile.view_slot];
         const bool independent = cam.sampler_kind == SamplerKind::Independent;
+        const bool thin_lens = cam.lens_radius() > 0.f; // per tile, not per sample (a virtual call)
         const uint32_t seed = uint32_t(m_opts.seed ? *m_opts.seed : cam.seed); // as Sampler keeps it
         static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
                       "independent_start_draws draws the camera dimensions 0, 1, 2");
@@ -195,7 +196,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                 }
                 Vec2f offset = film.filter->sample(u_film);
                 film_positions[i] = Vec2f(float(sx[i]) + 0.5f + offset.x, float(sy[i]) + 0.5f + offset.y);
-                lens_points[i] = cam.lens_radius() > 0.f ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
+                lens_points[i] = thin_lens ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
                 times[i] = cam.sample_time(u_time);
             }
             cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
