@@ -5,11 +5,13 @@
 #include "batch_checks.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
+#include "mvpt/integrators/path_kernels.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/scene/scene.h"
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -163,4 +165,50 @@ TEST(PathKernels, SincosTurnMatchesLibm) {
     EXPECT_EQ(warp::sincos_turn(0.f).y, 1.f);
     EXPECT_EQ(warp::sincos_turn(0.25f).y, 0.f);
     EXPECT_EQ(warp::sincos_turn(0.5f).x, 0.f);
+}
+
+TEST(PathKernels, OneQuadChunkMatchesMixedChunk) {
+    // A chunk whose lanes all chose one quad takes the loop-invariant form of
+    // lambert_quad_nee_kernel; its lanes must come out bit for bit as in a chunk that mixes
+    // quads (the per-lane form). The lanes use quad 1, so a wrong table row shows too.
+    QuadTable quads;
+    const float rows[2][QuadTable::Params] = {
+        {-0.5f, 2.f, -0.5f, 1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f, -1.f, 0.f, 1.f, 5.f, 5.f, 5.f},
+        {1.f, -0.2f, -0.3f, 0.f, 0.f, 0.6f, 0.f, 0.4f, 0.f, -1.f, 0.f, 0.f, 1.f / 0.24f, 2.f, 3.f, 4.f}};
+    for (size_t q = 0; q < 2; ++q)
+        for (size_t r = 0; r < QuadTable::Params; ++r) quads.at(r, q) = rows[q][r];
+    constexpr size_t n = 40;
+    SoaColumns one, mixed;
+    one.resize(lam_col::Count, n);
+    mixed.resize(lam_col::Count, n + 1);
+    uint32_t state = 12345u;
+    auto rnd = [&state] { // in [0, 1)
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) * 0x1p-24f;
+    };
+    for (size_t i = 0; i <= n; ++i) {
+        using namespace lam_col;
+        const float v[] = {0.2f + 0.8f * rnd(), 1.f, 1.f, 0.f, 0.f, 0.f, 0.f, -1.f, 0.f, 1.f, 0.f,
+                           -1.f + 1.8f * rnd(), -1.f + rnd(), -1.f + 2.f * rnd(), 0.f, 1.f, 0.f,
+                           rnd(), rnd(), rnd(), rnd(), rnd(), rnd()};
+        static_assert(Bb + 1 == std::size(v));
+        for (size_t c = 0; c < std::size(v); ++c) {
+            mixed[c][i] = v[c];
+            if (i < n) one[c][i] = v[c];
+        }
+        const float u[] = {rnd(), rnd(), i < n ? 1.f : 0.f}; // the last lane of `mixed` on quad 0
+        for (size_t c = 0; c < 3; ++c) {
+            mixed[LightUx + c][i] = u[c];
+            if (i < n) one[LightUx + c][i] = u[c];
+        }
+    }
+    lambert_quad_nee_kernel(one, n, quads, 2.f);
+    lambert_quad_nee_kernel(mixed, n + 1, quads, 2.f);
+    size_t lit = 0;
+    for (size_t i = 0; i < n; ++i) {
+        for (size_t c = lam_col::SOx; c <= lam_col::Ok; ++c)
+            EXPECT_EQ(std::bit_cast<uint32_t>(one[c][i]), std::bit_cast<uint32_t>(mixed[c][i])) << "lane " << i << " column " << c;
+        lit += one[lam_col::Ok][i] > 0.f && one[lam_col::Cr][i] > 0.f;
+    }
+    EXPECT_GT(lit, n / 2); // most lanes see quad 1's front and get a contribution
 }

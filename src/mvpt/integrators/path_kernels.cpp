@@ -107,38 +107,55 @@ namespace {
 
 } // namespace
 
-MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
+/// One lane of lambert_quad_nee_kernel: quad `k` of table `q`.
+__attribute__((always_inline)) inline void lambert_quad_nee_lane(float *c, size_t s, size_t i, const float *q, int k,
+                                                                 float light_count) {
     using namespace lq_col;
     constexpr size_t M = QuadTable::Max;
+    const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
+    // TriangleMesh::sample_point (parallelogram), area_to_solid_angle, AreaLight::sample_li.
+    const float ux = c[Ux * s + i], uy = c[Uy * s + i];
+    float lpx = (q[QuadTable::Ox * M + k] + q[QuadTable::E1x * M + k] * ux) + q[QuadTable::E2x * M + k] * uy;
+    float lpy = (q[QuadTable::Oy * M + k] + q[QuadTable::E1y * M + k] * ux) + q[QuadTable::E2y * M + k] * uy;
+    float lpz = (q[QuadTable::Oz * M + k] + q[QuadTable::E1z * M + k] * ux) + q[QuadTable::E2z * M + k] * uy;
+    const float qnx = q[QuadTable::Nx * M + k], qny = q[QuadTable::Ny * M + k], qnz = q[QuadTable::Nz * M + k];
+    float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
+    float dist2 = vx * vx + vy * vy + vz * vz;
+    float dist = std::sqrt(dist2);
+    float cos_t = std::abs(qnx * vx + qny * vy + qnz * vz) / dist;
+    float lpdf = select(cos_t > 0.f, q[QuadTable::InvArea * M + k] * dist2 / cos_t, 0.f);
+    float inv_dist = 1.f / dist;
+    const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
+    bool front_side = !(qnx * ldx + qny * ldy + qnz * ldz >= 0.f); // one-sided emitter
+    float inv_pdf = 1.f / lpdf;
+    float wr = q[QuadTable::Lr * M + k] * inv_pdf, wg = q[QuadTable::Lg * M + k] * inv_pdf,
+          wb = q[QuadTable::Lb * M + k] * inv_pdf;
+    bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
+    lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
+                     light_count);
+}
+
+MVPT_MULTI_ISA void lambert_quad_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) {
-        const int k = int(c[Quad * s + i]);
-        const float px = c[Px * s + i], py = c[Py * s + i], pz = c[Pz * s + i];
-        // TriangleMesh::sample_point (parallelogram), area_to_solid_angle, AreaLight::sample_li.
-        const float ux = c[Ux * s + i], uy = c[Uy * s + i];
-        float lpx = (q[QuadTable::Ox * M + k] + q[QuadTable::E1x * M + k] * ux) + q[QuadTable::E2x * M + k] * uy;
-        float lpy = (q[QuadTable::Oy * M + k] + q[QuadTable::E1y * M + k] * ux) + q[QuadTable::E2y * M + k] * uy;
-        float lpz = (q[QuadTable::Oz * M + k] + q[QuadTable::E1z * M + k] * ux) + q[QuadTable::E2z * M + k] * uy;
-        const float qnx = q[QuadTable::Nx * M + k], qny = q[QuadTable::Ny * M + k], qnz = q[QuadTable::Nz * M + k];
-        float vx = lpx - px, vy = lpy - py, vz = lpz - pz;
-        float dist2 = vx * vx + vy * vy + vz * vz;
-        float dist = std::sqrt(dist2);
-        float cos_t = std::abs(qnx * vx + qny * vy + qnz * vz) / dist;
-        float lpdf = select(cos_t > 0.f, q[QuadTable::InvArea * M + k] * dist2 / cos_t, 0.f);
-        float inv_dist = 1.f / dist;
-        const float ldx = vx * inv_dist, ldy = vy * inv_dist, ldz = vz * inv_dist;
-        bool front_side = !(qnx * ldx + qny * ldy + qnz * ldz >= 0.f); // one-sided emitter
-        float inv_pdf = 1.f / lpdf;
-        float wr = q[QuadTable::Lr * M + k] * inv_pdf, wg = q[QuadTable::Lg * M + k] * inv_pdf,
-              wb = q[QuadTable::Lb * M + k] * inv_pdf;
-        bool sampled = (lpdf > 0.f) & (dist > 0.f) & front_side & !((wr == 0.f) & (wg == 0.f) & (wb == 0.f));
-        lambert_nee_tail(c, s, i, px, py, pz, lpx, lpy, lpz, vx, vy, vz, ldx, ldy, ldz, lpdf, wr, wg, wb, sampled,
-                         light_count);
-    }
+    for (size_t i = 0; i < n; ++i) lambert_quad_nee_lane(c, s, i, q, int(c[lq_col::Quad * s + i]), light_count);
+}
+
+/// All lanes on the quad that `q` points at (its row offset applied): the table's entries are
+/// loop invariants, broadcast once, instead of being gathered lane by lane.
+MVPT_MULTI_ISA void lambert_one_quad_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
+#pragma GCC ivdep
+    for (size_t i = 0; i < n; ++i) lambert_quad_nee_lane(c, s, i, q, 0, light_count);
 }
 
 void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count) {
-    lambert_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v, light_count);
+    // Scenes with one quad emitter (or chunks whose lanes all chose one) take the invariant form.
+    const float *const rows = c.data.data() + lq_col::Quad * c.stride;
+    bool one = true;
+    for (size_t i = 1; i < n; ++i) one &= rows[i] == rows[0];
+    if (one && n > 0)
+        lambert_one_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v + int(rows[0]), light_count);
+    else
+        lambert_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v, light_count);
 }
 
 MVPT_MULTI_ISA void lambert_sphere_nee_kernel_impl(float *c, size_t s, size_t n, const float *q, float light_count) {
