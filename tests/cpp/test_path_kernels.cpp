@@ -169,8 +169,8 @@ TEST(PathKernels, SincosTurnMatchesLibm) {
 
 TEST(PathKernels, OneQuadChunkMatchesMixedChunk) {
     // A chunk whose lanes all chose one quad takes the loop-invariant form of
-    // lambert_quad_nee_kernel; its lanes must come out bit for bit as in a chunk that mixes
-    // quads (the per-lane form). The lanes use quad 1, so a wrong table row shows too.
+    // lambert_quad_nee_kernel; its lanes must come out bit for bit as in the per-lane form
+    // (a chunk that mixes quads). The lanes use quad 1, so a wrong table row shows too.
     QuadTable quads;
     const float rows[2][QuadTable::Params] = {
         {-0.5f, 2.f, -0.5f, 1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f, -1.f, 0.f, 1.f, 5.f, 5.f, 5.f},
@@ -202,7 +202,7 @@ TEST(PathKernels, OneQuadChunkMatchesMixedChunk) {
             if (i < n) one[LightUx + c][i] = u[c];
         }
     }
-    lambert_quad_nee_kernel(one, n, quads, 2.f);
+    lambert_quad_nee_kernel(one, n, quads, 2.f, 1);
     lambert_quad_nee_kernel(mixed, n + 1, quads, 2.f);
     size_t lit = 0;
     for (size_t i = 0; i < n; ++i) {

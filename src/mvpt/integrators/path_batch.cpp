@@ -399,6 +399,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // A Lambertian vertex that chose a quad emitter is done whole (emitter sample, BSDF,
         // MIS, shadow ray) by a vector kernel; the others sample their emitter here.
         size_t n_shadow = 0, n_quad = 0;
+        int quad_one = -1; // the quad emitter that all of the chunk's lanes chose, or -1
         SoaColumns &qc = buf.quad;
         qc.resize(lq_col::Count, LambertChunk);
         size_t n_sph = 0;
@@ -428,7 +429,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
         auto flush_quad = [&] {
             if (n_quad == 0) return;
-            lambert_quad_nee_kernel(qc, n_quad, quads, n_lights_f);
+            lambert_quad_nee_kernel(qc, n_quad, quads, n_lights_f, quad_one);
             take_shadow_rays(qc, quad_index, n_quad, std::integral_constant<size_t, lq_col::Ox>{});
             lambert_sample_kernel(qc, n_quad);
             take_samples(qc, quad_index, n_quad, std::integral_constant<size_t, ls_col::Ox>{},
@@ -483,9 +484,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (!v.nee) continue;
             size_t idx = std::min(size_t(u[0][j] * n_lights_f), n_lights - 1);
             if (const LambertInfo *lam = bsdf.lambert()) {
-                if (quad_row[idx] >= 0) {
+                if (const int row = quad_row[idx]; row >= 0) {
+                    quad_one = n_quad == 0 || quad_one == row ? row : -1;
                     quad_index[n_quad] = v.path;
-                    gather(quad_cols, n_quad++, si, *lam, v.refl, paths[v.path], j, quad_row[idx]);
+                    gather(quad_cols, n_quad++, si, *lam, v.refl, paths[v.path], j, row);
                     v.nee = false; // handled by the kernel, BSDF sampling too
                     v.sampled = true;
                     if (n_quad == LambertChunk) flush_quad();

@@ -147,13 +147,9 @@ MVPT_MULTI_ISA void lambert_one_quad_nee_kernel_impl(float *c, size_t s, size_t 
     for (size_t i = 0; i < n; ++i) lambert_quad_nee_lane(c, s, i, q, 0, light_count);
 }
 
-void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count) {
-    // Scenes with one quad emitter (or chunks whose lanes all chose one) take the invariant form.
-    const float *const rows = c.data.data() + lq_col::Quad * c.stride;
-    bool one = true;
-    for (size_t i = 1; i < n; ++i) one &= rows[i] == rows[0];
-    if (one && n > 0)
-        lambert_one_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v + int(rows[0]), light_count);
+void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count, int one_quad) {
+    if (one_quad >= 0)
+        lambert_one_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v + one_quad, light_count);
     else
         lambert_quad_nee_kernel_impl(c.data.data(), c.stride, n, quads.v, light_count);
 }

@@ -104,7 +104,9 @@ struct QuadTable {
 
 /// Next-event estimation at n Lambertian vertices towards quad emitters, emitter sampling
 /// included (AreaLight::sample_li on a parallelogram mesh, then as lambert_nee_kernel).
-void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count);
+/// `one_quad` >= 0 says that every lane chose that quad: its table row is then read as loop
+/// invariants instead of lane by lane (which GCC assembles from scalar loads).
+void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count, int one_quad = -1);
 
 /// Parameters of up to `Max` sphere emitters (SphereEmitter in light.h), one row per parameter.
 struct SphereTable {
