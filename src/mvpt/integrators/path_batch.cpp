@@ -6,7 +6,9 @@
 // (tests/cpp/test_path_batch.cpp checks this). trace_batch starts the paths from given
 // states instead: multi-view path tracing's suffixes, bit-identical to `trace`.
 #include "path.h"
+#include "lane_gather.h"
 #include "path_kernels.h"
+#include "wavefront.h"
 
 #include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
@@ -24,35 +26,6 @@
 namespace mvpt {
 
 namespace {
-/// One path between two vertices: li's loop variables (its ray is in WaveBuffers::rays).
-struct WavePath {
-    Spectrum result{0.f}, throughput{1.f};
-    float eta = 1.f;
-    Point3f prev_p;
-    float prev_bsdf_pdf = 1.f;
-    bool prev_bsdf_delta = true;
-    bool valid = false;
-    uint32_t depth = 0;
-    /// Index of the camera ray (sampler and output slot).
-    uint32_t slot = 0;
-};
-
-/// A path that scatters at its current vertex: its emitter sample, carried between the
-/// shading loops (the vertex's random numbers are in WaveBuffers::u).
-struct ScatterVertex {
-    /// Index of the path among the active ones.
-    uint32_t path;
-    /// The BSDF at the vertex (looked up once).
-    const Bsdf *bsdf;
-    /// A Lambertian BSDF's reflectance at the vertex (evaluated once, read by the NEE and sampling loops).
-    Color3f refl;
-    /// Next-event estimation: whether an emitter was sampled, the sample and its weight.
-    bool nee = false;
-    /// Whether the BSDF was sampled already (with next-event estimation, by a Lambertian emitter kernel).
-    bool sampled = false;
-    std::pair<LightSample, Spectrum> emitter_sample;
-};
-
 /// Next-event estimate waiting for its shadow ray: added to `path`'s result if unblocked.
 struct PendingShadow {
     uint32_t path;
@@ -92,6 +65,13 @@ inline Color3f lambert_reflectance(const LambertInfo &lam, const SurfaceInteract
 constexpr size_t LambertChunk = 64;
 static_assert(LambertChunk % 16 == 0, "SoaColumns::resize(cols, LambertChunk) gives stride LambertChunk");
 
+/// Lane m's columns of an emitter-sampling Lambertian kernel that gather_lambert_lanes leaves
+/// out: whether the BSDF is two-sided and the chosen emitter's table row.
+inline void put_lambert_lane(float *cols, size_t m, const LambertInfo &lam, int row) {
+    cols[lam_col::TwoSided * LambertChunk + m] = lam.two_sided ? 1.f : 0.f;
+    cols[lam_col::Emitter * LambertChunk + m] = float(row);
+}
+
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
     std::vector<WavePath> paths;
@@ -112,6 +92,8 @@ struct WaveBuffers {
     /// Lambertian vertices: their columns for the vector kernels, and where each lane came from.
     SoaColumns lambert, quad, sphere;
     std::vector<uint32_t> lambert_index, quad_index, sphere_index;
+    /// Their scattering vertices (gather_lambert_lanes reads the lanes' numbers and reflectance there).
+    std::vector<uint32_t> lambert_vertex, quad_vertex, sphere_vertex;
     /// Constant rough conductor vertices, likewise (those sampling a sphere emitter apart).
     SoaColumns conductor, conductor_sphere;
     std::vector<uint32_t> conductor_index, conductor_sphere_index;
@@ -201,11 +183,16 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     buf.lambert_index.resize(LambertChunk);
     buf.quad_index.resize(LambertChunk);
     buf.sphere_index.resize(LambertChunk);
+    buf.lambert_vertex.resize(LambertChunk);
+    buf.quad_vertex.resize(LambertChunk);
+    buf.sphere_vertex.resize(LambertChunk);
     buf.conductor_index.resize(LambertChunk);
     buf.conductor_sphere_index.resize(LambertChunk);
     uint32_t *const lambert_index = buf.lambert_index.data(), *const quad_index = buf.quad_index.data(),
                    *const sphere_index = buf.sphere_index.data(), *const conductor_index = buf.conductor_index.data(),
                    *const conductor_sphere_index = buf.conductor_sphere_index.data();
+    uint32_t *const lambert_vertex = buf.lambert_vertex.data(), *const quad_vertex = buf.quad_vertex.data(),
+                   *const sphere_vertex = buf.sphere_vertex.data();
     // Quad emitters (constant-radiance parallelograms) for the vector kernel: their table row per light, or -1.
     QuadTable quads;
     std::vector<int> &quad_of_light = buf.quad_of_light;
@@ -268,21 +255,6 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         col[Eta * st] = p.eta, col[URr * st] = u[6][j];
         col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
     };
-    // One lane of lam_col columns (LambertChunk lanes each) from scattering vertex j: everything
-    // BSDF sampling reads, which includes what next-event estimation reads.
-    auto gather_lambert = [&, u](float *col, const SurfaceInteraction &si, const LambertInfo &lam, const Color3f &refl,
-                              const WavePath &p, size_t j) {
-        using namespace ls_col;
-        constexpr size_t st = LambertChunk; // the columns' stride (resized to LambertChunk lanes)
-        col[WiZ * st] = si.wi.z;
-        col[TwoSided * st] = lam.two_sided ? 1.f : 0.f;
-        col[Ux * st] = u[4][j], col[Uy * st] = u[5][j];
-        put_vertex<Sx, Px, Br>(col, st, si, p.throughput);
-        col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
-        col[Eta * st] = p.eta, col[URr * st] = u[6][j];
-        col[RrOn * st] = p.depth + 1 >= uint32_t(m_cfg.rr_depth) ? 1.f : 0.f;
-    };
-
     // The paths of a sampling kernel's lanes take its next rays (columns from O0: origin,
     // direction, density, alive; throughput from B0). Lambertian and rough conductor samples
     // are never null lobes (the path becomes valid), have eta 1 and are not deltas.
@@ -427,8 +399,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             n_shadow = ns;
         };
         // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
+        const LaneSources lanes{sis, paths, scatter, u, uint32_t(m_cfg.rr_depth)};
         auto flush_quad = [&] {
             if (n_quad == 0) return;
+            gather_lambert_lanes(qc.data.data(), LambertChunk, n_quad, quad_index, quad_vertex, lanes, true);
             lambert_quad_nee_kernel(qc, n_quad, quads, n_lights_f, quad_one);
             take_shadow_rays(qc, quad_index, n_quad, std::integral_constant<size_t, lq_col::Ox>{});
             lambert_sample_kernel(qc, n_quad);
@@ -437,20 +411,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         };
         auto flush_sphere = [&] {
             if (n_sph == 0) return;
+            gather_lambert_lanes(sc.data.data(), LambertChunk, n_sph, sphere_index, sphere_vertex, lanes, true);
             lambert_sphere_nee_kernel(sc, n_sph, spheres, n_lights_f);
             take_shadow_rays(sc, sphere_index, n_sph, std::integral_constant<size_t, lq_col::Ox>{});
             lambert_sample_kernel(sc, n_sph);
             take_samples(sc, sphere_index, n_sph, std::integral_constant<size_t, ls_col::Ox>{},
                          std::integral_constant<size_t, ls_col::Br>{});
-        };
-        // One lane of lam_col columns: the vertex, its throughput, the emitter's numbers and table row.
-        auto gather = [&, u](float *cols, size_t m, const SurfaceInteraction &si, const LambertInfo &lam,
-                             const Color3f &refl, const WavePath &p, size_t j, int row) {
-            float *col = cols + m;
-            gather_lambert(col, si, lam, refl, p, j);
-            constexpr size_t st = LambertChunk;
-            col[lam_col::LightUx * st] = u[1][j], col[lam_col::LightUy * st] = u[2][j];
-            col[lam_col::Emitter * st] = float(row);
         };
         // Rough conductor vertices that chose a sphere emitter seen from outside: a kernel too.
         size_t n_csph = 0;
@@ -486,16 +452,18 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const LambertInfo *lam = bsdf.lambert()) {
                 if (const int row = quad_row[idx]; row >= 0) {
                     quad_one = n_quad == 0 || quad_one == row ? row : -1;
+                    put_lambert_lane(quad_cols, n_quad, *lam, row);
                     quad_index[n_quad] = v.path;
-                    gather(quad_cols, n_quad++, si, *lam, v.refl, paths[v.path], j, row);
+                    quad_vertex[n_quad++] = uint32_t(j);
                     v.nee = false; // handled by the kernel, BSDF sampling too
                     v.sampled = true;
                     if (n_quad == LambertChunk) flush_quad();
                     continue;
                 }
                 if (const int row = sphere_row[idx]; row >= 0 && outside_sphere(row, si.p)) {
+                    put_lambert_lane(sphere_cols, n_sph, *lam, row);
                     sphere_index[n_sph] = v.path;
-                    gather(sphere_cols, n_sph++, si, *lam, v.refl, paths[v.path], j, row);
+                    sphere_vertex[n_sph++] = uint32_t(j);
                     v.nee = false;
                     v.sampled = true;
                     if (n_sph == LambertChunk) flush_sphere();
@@ -620,6 +588,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         lc.resize(ls_col::Count, LambertChunk);
         auto flush_sample = [&] {
             if (n_lam == 0) return;
+            gather_lambert_lanes(lc.data.data(), LambertChunk, n_lam, lambert_index, lambert_vertex, lanes, false);
             lambert_sample_kernel(lc, n_lam);
             take_samples(lc, lambert_index, n_lam, std::integral_constant<size_t, ls_col::Ox>{},
                          std::integral_constant<size_t, ls_col::Br>{});
@@ -640,7 +609,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (const LambertInfo *lam = bsdf.lambert()) {
                 const size_t m = n_lam++;
                 lambert_index[m] = uint32_t(k);
-                gather_lambert(lc.data.data() + m, si, *lam, v.refl, p, j);
+                lambert_vertex[m] = uint32_t(j);
+                lc[ls_col::TwoSided][m] = lam->two_sided ? 1.f : 0.f;
                 if (n_lam == LambertChunk) flush_sample();
                 continue;
             }

@@ -1,0 +1,99 @@
+// gather_lambert_lanes (integrators/lane_gather.cpp): the Lambertian kernels' input columns
+// gathered from the wavefront's records, by the AVX-512 loop and by the scalar one, against
+// the records' fields themselves.
+#include "mvpt/integrators/lane_gather.h"
+#include "mvpt/integrators/path_kernels.h"
+#include "mvpt/render/interaction.h"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+using namespace mvpt;
+
+namespace {
+
+struct Records {
+    std::vector<SurfaceInteraction> si;
+    std::vector<WavePath> paths;
+    std::vector<ScatterVertex> scatter;
+    std::vector<float> u[7];
+    const float *u_ptr[7];
+};
+
+/// `n` paths and vertices with distinct pseudo-random field values.
+Records make_records(size_t n) {
+    Records r;
+    uint32_t state = 7u;
+    auto rnd = [&state] {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) * 0x1p-24f - 0.5f;
+    };
+    auto vec = [&] { return Vec3f(rnd(), rnd(), rnd()); };
+    r.si.resize(n);
+    r.paths.resize(n);
+    r.scatter.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        SurfaceInteraction &s = r.si[i];
+        s.p = vec(), s.n = vec(), s.wi = vec();
+        s.sh_frame = Frame(vec(), vec(), vec());
+        WavePath &p = r.paths[i];
+        p.throughput = Spectrum(rnd(), rnd(), rnd());
+        p.eta = rnd();
+        p.depth = uint32_t(i % 7);
+        r.scatter[i].refl = Color3f(rnd(), rnd(), rnd());
+    }
+    for (size_t c = 0; c < 7; ++c) {
+        r.u[c].resize(n);
+        for (float &x : r.u[c]) x = rnd();
+        r.u_ptr[c] = r.u[c].data();
+    }
+    return r;
+}
+
+} // namespace
+
+TEST(LaneGather, LambertLanesCopyTheirRecords) {
+    constexpr size_t records = 200, stride = 64;
+    Records r = make_records(records);
+    const LaneSources src{r.si.data(), r.paths.data(), r.scatter.data(), r.u_ptr, 4};
+    for (size_t n : {size_t(64), size_t(37), size_t(5)}) { // whole and partial 16-lane steps
+        std::vector<uint32_t> path(n), vertex(n);
+        for (size_t m = 0; m < n; ++m) path[m] = uint32_t((m * 53 + 11) % records), vertex[m] = uint32_t((m * 17 + 3) % records);
+        for (bool light : {true, false}) {
+            std::vector<float> vec(lam_col::Count * stride, -7.f), scal(lam_col::Count * stride, -7.f);
+            gather_lambert_lanes(vec.data(), stride, n, path.data(), vertex.data(), src, light, true);
+            gather_lambert_lanes(scal.data(), stride, n, path.data(), vertex.data(), src, light, false);
+            for (size_t c = 0; c < lam_col::Count; ++c)
+                for (size_t m = 0; m < stride; ++m)
+                    ASSERT_EQ(std::bit_cast<uint32_t>(vec[c * stride + m]), std::bit_cast<uint32_t>(scal[c * stride + m]))
+                        << "n " << n << " column " << c << " lane " << m;
+            using namespace lam_col;
+            for (size_t m = 0; m < n; ++m) {
+                const SurfaceInteraction &si = r.si[path[m]];
+                const WavePath &p = r.paths[path[m]];
+                const uint32_t j = vertex[m];
+                auto at = [&](size_t c) { return vec[c * stride + m]; };
+                EXPECT_EQ(at(WiZ), si.wi.z);
+                EXPECT_EQ(at(Sy), si.sh_frame.s.y);
+                EXPECT_EQ(at(Tz), si.sh_frame.t.z);
+                EXPECT_EQ(at(Nx), si.sh_frame.n.x);
+                EXPECT_EQ(at(Py), si.p.y);
+                EXPECT_EQ(at(Gz), si.n.z);
+                EXPECT_EQ(at(Rg), r.scatter[j].refl.g);
+                EXPECT_EQ(at(Bb), p.throughput.b);
+                EXPECT_EQ(at(Eta), p.eta);
+                EXPECT_EQ(at(RrOn), p.depth + 1 >= 4 ? 1.f : 0.f);
+                EXPECT_EQ(at(URr), r.u[6][j]);
+                EXPECT_EQ(at(DirUx), r.u[4][j]);
+                EXPECT_EQ(at(DirUy), r.u[5][j]);
+                EXPECT_EQ(at(LightUx), light ? r.u[1][j] : -7.f);
+                EXPECT_EQ(at(LightUy), light ? r.u[2][j] : -7.f);
+                EXPECT_EQ(at(TwoSided), -7.f); // left to the caller
+                EXPECT_EQ(at(Emitter), -7.f);
+            }
+        }
+    }
+}
