@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -95,5 +96,56 @@ TEST(LaneGather, LambertLanesCopyTheirRecords) {
                 EXPECT_EQ(at(Emitter), -7.f);
             }
         }
+    }
+}
+
+TEST(LaneGather, ShadowRaysOfTheLanesThatCountAppendInOrder) {
+    constexpr size_t records = 100, stride = 64, o0 = 5, start = 3;
+    Records r = make_records(records);
+    for (size_t i = 0; i < records; ++i) r.si[i].time = 0.25f + float(i);
+    auto value = [](size_t m, size_t q) { return float(m) + 0.01f * float(q + 1); };
+    for (size_t n : {size_t(64), size_t(29), size_t(1)}) {
+        std::vector<float> cols((o0 + 11) * stride);
+        std::vector<uint32_t> path(stride);
+        size_t counting = 0;
+        for (size_t m = 0; m < stride; ++m) {
+            path[m] = uint32_t((m * 31 + 7) % records);
+            for (size_t q = 0; q < 10; ++q) cols[(o0 + q) * stride + m] = value(m, q);
+            // Whether the lane counts: > 0 only (NaN, zero and negative values do not).
+            const float ok[] = {1.f, 0.f, std::nanf(""), -1.f, 0.5f};
+            cols[(o0 + 10) * stride + m] = ok[m % 5];
+            counting += m < n && (m % 5 == 0 || m % 5 == 4);
+        }
+        std::vector<float> shadow_v[8], shadow_s[8];
+        float *sv[8], *ss[8];
+        for (size_t q = 0; q < 8; ++q) {
+            shadow_v[q].assign(start + stride + 16, -3.f), shadow_s[q].assign(start + stride + 16, -3.f);
+            sv[q] = shadow_v[q].data(), ss[q] = shadow_s[q].data();
+        }
+        std::vector<PendingShadow> pend_v(start + stride + 16), pend_s(start + stride + 16);
+        const size_t cv = append_shadow_rays(cols.data(), stride, n, o0, path.data(), r.si.data(), sv, pend_v.data(), start, true);
+        const size_t cs = append_shadow_rays(cols.data(), stride, n, o0, path.data(), r.si.data(), ss, pend_s.data(), start, false);
+        ASSERT_EQ(cv, start + counting);
+        ASSERT_EQ(cs, cv);
+        for (size_t q = 0; q < 8; ++q)
+            for (size_t i = 0; i < cv; ++i) ASSERT_EQ(shadow_v[q][i], shadow_s[q][i]) << "column " << q << " entry " << i;
+        for (size_t i = start; i < cv; ++i) {
+            ASSERT_EQ(pend_v[i].path, pend_s[i].path) << i;
+            ASSERT_EQ(pend_v[i].contribution.r, pend_s[i].contribution.r) << i;
+            ASSERT_EQ(pend_v[i].contribution.g, pend_s[i].contribution.g) << i;
+            ASSERT_EQ(pend_v[i].contribution.b, pend_s[i].contribution.b) << i;
+        }
+        // In lane order: entry start + e is the e-th lane that counts, its time its interaction's.
+        size_t e = start;
+        for (size_t m = 0; m < n; ++m) {
+            if (!(m % 5 == 0 || m % 5 == 4)) continue;
+            EXPECT_EQ(shadow_v[0][e], value(m, 0));
+            EXPECT_EQ(shadow_v[6][e], value(m, 6));
+            EXPECT_EQ(shadow_v[7][e], r.si[path[m]].time);
+            EXPECT_EQ(pend_v[e].path, path[m]);
+            EXPECT_EQ(pend_v[e].contribution.b, value(m, 9));
+            ++e;
+        }
+        EXPECT_EQ(shadow_v[0][0], -3.f); // entries before `start` are kept
     }
 }

@@ -5,7 +5,12 @@
 
 #include <cstddef>
 #if defined(__GNUC__) && defined(__x86_64__)
+// GCC 12's AVX-512 headers start masked loads and compresses from an "undefined" vector that
+// -Wmaybe-uninitialized reports (GCC bug 105593); every lane they leave is masked to zero.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <immintrin.h>
+#pragma GCC diagnostic pop
 #endif
 
 namespace mvpt {
@@ -85,13 +90,77 @@ void gather_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const
     }
 }
 
+/// append_shadow_rays, 16 lanes per step: each column compressed to the lanes that count.
+[[gnu::target("avx512f")]] size_t append_avx512(const float *cols, size_t st, size_t n, size_t o0,
+                                                 const uint32_t *path, const SurfaceInteraction *si,
+                                                 float *const shadow[8], PendingShadow *pending, size_t ns) {
+    static_assert(sizeof(PendingShadow) == 4 * sizeof(float) && offsetof(PendingShadow, contribution) == sizeof(float));
+    const float *const time = reinterpret_cast<const float *>(si) + word(offsetof(SurfaceInteraction, time));
+    const __m512i si_words = _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction))));
+    for (size_t m = 0; m < n; m += 16) {
+        const __mmask16 lanes = n - m >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - m)) - 1);
+        // !(ok > 0), as the scalar loop: a NaN does not count.
+        const __mmask16 ok =
+            _mm512_mask_cmp_ps_mask(lanes, _mm512_maskz_loadu_ps(lanes, cols + (o0 + 10) * st + m), _mm512_setzero_ps(),
+                                    _CMP_GT_OQ);
+        if (ok == 0) continue;
+        for (size_t q = 0; q < 7; ++q)
+            _mm512_storeu_ps(shadow[q] + ns, _mm512_maskz_compress_ps(ok, _mm512_maskz_loadu_ps(ok, cols + (o0 + q) * st + m)));
+        const __m512i k = _mm512_maskz_compress_epi32(ok, _mm512_maskz_loadu_epi32(ok, path + m));
+        const unsigned count = unsigned(__builtin_popcount(ok));
+        const __mmask16 first = __mmask16((1u << count) - 1);
+        _mm512_storeu_ps(shadow[7] + ns, _mm512_mask_i32gather_ps(_mm512_setzero_ps(), first,
+                                                                  _mm512_mullo_epi32(k, si_words), time, sizeof(float)));
+        // The records {path, r, g, b} of the compressed lanes: a 4 x 16 transpose.
+        const __m512 kf = _mm512_castsi512_ps(k);
+        const __m512 r = _mm512_maskz_compress_ps(ok, _mm512_maskz_loadu_ps(ok, cols + (o0 + 7) * st + m));
+        const __m512 g = _mm512_maskz_compress_ps(ok, _mm512_maskz_loadu_ps(ok, cols + (o0 + 8) * st + m));
+        const __m512 b = _mm512_maskz_compress_ps(ok, _mm512_maskz_loadu_ps(ok, cols + (o0 + 9) * st + m));
+        const __m512 t0 = _mm512_unpacklo_ps(kf, r), t1 = _mm512_unpacklo_ps(g, b);
+        const __m512 t2 = _mm512_unpackhi_ps(kf, r), t3 = _mm512_unpackhi_ps(g, b);
+        // Record 4i + c of each 128-bit block i: oc's block i.
+        const __m512 o0r = _mm512_shuffle_ps(t0, t1, 0x44), o1r = _mm512_shuffle_ps(t0, t1, 0xee);
+        const __m512 o2r = _mm512_shuffle_ps(t2, t3, 0x44), o3r = _mm512_shuffle_ps(t2, t3, 0xee);
+        const __m512 u0 = _mm512_shuffle_f32x4(o0r, o1r, 0x44), u1 = _mm512_shuffle_f32x4(o2r, o3r, 0x44);
+        const __m512 u2 = _mm512_shuffle_f32x4(o0r, o1r, 0xee), u3 = _mm512_shuffle_f32x4(o2r, o3r, 0xee);
+        float *const out = reinterpret_cast<float *>(pending + ns);
+        _mm512_storeu_ps(out, _mm512_shuffle_f32x4(u0, u1, 0x88));
+        _mm512_storeu_ps(out + 16, _mm512_shuffle_f32x4(u0, u1, 0xdd));
+        _mm512_storeu_ps(out + 32, _mm512_shuffle_f32x4(u2, u3, 0x88));
+        _mm512_storeu_ps(out + 48, _mm512_shuffle_f32x4(u2, u3, 0xdd));
+        ns += count;
+    }
+    return ns;
+}
+
 bool has_avx512f() {
     static const bool yes = __builtin_cpu_supports("avx512f");
     return yes;
 }
 #endif
 
+size_t append_scalar(const float *cols, size_t st, size_t n, size_t o0, const uint32_t *path,
+                     const SurfaceInteraction *si, float *const shadow[8], PendingShadow *pending, size_t ns) {
+    for (size_t m = 0; m < n; ++m) {
+        auto at = [cols, st, m](size_t c) { return cols[c * st + m]; };
+        if (!(at(o0 + 10) > 0.f)) continue;
+        for (size_t q = 0; q < 7; ++q) shadow[q][ns] = at(o0 + q);
+        shadow[7][ns] = si[path[m]].time;
+        pending[ns++] = {path[m], Spectrum(at(o0 + 7), at(o0 + 8), at(o0 + 9))};
+    }
+    return ns;
+}
+
 } // namespace
+
+size_t append_shadow_rays(const float *cols, size_t stride, size_t n, size_t o0, const uint32_t *path,
+                          const SurfaceInteraction *si, float *const shadow[8], PendingShadow *pending, size_t count,
+                          bool vector) {
+#if defined(__GNUC__) && defined(__x86_64__)
+    if (vector && has_avx512f()) return append_avx512(cols, stride, n, o0, path, si, shadow, pending, count);
+#endif
+    return append_scalar(cols, stride, n, o0, path, si, shadow, pending, count);
+}
 
 void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
                           const LaneSources &src, bool light_numbers, bool vector) {

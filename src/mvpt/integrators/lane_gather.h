@@ -1,8 +1,9 @@
-// Filling the Lambertian kernels' input columns (lam_col, path_kernels.h) for a chunk of
-// lanes from the wavefront's records: one column at a time, 16 lanes per AVX-512 gather
-// where the CPU has it (a lane's 30-odd values come from three records of different paths,
-// which scalar code copies with one load and one store each). Pure copies: the columns are
-// the same bits on every CPU.
+// Moving a chunk of lanes between the wavefront's records and the vector kernels' columns:
+// the Lambertian kernels' inputs (lam_col, path_kernels.h) gathered one column at a time,
+// 16 lanes per AVX-512 gather where the CPU has it (a lane's 30-odd values come from three
+// records of different paths, which scalar code copies with one load and one store each),
+// and the kernels' shadow rays appended by compressing 16 lanes at a time. Pure copies:
+// the results are the same bits on every CPU.
 #pragma once
 
 #include "wavefront.h"
@@ -30,5 +31,15 @@ struct LaneSources {
 /// `vector` = false takes the scalar loop on any CPU (the tests compare both).
 void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
                           const LaneSources &src, bool light_numbers, bool vector = true);
+
+/// The next-event estimates of a kernel's n lanes (paths path[m]), from its output columns
+/// o0 .. o0 + 10 (shadow ray origin, direction and t_max, contribution, whether it counts):
+/// the lanes that count append their shadow ray (with their interaction's time) to the
+/// columns shadow[0..7] and their contribution to `pending`, from position `count` on, in
+/// lane order. Returns the new count. The AVX-512 loop stores whole 16-lane steps: shadow
+/// and pending need 16 entries to spare past the last one used.
+size_t append_shadow_rays(const float *cols, size_t stride, size_t n, size_t o0, const uint32_t *path,
+                          const SurfaceInteraction *si, float *const shadow[8], PendingShadow *pending, size_t count,
+                          bool vector = true);
 
 } // namespace mvpt

@@ -26,12 +26,6 @@
 namespace mvpt {
 
 namespace {
-/// Next-event estimate waiting for its shadow ray: added to `path`'s result if unblocked.
-struct PendingShadow {
-    uint32_t path;
-    Spectrum contribution;
-};
-
 /// One lane's emitter sample and weight L/pdf in the columns Ldx .. Ldx + 11 (direction,
 /// point, distance, density, delta flag, weight), where the NEE kernels read them.
 template <size_t Ldx>
@@ -155,12 +149,12 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
     buf.si.resize(n);
     buf.hit.resize(n);
     buf.alive.resize(n);
-    for (auto &c : buf.shadow) c.resize(n);
+    for (auto &c : buf.shadow) c.resize(n + 16); // append_shadow_rays stores whole 16-lane steps
     float *const shadow[8] = {buf.shadow[0].data(), buf.shadow[1].data(), buf.shadow[2].data(), buf.shadow[3].data(),
                               buf.shadow[4].data(), buf.shadow[5].data(), buf.shadow[6].data(), buf.shadow[7].data()};
     buf.blocked.resize(n);
     buf.scatter.resize(n);
-    buf.shadows.resize(n);
+    buf.shadows.resize(n + 16);
     SurfaceInteraction *const sis = buf.si.data();
     Ray *const rays = buf.rays.data();
     uint8_t *const hits = buf.hit.data(), *const alive = buf.alive.data(), *const blocked = buf.blocked.data();
@@ -381,22 +375,8 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         // rays (columns from O0: origin, direction, t_max, contribution, whether it counts).
         auto take_shadow_rays = [&n_shadow, shadow, shadows, sis](SoaColumns &cols, const uint32_t *index, size_t count,
                                                                   auto o0) {
-            constexpr size_t O0 = decltype(o0)::value;
-            const float *const cd = cols.data.data(); // LambertChunk lanes per column
-            float *const sh[8] = {shadow[0], shadow[1], shadow[2], shadow[3],
-                                  shadow[4], shadow[5], shadow[6], shadow[7]};
-            PendingShadow *const pending = shadows;
-            const SurfaceInteraction *const si_of = sis;
-            size_t ns = n_shadow;
-            for (size_t m = 0; m < count; ++m) {
-                auto at = [cd, m](size_t col) { return cd[col * LambertChunk + m]; };
-                if (!(at(O0 + 10) > 0.f)) continue;
-                const uint32_t k = index[m];
-                for (size_t q = 0; q < 7; ++q) sh[q][ns] = at(O0 + q);
-                sh[7][ns] = si_of[k].time;
-                pending[ns++] = {k, Spectrum(at(O0 + 7), at(O0 + 8), at(O0 + 9))};
-            }
-            n_shadow = ns;
+            n_shadow = append_shadow_rays(cols.data.data(), LambertChunk, count, decltype(o0)::value, index, sis, shadow,
+                                          shadows, n_shadow);
         };
         // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
         const LaneSources lanes{sis, paths, scatter, u, uint32_t(m_cfg.rr_depth)};

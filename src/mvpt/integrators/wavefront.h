@@ -41,4 +41,10 @@ struct ScatterVertex {
     std::pair<LightSample, Spectrum> emitter_sample;
 };
 
+/// Next-event estimate waiting for its shadow ray: added to `path`'s result if unblocked.
+struct PendingShadow {
+    uint32_t path;
+    Spectrum contribution;
+};
+
 } // namespace mvpt
