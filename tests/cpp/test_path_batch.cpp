@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <cstring>
 #include <filesystem>
 #include <vector>
@@ -48,6 +50,20 @@ TEST(PathBatch, BatchedQueriesMatchSingleRays) {
             Vec3f d = warp::square_to_uniform_sphere(samplers[i].next_2d());
             rays.push_back(si.spawn_ray(d));
             rays.push_back(si.spawn_ray_to(Point3f(0.f, 0.f, 0.f)));
+        }
+        // Rays Embree must not trace (a NaN, a coordinate beyond its range) among the others,
+        // at packet positions that vary: misses and unblocked, as the single queries say.
+        const float nan = std::nanf("");
+        for (size_t i = 0, n = rays.size(); i < n; i += 7) {
+            Ray bad = rays[i];
+            switch (i / 7 % 5) {
+            case 0: bad.o.x = nan; break;
+            case 1: bad.d.y = 1e19f; break;
+            case 2: bad.tmax = nan; break;
+            case 3: bad.tmin = nan; break;
+            default: bad.o.z = -2e18f; break;
+            }
+            rays[i] = bad;
         }
         for (bool coherent : {false, true}) {
             size_t ties = 0;

@@ -1,17 +1,10 @@
+#include "../core/simd_x86.h"
 #include "lane_gather.h"
 
 #include "path_kernels.h"
 #include "../render/interaction.h"
 
 #include <cstddef>
-#if defined(__GNUC__) && defined(__x86_64__)
-// GCC 12's AVX-512 headers start masked loads and compresses from an "undefined" vector that
-// -Wmaybe-uninitialized reports (GCC bug 105593); every lane they leave is masked to zero.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <immintrin.h>
-#pragma GCC diagnostic pop
-#endif
 
 namespace mvpt {
 
@@ -47,7 +40,7 @@ void gather_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const
     }
 }
 
-#if defined(__GNUC__) && defined(__x86_64__)
+#if MVPT_X86_SIMD
 /// gather_scalar, 16 lanes per step: one index vector per record kind, one gather per column.
 [[gnu::target("avx512f")]] void gather_avx512(float *cols, size_t st, size_t n, const uint32_t *path,
                                                const uint32_t *vertex, const LaneSources &src, bool light_numbers) {
@@ -133,10 +126,6 @@ void gather_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const
     return ns;
 }
 
-bool has_avx512f() {
-    static const bool yes = __builtin_cpu_supports("avx512f");
-    return yes;
-}
 #endif
 
 size_t append_scalar(const float *cols, size_t st, size_t n, size_t o0, const uint32_t *path,
@@ -156,16 +145,16 @@ size_t append_scalar(const float *cols, size_t st, size_t n, size_t o0, const ui
 size_t append_shadow_rays(const float *cols, size_t stride, size_t n, size_t o0, const uint32_t *path,
                           const SurfaceInteraction *si, float *const shadow[8], PendingShadow *pending, size_t count,
                           bool vector) {
-#if defined(__GNUC__) && defined(__x86_64__)
-    if (vector && has_avx512f()) return append_avx512(cols, stride, n, o0, path, si, shadow, pending, count);
+#if MVPT_X86_SIMD
+    if (vector && cpu_has_avx512f()) return append_avx512(cols, stride, n, o0, path, si, shadow, pending, count);
 #endif
     return append_scalar(cols, stride, n, o0, path, si, shadow, pending, count);
 }
 
 void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
                           const LaneSources &src, bool light_numbers, bool vector) {
-#if defined(__GNUC__) && defined(__x86_64__)
-    if (vector && has_avx512f()) return gather_avx512(cols, stride, n, path, vertex, src, light_numbers);
+#if MVPT_X86_SIMD
+    if (vector && cpu_has_avx512f()) return gather_avx512(cols, stride, n, path, vertex, src, light_numbers);
 #endif
     gather_scalar(cols, stride, n, path, vertex, src, light_numbers);
 }

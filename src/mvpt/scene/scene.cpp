@@ -1,6 +1,7 @@
 #include "scene.h"
 
 #include "plugin.h"
+#include "ray_packet.h"
 #include "rig.h"
 
 #include <algorithm>
@@ -12,32 +13,6 @@ namespace mvpt {
 namespace {
 void embree_error(void *, RTCError code, const char *str) {
     std::fprintf(stderr, "mvpt: Embree error %d: %s\n", int(code), str ? str : "");
-}
-
-/// Embree's RayK::valid(): |origin|, |direction| <= FLT_LARGE (1.844e18) and no NaN in the
-/// range. Its release builds may misbehave and its debug builds abort on other rays, so a
-/// NaN or absurdly distant ray is treated as a miss (its sample is then usually non-finite
-/// and counted as such).
-bool embree_can_trace(const Ray &ray) {
-    constexpr float large = 1.844e18f;
-    // Branch-free: a NaN fails its comparison and so the conjunction.
-    bool finite = (std::abs(ray.o.x) <= large) & (std::abs(ray.o.y) <= large) & (std::abs(ray.o.z) <= large) &
-                  (std::abs(ray.d.x) <= large) & (std::abs(ray.d.y) <= large) & (std::abs(ray.d.z) <= large);
-    return finite & (ray.tmin == ray.tmin) & (ray.tmax == ray.tmax);
-}
-
-/// `embree_can_trace` of a 16-wide packet's lanes (SoA, after packing) as Embree's valid
-/// mask, lanes from `m` on inactive: one vector loop instead of a test per Ray.
-template <class RayK>
-void packet_valid(const RayK &r, uint32_t m, int *valid) {
-    constexpr float large = 1.844e18f;
-    for (uint32_t i = 0; i < 16; ++i) {
-        bool finite = (std::abs(r.org_x[i]) <= large) & (std::abs(r.org_y[i]) <= large) &
-                      (std::abs(r.org_z[i]) <= large) & (std::abs(r.dir_x[i]) <= large) &
-                      (std::abs(r.dir_y[i]) <= large) & (std::abs(r.dir_z[i]) <= large);
-        bool ok = (i < m) & finite & (r.tnear[i] == r.tnear[i]) & (r.tfar[i] == r.tfar[i]);
-        valid[i] = ok ? -1 : 0;
-    }
 }
 } // namespace
 
@@ -216,23 +191,19 @@ void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t
         }
         return;
     }
+    alignas(64) RTCRayHit16 p;
+    alignas(64) int valid[16];
+    for (size_t i = 0; i < 16; ++i) {
+        p.ray.time[i] = 0.f;
+        p.ray.mask[i] = 0xffffffffu;
+        p.ray.flags[i] = 0;
+    }
     for (size_t b = 0; b < n; b += 16) {
-        size_t m = std::min<size_t>(16, n - b);
-        alignas(64) RTCRayHit16 p;
-        alignas(64) int valid[16];
-        for (size_t i = 0; i < 16; ++i) {
-            const Ray &ray = rays[b + std::min(i, m - 1)];
-            p.ray.org_x[i] = ray.o.x; p.ray.org_y[i] = ray.o.y; p.ray.org_z[i] = ray.o.z;
-            p.ray.dir_x[i] = ray.d.x; p.ray.dir_y[i] = ray.d.y; p.ray.dir_z[i] = ray.d.z;
-            p.ray.tnear[i] = ray.tmin;
-            p.ray.tfar[i] = ray.tmax;
-            p.ray.time[i] = m_animated ? m_motion.to_embree(ray.time) : 0.f;
-            p.ray.mask[i] = 0xffffffffu;
-            p.ray.flags[i] = 0;
-            p.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-            p.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-        }
-        packet_valid(p.ray, uint32_t(m), valid);
+        const size_t m = std::min<size_t>(16, n - b);
+        pack_ray16(rays + b, uint32_t(m), p.ray, valid);
+        if (m_animated)
+            for (size_t i = 0; i < 16; ++i) p.ray.time[i] = m_motion.to_embree(rays[b + std::min(i, m - 1)].time);
+        for (size_t i = 0; i < 16; ++i) p.hit.geomID[i] = p.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) {
             hit[b + i] = valid[i] && p.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
@@ -317,21 +288,18 @@ void Scene::occluded(const Ray *rays, size_t n, uint8_t *blocked) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    alignas(64) RTCRay16 p;
+    alignas(64) int valid[Width];
+    for (size_t i = 0; i < Width; ++i) {
+        p.time[i] = 0.f;
+        p.mask[i] = 0xffffffffu;
+        p.flags[i] = 0;
+    }
     for (size_t b = 0; b < n; b += Width) {
-        size_t m = std::min(Width, n - b);
-        alignas(64) RTCRay16 p;
-        alignas(64) int valid[Width];
-        for (size_t i = 0; i < Width; ++i) {
-            const Ray &ray = rays[b + std::min(i, m - 1)];
-            p.org_x[i] = ray.o.x; p.org_y[i] = ray.o.y; p.org_z[i] = ray.o.z;
-            p.dir_x[i] = ray.d.x; p.dir_y[i] = ray.d.y; p.dir_z[i] = ray.d.z;
-            p.tnear[i] = ray.tmin;
-            p.tfar[i] = ray.tmax;
-            p.time[i] = m_animated ? m_motion.to_embree(ray.time) : 0.f;
-            p.mask[i] = 0xffffffffu;
-            p.flags[i] = 0;
-        }
-        packet_valid(p, uint32_t(m), valid);
+        const size_t m = std::min(Width, n - b);
+        pack_ray16(rays + b, uint32_t(m), p, valid);
+        if (m_animated)
+            for (size_t i = 0; i < Width; ++i) p.time[i] = m_motion.to_embree(rays[b + std::min(i, m - 1)].time);
         rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = valid[i] && p.tfar[i] < 0.f;
     }
