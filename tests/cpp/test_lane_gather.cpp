@@ -45,6 +45,10 @@ Records make_records(size_t n) {
         p.eta = rnd();
         p.depth = uint32_t(i % 7);
         r.scatter[i].refl = Color3f(rnd(), rnd(), rnd());
+        LightSample &ls = r.scatter[i].emitter_sample.first;
+        ls.p = vec(), ls.n = vec(), ls.d = vec();
+        ls.dist = rnd(), ls.pdf = rnd(), ls.delta = i % 3 == 0;
+        r.scatter[i].emitter_sample.second = Spectrum(rnd(), rnd(), rnd());
     }
     for (size_t c = 0; c < 7; ++c) {
         r.u[c].resize(n);
@@ -96,6 +100,47 @@ TEST(LaneGather, LambertLanesCopyTheirRecords) {
                 EXPECT_EQ(at(Emitter), -7.f);
             }
         }
+    }
+}
+
+TEST(LaneGather, LambertNeeLanesCopyTheirRecords) {
+    constexpr size_t records = 150, stride = 64;
+    Records r = make_records(records);
+    const LaneSources src{r.si.data(), r.paths.data(), r.scatter.data(), r.u_ptr, 4};
+    for (size_t n : {size_t(64), size_t(23)}) {
+        std::vector<uint32_t> path(n), vertex(n);
+        for (size_t m = 0; m < n; ++m) path[m] = uint32_t((m * 41 + 5) % records), vertex[m] = uint32_t((m * 13 + 1) % records);
+        std::vector<float> vec(ln_col::Count * stride, -7.f), scal(ln_col::Count * stride, -7.f);
+        gather_lambert_nee_lanes(vec.data(), stride, n, path.data(), vertex.data(), src, true);
+        gather_lambert_nee_lanes(scal.data(), stride, n, path.data(), vertex.data(), src, false);
+        for (size_t c = 0; c < ln_col::Count; ++c)
+            for (size_t m = 0; m < stride; ++m)
+                ASSERT_EQ(std::bit_cast<uint32_t>(vec[c * stride + m]), std::bit_cast<uint32_t>(scal[c * stride + m]))
+                    << "n " << n << " column " << c << " lane " << m;
+        using namespace ln_col;
+        size_t deltas = 0;
+        for (size_t m = 0; m < n; ++m) {
+            const SurfaceInteraction &si = r.si[path[m]];
+            const ScatterVertex &v = r.scatter[vertex[m]];
+            const LightSample &ls = v.emitter_sample.first;
+            auto at = [&](size_t c) { return vec[c * stride + m]; };
+            EXPECT_EQ(at(WiZ), si.wi.z);
+            EXPECT_EQ(at(Ny), si.sh_frame.n.y);
+            EXPECT_EQ(at(Pz), si.p.z);
+            EXPECT_EQ(at(Gx), si.n.x);
+            EXPECT_EQ(at(Rb), v.refl.b);
+            EXPECT_EQ(at(Bg), r.paths[path[m]].throughput.g);
+            EXPECT_EQ(at(Ldz), ls.d.z);
+            EXPECT_EQ(at(Lpx), ls.p.x);
+            EXPECT_EQ(at(LDist), ls.dist);
+            EXPECT_EQ(at(LPdf), ls.pdf);
+            EXPECT_EQ(at(LDelta), ls.delta ? 1.f : 0.f);
+            EXPECT_EQ(at(Wg), v.emitter_sample.second.g);
+            EXPECT_EQ(at(TwoSided), -7.f); // left to the caller
+            deltas += ls.delta;
+        }
+        EXPECT_GT(deltas, 0u);
+        EXPECT_LT(deltas, n);
     }
 }
 

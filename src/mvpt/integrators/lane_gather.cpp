@@ -5,6 +5,7 @@
 #include "../render/interaction.h"
 
 #include <cstddef>
+#include <utility>
 
 namespace mvpt {
 
@@ -37,6 +38,29 @@ void gather_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const
         col[RrOn * st] = p.depth + 1 >= src.rr_depth ? 1.f : 0.f;
         col[DirUx * st] = src.u[4][j], col[DirUy * st] = src.u[5][j];
         if (light_numbers) col[LightUx * st] = src.u[1][j], col[LightUy * st] = src.u[2][j];
+    }
+}
+
+void gather_nee_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const uint32_t *vertex,
+                       const LaneSources &src) {
+    using namespace ln_col;
+    for (size_t m = 0; m < n; ++m) {
+        const SurfaceInteraction &si = src.si[path[m]];
+        const Spectrum &beta = src.paths[path[m]].throughput;
+        const ScatterVertex &v = src.scatter[vertex[m]];
+        const LightSample &ls = v.emitter_sample.first;
+        const Spectrum &weight = v.emitter_sample.second;
+        float *const col = cols + m;
+        col[WiZ * st] = si.wi.z;
+        col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
+        col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
+        col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
+        col[Rr * st] = v.refl.r, col[Rg * st] = v.refl.g, col[Rb * st] = v.refl.b;
+        col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
+        col[Ldx * st] = ls.d.x, col[Ldy * st] = ls.d.y, col[Ldz * st] = ls.d.z;
+        col[Lpx * st] = ls.p.x, col[Lpy * st] = ls.p.y, col[Lpz * st] = ls.p.z;
+        col[LDist * st] = ls.dist, col[LPdf * st] = ls.pdf, col[LDelta * st] = ls.delta ? 1.f : 0.f;
+        col[Wr * st] = weight.r, col[Wg * st] = weight.g, col[Wb * st] = weight.b;
     }
 }
 
@@ -80,6 +104,48 @@ void gather_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const
                                                           wp + word(offsetof(WavePath, depth)), sizeof(uint32_t));
         const __mmask16 rr_on = _mm512_cmpge_epu32_mask(_mm512_add_epi32(depth, one), rr_depth);
         _mm512_mask_storeu_ps(cols + RrOn * st + m, lanes, _mm512_maskz_mov_ps(rr_on, _mm512_set1_ps(1.f)));
+    }
+}
+
+/// gather_nee_scalar, 16 lanes per step.
+[[gnu::target("avx512f")]] void gather_nee_avx512(float *cols, size_t st, size_t n, const uint32_t *path,
+                                                   const uint32_t *vertex, const LaneSources &src) {
+    using namespace ln_col;
+    using Sample = std::pair<LightSample, Spectrum>;
+    static_assert(sizeof(bool) == 1 && offsetof(LightSample, delta) % 4 == 0, "the delta flag is a word's low byte");
+    const float *const si = reinterpret_cast<const float *>(src.si);
+    const float *const wp = reinterpret_cast<const float *>(src.paths);
+    const float *const sv = reinterpret_cast<const float *>(src.scatter);
+    const float *const es = sv + word(offsetof(ScatterVertex, emitter_sample));
+    const float *const ls = es + word(offsetof(Sample, first)), *const weight = es + word(offsetof(Sample, second));
+    const __m512i si_words = _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction))));
+    const __m512i path_words = _mm512_set1_epi32(int(word(sizeof(WavePath))));
+    const __m512i vertex_words = _mm512_set1_epi32(int(word(sizeof(ScatterVertex))));
+    for (size_t m = 0; m < n; m += 16) {
+        const __mmask16 lanes = n - m >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - m)) - 1);
+        const __m512i k = _mm512_maskz_loadu_epi32(lanes, path + m), j = _mm512_maskz_loadu_epi32(lanes, vertex + m);
+        const __m512i at_si = _mm512_mullo_epi32(k, si_words), at_path = _mm512_mullo_epi32(k, path_words),
+                      at_vertex = _mm512_mullo_epi32(j, vertex_words);
+#define MVPT_GATHER(c, index, base)                                                                                \
+    _mm512_mask_storeu_ps(cols + (c) * st + m, lanes,                                                              \
+                          _mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes, index, base, sizeof(float)))
+        MVPT_GATHER(WiZ, at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
+        const float *const normal = si + word(offsetof(SurfaceInteraction, sh_frame) + offsetof(Frame, n));
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Nx + q, at_si, normal + q);
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Px + q, at_si, si + word(offsetof(SurfaceInteraction, p)) + q);
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Gx + q, at_si, si + word(offsetof(SurfaceInteraction, n)) + q);
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Rr + q, at_vertex, sv + word(offsetof(ScatterVertex, refl)) + q);
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Br + q, at_path, wp + word(offsetof(WavePath, throughput)) + q);
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Ldx + q, at_vertex, ls + word(offsetof(LightSample, d)) + q);
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Lpx + q, at_vertex, ls + word(offsetof(LightSample, p)) + q);
+        MVPT_GATHER(LDist, at_vertex, ls + word(offsetof(LightSample, dist)));
+        MVPT_GATHER(LPdf, at_vertex, ls + word(offsetof(LightSample, pdf)));
+        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Wr + q, at_vertex, weight + q);
+#undef MVPT_GATHER
+        const __m512i delta = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), lanes, at_vertex,
+                                                          ls + word(offsetof(LightSample, delta)), sizeof(uint32_t));
+        const __mmask16 is_delta = _mm512_test_epi32_mask(delta, _mm512_set1_epi32(0xff));
+        _mm512_mask_storeu_ps(cols + LDelta * st + m, lanes, _mm512_maskz_mov_ps(is_delta, _mm512_set1_ps(1.f)));
     }
 }
 
@@ -149,6 +215,14 @@ size_t append_shadow_rays(const float *cols, size_t stride, size_t n, size_t o0,
     if (vector && cpu_has_avx512f()) return append_avx512(cols, stride, n, o0, path, si, shadow, pending, count);
 #endif
     return append_scalar(cols, stride, n, o0, path, si, shadow, pending, count);
+}
+
+void gather_lambert_nee_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
+                              const LaneSources &src, bool vector) {
+#if MVPT_X86_SIMD
+    if (vector && cpu_has_avx512f()) return gather_nee_avx512(cols, stride, n, path, vertex, src);
+#endif
+    gather_nee_scalar(cols, stride, n, path, vertex, src);
 }
 
 void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,

@@ -32,6 +32,13 @@ struct LaneSources {
 void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
                           const LaneSources &src, bool light_numbers, bool vector = true);
 
+/// The ln_col inputs of lambert_nee_kernel for n lanes (path path[m], scattering vertex
+/// vertex[m], whose emitter sample is taken): WiZ, shading normal, position, geometric
+/// normal, reflectance, throughput, and the emitter sample (direction, point, distance,
+/// density, delta flag as 1 or 0, weight). TwoSided is left to the caller.
+void gather_lambert_nee_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
+                              const LaneSources &src, bool vector = true);
+
 /// The next-event estimates of a kernel's n lanes (paths path[m]), from its output columns
 /// o0 .. o0 + 10 (shadow ray origin, direction and t_max, contribution, whether it counts):
 /// the lanes that count append their shadow ray (with their interaction's time) to the

@@ -499,6 +499,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
         lc.resize(ln_col::Count, LambertChunk);
         auto flush_nee = [&] {
             if (n_lam == 0) return;
+            gather_lambert_nee_lanes(lc.data.data(), LambertChunk, n_lam, lambert_index, lambert_vertex, lanes);
             lambert_nee_kernel(lc, n_lam, n_lights_f);
             take_shadow_rays(lc, lambert_index, n_lam, std::integral_constant<size_t, ln_col::Ox>{});
             n_lam = 0;
@@ -519,21 +520,10 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             const Bsdf &bsdf = *v.bsdf;
             const LightSample &ls = v.emitter_sample.first;
             if (const LambertInfo *lam = bsdf.lambert()) {
-                using namespace ln_col;
                 const size_t m = n_lam++;
                 lambert_index[m] = v.path;
-                const Spectrum &beta = paths[v.path].throughput, &weight = v.emitter_sample.second;
-                float *col = lc.data.data() + m;
-                constexpr size_t st = LambertChunk;
-                col[WiZ * st] = si.wi.z;
-                col[TwoSided * st] = lam->two_sided ? 1.f : 0.f;
-                col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
-                col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
-                col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
-                const Color3f &refl = v.refl;
-                col[Rr * st] = refl.r, col[Rg * st] = refl.g, col[Rb * st] = refl.b;
-                col[Br * st] = beta.r, col[Bg * st] = beta.g, col[Bb * st] = beta.b;
-                put_emitter_sample<Ldx>(col, st, ls, weight);
+                lambert_vertex[m] = uint32_t(j);
+                lc[ln_col::TwoSided][m] = lam->two_sided ? 1.f : 0.f;
                 if (n_lam == LambertChunk) flush_nee();
                 continue;
             }
