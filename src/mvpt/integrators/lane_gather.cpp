@@ -65,6 +65,31 @@ void gather_nee_scalar(float *cols, size_t st, size_t n, const uint32_t *path, c
 }
 
 #if MVPT_X86_SIMD
+/// A 16-lane step of lanes [m, n): its mask, the lanes' scattering vertices and their
+/// records' first words.
+struct Step {
+    __mmask16 lanes;
+    __m512i j, at_si, at_path, at_vertex;
+};
+
+[[gnu::target("avx512f"), gnu::always_inline]] inline Step step_at(size_t m, size_t n, const uint32_t *path,
+                                                                  const uint32_t *vertex) {
+    Step s;
+    s.lanes = n - m >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - m)) - 1);
+    const __m512i k = _mm512_maskz_loadu_epi32(s.lanes, path + m);
+    s.j = _mm512_maskz_loadu_epi32(s.lanes, vertex + m);
+    s.at_si = _mm512_mullo_epi32(k, _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction)))));
+    s.at_path = _mm512_mullo_epi32(k, _mm512_set1_epi32(int(word(sizeof(WavePath)))));
+    s.at_vertex = _mm512_mullo_epi32(s.j, _mm512_set1_epi32(int(word(sizeof(ScatterVertex)))));
+    return s;
+}
+
+/// The step's lanes of column `col` from the words at `base` + index.
+[[gnu::target("avx512f"), gnu::always_inline]] inline void gather_column(float *col, __mmask16 lanes, __m512i index,
+                                                                        const float *base) {
+    _mm512_mask_storeu_ps(col, lanes, _mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes, index, base, sizeof(float)));
+}
+
 /// gather_scalar, 16 lanes per step: one index vector per record kind, one gather per column.
 [[gnu::target("avx512f")]] void gather_avx512(float *cols, size_t st, size_t n, const uint32_t *path,
                                                const uint32_t *vertex, const LaneSources &src, bool light_numbers) {
@@ -72,35 +97,29 @@ void gather_nee_scalar(float *cols, size_t st, size_t n, const uint32_t *path, c
     const float *const si = reinterpret_cast<const float *>(src.si);
     const float *const wp = reinterpret_cast<const float *>(src.paths);
     const float *const sv = reinterpret_cast<const float *>(src.scatter);
-    const __m512i si_words = _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction))));
-    const __m512i path_words = _mm512_set1_epi32(int(word(sizeof(WavePath))));
-    const __m512i vertex_words = _mm512_set1_epi32(int(word(sizeof(ScatterVertex))));
     const __m512i rr_depth = _mm512_set1_epi32(int(src.rr_depth)), one = _mm512_set1_epi32(1);
     for (size_t m = 0; m < n; m += 16) {
-        const __mmask16 lanes = n - m >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - m)) - 1);
-        const __m512i k = _mm512_maskz_loadu_epi32(lanes, path + m), j = _mm512_maskz_loadu_epi32(lanes, vertex + m);
-        const __m512i at_si = _mm512_mullo_epi32(k, si_words), at_path = _mm512_mullo_epi32(k, path_words),
-                      at_vertex = _mm512_mullo_epi32(j, vertex_words);
-        // Column `c` from the words at `base` + index (a macro: a lambda would not inherit the target).
-#define MVPT_GATHER(c, index, base)                                                                                \
-    _mm512_mask_storeu_ps(cols + (c) * st + m, lanes,                                                              \
-                          _mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes, index, base, sizeof(float)))
-        MVPT_GATHER(WiZ, at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
-        for (size_t q = 0; q < 9; ++q) MVPT_GATHER(Sx + q, at_si, si + word(offsetof(SurfaceInteraction, sh_frame)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Px + q, at_si, si + word(offsetof(SurfaceInteraction, p)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Gx + q, at_si, si + word(offsetof(SurfaceInteraction, n)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Rr + q, at_vertex, sv + word(offsetof(ScatterVertex, refl)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Br + q, at_path, wp + word(offsetof(WavePath, throughput)) + q);
-        MVPT_GATHER(Eta, at_path, wp + word(offsetof(WavePath, eta)));
-        MVPT_GATHER(URr, j, src.u[6]);
-        MVPT_GATHER(DirUx, j, src.u[4]);
-        MVPT_GATHER(DirUy, j, src.u[5]);
-        if (light_numbers) {
-            MVPT_GATHER(LightUx, j, src.u[1]);
-            MVPT_GATHER(LightUy, j, src.u[2]);
+        const Step s = step_at(m, n, path, vertex);
+        const __mmask16 lanes = s.lanes;
+        auto column = [&](size_t c) { return cols + c * st + m; };
+        gather_column(column(WiZ), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
+        for (size_t q = 0; q < 9; ++q)
+            gather_column(column(Sx + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, sh_frame)) + q);
+        for (size_t q = 0; q < 3; ++q) {
+            gather_column(column(Px + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, p)) + q);
+            gather_column(column(Gx + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, n)) + q);
+            gather_column(column(Rr + q), lanes, s.at_vertex, sv + word(offsetof(ScatterVertex, refl)) + q);
+            gather_column(column(Br + q), lanes, s.at_path, wp + word(offsetof(WavePath, throughput)) + q);
         }
-#undef MVPT_GATHER
-        const __m512i depth = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), lanes, at_path,
+        gather_column(column(Eta), lanes, s.at_path, wp + word(offsetof(WavePath, eta)));
+        gather_column(column(URr), lanes, s.j, src.u[6]);
+        gather_column(column(DirUx), lanes, s.j, src.u[4]);
+        gather_column(column(DirUy), lanes, s.j, src.u[5]);
+        if (light_numbers) {
+            gather_column(column(LightUx), lanes, s.j, src.u[1]);
+            gather_column(column(LightUy), lanes, s.j, src.u[2]);
+        }
+        const __m512i depth = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), lanes, s.at_path,
                                                           wp + word(offsetof(WavePath, depth)), sizeof(uint32_t));
         const __mmask16 rr_on = _mm512_cmpge_epu32_mask(_mm512_add_epi32(depth, one), rr_depth);
         _mm512_mask_storeu_ps(cols + RrOn * st + m, lanes, _mm512_maskz_mov_ps(rr_on, _mm512_set1_ps(1.f)));
@@ -118,31 +137,25 @@ void gather_nee_scalar(float *cols, size_t st, size_t n, const uint32_t *path, c
     const float *const sv = reinterpret_cast<const float *>(src.scatter);
     const float *const es = sv + word(offsetof(ScatterVertex, emitter_sample));
     const float *const ls = es + word(offsetof(Sample, first)), *const weight = es + word(offsetof(Sample, second));
-    const __m512i si_words = _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction))));
-    const __m512i path_words = _mm512_set1_epi32(int(word(sizeof(WavePath))));
-    const __m512i vertex_words = _mm512_set1_epi32(int(word(sizeof(ScatterVertex))));
     for (size_t m = 0; m < n; m += 16) {
-        const __mmask16 lanes = n - m >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - m)) - 1);
-        const __m512i k = _mm512_maskz_loadu_epi32(lanes, path + m), j = _mm512_maskz_loadu_epi32(lanes, vertex + m);
-        const __m512i at_si = _mm512_mullo_epi32(k, si_words), at_path = _mm512_mullo_epi32(k, path_words),
-                      at_vertex = _mm512_mullo_epi32(j, vertex_words);
-#define MVPT_GATHER(c, index, base)                                                                                \
-    _mm512_mask_storeu_ps(cols + (c) * st + m, lanes,                                                              \
-                          _mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes, index, base, sizeof(float)))
-        MVPT_GATHER(WiZ, at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
+        const Step s = step_at(m, n, path, vertex);
+        const __mmask16 lanes = s.lanes;
+        auto column = [&](size_t c) { return cols + c * st + m; };
+        gather_column(column(WiZ), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
         const float *const normal = si + word(offsetof(SurfaceInteraction, sh_frame) + offsetof(Frame, n));
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Nx + q, at_si, normal + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Px + q, at_si, si + word(offsetof(SurfaceInteraction, p)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Gx + q, at_si, si + word(offsetof(SurfaceInteraction, n)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Rr + q, at_vertex, sv + word(offsetof(ScatterVertex, refl)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Br + q, at_path, wp + word(offsetof(WavePath, throughput)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Ldx + q, at_vertex, ls + word(offsetof(LightSample, d)) + q);
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Lpx + q, at_vertex, ls + word(offsetof(LightSample, p)) + q);
-        MVPT_GATHER(LDist, at_vertex, ls + word(offsetof(LightSample, dist)));
-        MVPT_GATHER(LPdf, at_vertex, ls + word(offsetof(LightSample, pdf)));
-        for (size_t q = 0; q < 3; ++q) MVPT_GATHER(Wr + q, at_vertex, weight + q);
-#undef MVPT_GATHER
-        const __m512i delta = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), lanes, at_vertex,
+        for (size_t q = 0; q < 3; ++q) {
+            gather_column(column(Nx + q), lanes, s.at_si, normal + q);
+            gather_column(column(Px + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, p)) + q);
+            gather_column(column(Gx + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, n)) + q);
+            gather_column(column(Rr + q), lanes, s.at_vertex, sv + word(offsetof(ScatterVertex, refl)) + q);
+            gather_column(column(Br + q), lanes, s.at_path, wp + word(offsetof(WavePath, throughput)) + q);
+            gather_column(column(Ldx + q), lanes, s.at_vertex, ls + word(offsetof(LightSample, d)) + q);
+            gather_column(column(Lpx + q), lanes, s.at_vertex, ls + word(offsetof(LightSample, p)) + q);
+            gather_column(column(Wr + q), lanes, s.at_vertex, weight + q);
+        }
+        gather_column(column(LDist), lanes, s.at_vertex, ls + word(offsetof(LightSample, dist)));
+        gather_column(column(LPdf), lanes, s.at_vertex, ls + word(offsetof(LightSample, pdf)));
+        const __m512i delta = _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), lanes, s.at_vertex,
                                                           ls + word(offsetof(LightSample, delta)), sizeof(uint32_t));
         const __mmask16 is_delta = _mm512_test_epi32_mask(delta, _mm512_set1_epi32(0xff));
         _mm512_mask_storeu_ps(cols + LDelta * st + m, lanes, _mm512_maskz_mov_ps(is_delta, _mm512_set1_ps(1.f)));
