@@ -61,7 +61,8 @@ def views(n: int, res: int = 16, spp: int = 4, sampler: str = "independent") -> 
 
 
 # A closed room (an inward-facing cube around everything): long paths, so one pass of
-# `slow_scene()` takes a noticeable time (~0.2 s for 12 views of 64x64 on one core of 2).
+# `slow_scene()` takes a noticeable time (~0.04 s for 12 views of 64x64 on one core of 2,
+# ~0.15 s at 128x128).
 ROOM = GEOMETRY + textwrap.dedent("""\
     <shape type="cube">
         <transform name="to_world"><scale value="5"/></transform>
