@@ -18,6 +18,7 @@ namespace {
 
 struct Records {
     std::vector<SurfaceInteraction> si;
+    std::vector<Ray> rays;
     std::vector<WavePath> paths;
     std::vector<ScatterVertex> scatter;
     std::vector<float> u[7];
@@ -34,12 +35,19 @@ Records make_records(size_t n) {
     };
     auto vec = [&] { return Vec3f(rnd(), rnd(), rnd()); };
     r.si.resize(n);
+    r.rays.resize(n);
     r.paths.resize(n);
     r.scatter.resize(n);
     for (size_t i = 0; i < n; ++i) {
         SurfaceInteraction &s = r.si[i];
-        s.p = vec(), s.n = vec(), s.wi = vec();
+        s.p = vec(), s.n = vec(), s.wi = vec(); // wi: not read for Lambertian lanes
         s.sh_frame = Frame(vec(), vec(), vec());
+        r.rays[i] = Ray{vec(), vec(), 0.f, Infinity, 0.f};
+        if (i % 5 == 0) r.rays[i].d.y = 0.f; // a signed zero in -d
+        if (i % 7 == 3) { // all-zero terms: the sign of WiZ's zero shows how -d was formed
+            r.rays[i].d = Vec3f(0.f, 0.f, 0.f);
+            s.sh_frame.n = Vec3f(0.5f, 0.25f, 0.125f);
+        }
         WavePath &p = r.paths[i];
         p.throughput = Spectrum(rnd(), rnd(), rnd());
         p.eta = rnd();
@@ -63,7 +71,7 @@ Records make_records(size_t n) {
 TEST(LaneGather, LambertLanesCopyTheirRecords) {
     constexpr size_t records = 200, stride = 64;
     Records r = make_records(records);
-    const LaneSources src{r.si.data(), r.paths.data(), r.scatter.data(), r.u_ptr, 4};
+    const LaneSources src{r.si.data(), r.rays.data(), r.paths.data(), r.scatter.data(), r.u_ptr, 4};
     for (size_t n : {size_t(64), size_t(37), size_t(5)}) { // whole and partial 16-lane steps
         std::vector<uint32_t> path(n), vertex(n);
         for (size_t m = 0; m < n; ++m) path[m] = uint32_t((m * 53 + 11) % records), vertex[m] = uint32_t((m * 17 + 3) % records);
@@ -81,7 +89,8 @@ TEST(LaneGather, LambertLanesCopyTheirRecords) {
                 const WavePath &p = r.paths[path[m]];
                 const uint32_t j = vertex[m];
                 auto at = [&](size_t c) { return vec[c * stride + m]; };
-                EXPECT_EQ(at(WiZ), si.wi.z);
+                // -ray.d in the shading frame, as the emission loop would set wi.
+                EXPECT_EQ(std::bit_cast<uint32_t>(at(WiZ)), std::bit_cast<uint32_t>(si.to_local(-r.rays[path[m]].d).z));
                 EXPECT_EQ(at(Sy), si.sh_frame.s.y);
                 EXPECT_EQ(at(Tz), si.sh_frame.t.z);
                 EXPECT_EQ(at(Nx), si.sh_frame.n.x);
@@ -106,7 +115,7 @@ TEST(LaneGather, LambertLanesCopyTheirRecords) {
 TEST(LaneGather, LambertNeeLanesCopyTheirRecords) {
     constexpr size_t records = 150, stride = 64;
     Records r = make_records(records);
-    const LaneSources src{r.si.data(), r.paths.data(), r.scatter.data(), r.u_ptr, 4};
+    const LaneSources src{r.si.data(), r.rays.data(), r.paths.data(), r.scatter.data(), r.u_ptr, 4};
     for (size_t n : {size_t(64), size_t(23)}) {
         std::vector<uint32_t> path(n), vertex(n);
         for (size_t m = 0; m < n; ++m) path[m] = uint32_t((m * 41 + 5) % records), vertex[m] = uint32_t((m * 13 + 1) % records);
@@ -124,7 +133,7 @@ TEST(LaneGather, LambertNeeLanesCopyTheirRecords) {
             const ScatterVertex &v = r.scatter[vertex[m]];
             const LightSample &ls = v.emitter_sample.first;
             auto at = [&](size_t c) { return vec[c * stride + m]; };
-            EXPECT_EQ(at(WiZ), si.wi.z);
+            EXPECT_EQ(std::bit_cast<uint32_t>(at(WiZ)), std::bit_cast<uint32_t>(si.to_local(-r.rays[path[m]].d).z));
             EXPECT_EQ(at(Ny), si.sh_frame.n.y);
             EXPECT_EQ(at(Pz), si.p.z);
             EXPECT_EQ(at(Gx), si.n.x);

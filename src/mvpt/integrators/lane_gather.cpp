@@ -25,7 +25,7 @@ void gather_scalar(float *cols, size_t st, size_t n, const uint32_t *path, const
         const WavePath &p = src.paths[path[m]];
         const uint32_t j = vertex[m];
         float *const col = cols + m;
-        col[WiZ * st] = si.wi.z;
+        col[WiZ * st] = dot(-src.rays[path[m]].d, si.sh_frame.n); // to_local(-d).z
         const Frame &f = si.sh_frame;
         const float frame[9] = {f.s.x, f.s.y, f.s.z, f.t.x, f.t.y, f.t.z, f.n.x, f.n.y, f.n.z};
         for (size_t q = 0; q < 9; ++q) col[(Sx + q) * st] = frame[q];
@@ -51,7 +51,7 @@ void gather_nee_scalar(float *cols, size_t st, size_t n, const uint32_t *path, c
         const LightSample &ls = v.emitter_sample.first;
         const Spectrum &weight = v.emitter_sample.second;
         float *const col = cols + m;
-        col[WiZ * st] = si.wi.z;
+        col[WiZ * st] = dot(-src.rays[path[m]].d, si.sh_frame.n); // to_local(-d).z
         col[Nx * st] = si.sh_frame.n.x, col[Ny * st] = si.sh_frame.n.y, col[Nz * st] = si.sh_frame.n.z;
         col[Px * st] = si.p.x, col[Py * st] = si.p.y, col[Pz * st] = si.p.z;
         col[Gx * st] = si.n.x, col[Gy * st] = si.n.y, col[Gz * st] = si.n.z;
@@ -69,17 +69,17 @@ void gather_nee_scalar(float *cols, size_t st, size_t n, const uint32_t *path, c
 /// records' first words.
 struct Step {
     __mmask16 lanes;
-    __m512i j, at_si, at_path, at_vertex;
+    __m512i k, j, at_si, at_path, at_vertex;
 };
 
 [[gnu::target("avx512f"), gnu::always_inline]] inline Step step_at(size_t m, size_t n, const uint32_t *path,
                                                                   const uint32_t *vertex) {
     Step s;
     s.lanes = n - m >= 16 ? __mmask16(0xffff) : __mmask16((1u << (n - m)) - 1);
-    const __m512i k = _mm512_maskz_loadu_epi32(s.lanes, path + m);
+    s.k = _mm512_maskz_loadu_epi32(s.lanes, path + m);
     s.j = _mm512_maskz_loadu_epi32(s.lanes, vertex + m);
-    s.at_si = _mm512_mullo_epi32(k, _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction)))));
-    s.at_path = _mm512_mullo_epi32(k, _mm512_set1_epi32(int(word(sizeof(WavePath)))));
+    s.at_si = _mm512_mullo_epi32(s.k, _mm512_set1_epi32(int(word(sizeof(SurfaceInteraction)))));
+    s.at_path = _mm512_mullo_epi32(s.k, _mm512_set1_epi32(int(word(sizeof(WavePath)))));
     s.at_vertex = _mm512_mullo_epi32(s.j, _mm512_set1_epi32(int(word(sizeof(ScatterVertex)))));
     return s;
 }
@@ -88,6 +88,26 @@ struct Step {
 [[gnu::target("avx512f"), gnu::always_inline]] inline void gather_column(float *col, __mmask16 lanes, __m512i index,
                                                                         const float *base) {
     _mm512_mask_storeu_ps(col, lanes, _mm512_mask_i32gather_ps(_mm512_setzero_ps(), lanes, index, base, sizeof(float)));
+}
+
+/// The step's WiZ column: -ray.d in the shading frame, its z (Frame::to_local's dot(v, n),
+/// in its order of operations; the sign flipped exactly), from the lanes' rays and the
+/// shading normals at `normal` (+0..2).
+[[gnu::target("avx512f"), gnu::always_inline]] inline void wi_z_column(float *col, const Step &s, const Ray *rays,
+                                                                      const float *normal) {
+    static_assert(sizeof(Ray) == 9 * sizeof(float));
+    const float *const d = &rays[0].d.x;
+    const __m512i at_ray = _mm512_mullo_epi32(s.k, _mm512_set1_epi32(int(word(sizeof(Ray)))));
+    const __m512i sign = _mm512_set1_epi32(int(0x80000000u));
+    __m512 sum = _mm512_setzero_ps();
+    for (int q = 0; q < 3; ++q) {
+        const __m512 dq = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), s.lanes, at_ray, d + q, sizeof(float));
+        const __m512 vq = _mm512_castsi512_ps(_mm512_xor_si512(_mm512_castps_si512(dq), sign));
+        const __m512 nq = _mm512_mask_i32gather_ps(_mm512_setzero_ps(), s.lanes, s.at_si, normal + q, sizeof(float));
+        const __m512 term = _mm512_mul_ps(vq, nq);
+        sum = q == 0 ? term : _mm512_add_ps(sum, term);
+    }
+    _mm512_mask_storeu_ps(col, s.lanes, sum);
 }
 
 /// gather_scalar, 16 lanes per step: one index vector per record kind, one gather per column.
@@ -102,7 +122,8 @@ struct Step {
         const Step s = step_at(m, n, path, vertex);
         const __mmask16 lanes = s.lanes;
         auto column = [&](size_t c) { return cols + c * st + m; };
-        gather_column(column(WiZ), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
+        wi_z_column(column(WiZ), s, src.rays,
+                    si + word(offsetof(SurfaceInteraction, sh_frame) + offsetof(Frame, n)));
         for (size_t q = 0; q < 9; ++q)
             gather_column(column(Sx + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, sh_frame)) + q);
         for (size_t q = 0; q < 3; ++q) {
@@ -141,8 +162,8 @@ struct Step {
         const Step s = step_at(m, n, path, vertex);
         const __mmask16 lanes = s.lanes;
         auto column = [&](size_t c) { return cols + c * st + m; };
-        gather_column(column(WiZ), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, wi)) + 2);
         const float *const normal = si + word(offsetof(SurfaceInteraction, sh_frame) + offsetof(Frame, n));
+        wi_z_column(column(WiZ), s, src.rays, normal);
         for (size_t q = 0; q < 3; ++q) {
             gather_column(column(Nx + q), lanes, s.at_si, normal + q);
             gather_column(column(Px + q), lanes, s.at_si, si + word(offsetof(SurfaceInteraction, p)) + q);

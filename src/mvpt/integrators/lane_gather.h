@@ -17,7 +17,8 @@ struct SurfaceInteraction;
 
 /// The records a chunk's lanes are gathered from.
 struct LaneSources {
-    const SurfaceInteraction *si; ///< per active path
+    const SurfaceInteraction *si; ///< per active path (its wi is not set for Lambertian vertices)
+    const Ray *rays;              ///< per active path: the ray that found its interaction
     const WavePath *paths;        ///< per active path
     const ScatterVertex *scatter; ///< per scattering vertex
     const float *const *u;        ///< the scattering vertices' numbers u[0..6] (WaveBuffers::u)
@@ -25,7 +26,8 @@ struct LaneSources {
 };
 
 /// Lane m of the columns (stride `stride` floats) gets path path[m] at scattering vertex
-/// vertex[m]: WiZ, the shading frame, position, geometric normal, reflectance, throughput,
+/// vertex[m]: WiZ (the cosine of the incoming direction, -ray.d in the shading frame, as
+/// SurfaceInteraction::to_local computes it), the shading frame, position, geometric normal, reflectance, throughput,
 /// Eta, URr, RrOn and the BSDF sample's numbers DirUx, DirUy; with `light_numbers` also the
 /// emitter sample's LightUx, LightUy. TwoSided and Emitter are left to the caller.
 /// `vector` = false takes the scalar loop on any CPU (the tests compare both).
@@ -33,7 +35,7 @@ void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *
                           const LaneSources &src, bool light_numbers, bool vector = true);
 
 /// The ln_col inputs of lambert_nee_kernel for n lanes (path path[m], scattering vertex
-/// vertex[m], whose emitter sample is taken): WiZ, shading normal, position, geometric
+/// vertex[m], whose emitter sample is taken): WiZ (as above), shading normal, position, geometric
 /// normal, reflectance, throughput, and the emitter sample (direction, point, distance,
 /// density, delta flag as 1 or 0, weight). TwoSided is left to the caller.
 void gather_lambert_nee_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,

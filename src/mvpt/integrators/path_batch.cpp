@@ -323,13 +323,14 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
             if (!hit || p.depth + 1 >= max_depth) continue;
 
             SurfaceInteraction &si = sis[k];
-            si.wi = si.to_local(-ray.d);
             // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
             const size_t j = n_scatter++;
             scatter[j].path = uint32_t(k);
             scatter[j].sampled = false;
             scatter[j].bsdf = si.shape->bsdf.get();
+            // A Lambertian vertex's kernels read only wi's z, which their gather computes.
             if (const LambertInfo *lam = scatter[j].bsdf->lambert()) scatter[j].refl = lambert_reflectance(*lam, si);
+            else si.wi = si.to_local(-ray.d);
             if (independent) {
                 buf.u_hash[j] = sampler.sample_hash();
                 buf.u_dim[j] = sampler.dimension();
@@ -379,7 +380,7 @@ void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, cons
                                           shadows, n_shadow);
         };
         // Their lanes hold the whole vertex (lam_col): the BSDF is sampled right after NEE.
-        const LaneSources lanes{sis, paths, scatter, u, uint32_t(m_cfg.rr_depth)};
+        const LaneSources lanes{sis, rays, paths, scatter, u, uint32_t(m_cfg.rr_depth)};
         auto flush_quad = [&] {
             if (n_quad == 0) return;
             gather_lambert_lanes(qc.data.data(), LambertChunk, n_quad, quad_index, quad_vertex, lanes, true);
