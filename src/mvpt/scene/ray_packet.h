@@ -11,28 +11,29 @@
 
 namespace mvpt {
 
-/// Embree's RayK::valid(): |origin|, |direction| <= FLT_LARGE (1.844e18) and no NaN in the
-/// range. Its release builds may misbehave and its debug builds abort on other rays, so a
-/// NaN or absurdly distant ray is treated as a miss (its sample is then usually non-finite
-/// and counted as such).
-inline bool embree_can_trace(const Ray &ray) {
+/// Embree's RayK::valid() on a ray's fields: |origin|, |direction| <= FLT_LARGE (1.844e18)
+/// and no NaN in the range. Its release builds may misbehave and its debug builds abort on
+/// other rays, so a NaN or absurdly distant ray is treated as a miss (its sample is then
+/// usually non-finite and counted as such).
+inline bool embree_can_trace(float ox, float oy, float oz, float dx, float dy, float dz, float tnear, float tfar) {
     constexpr float large = 1.844e18f;
     // Branch-free: a NaN fails its comparison and so the conjunction.
-    bool finite = (std::abs(ray.o.x) <= large) & (std::abs(ray.o.y) <= large) & (std::abs(ray.o.z) <= large) &
-                  (std::abs(ray.d.x) <= large) & (std::abs(ray.d.y) <= large) & (std::abs(ray.d.z) <= large);
-    return finite & (ray.tmin == ray.tmin) & (ray.tmax == ray.tmax);
+    bool finite = (std::abs(ox) <= large) & (std::abs(oy) <= large) & (std::abs(oz) <= large) &
+                  (std::abs(dx) <= large) & (std::abs(dy) <= large) & (std::abs(dz) <= large);
+    return finite & (tnear == tnear) & (tfar == tfar);
+}
+
+inline bool embree_can_trace(const Ray &ray) {
+    return embree_can_trace(ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z, ray.tmin, ray.tmax);
 }
 
 /// `embree_can_trace` of a 16-wide packet's lanes (SoA, after packing) as Embree's valid
 /// mask, lanes from `m` on inactive: one vector loop instead of a test per Ray.
 template <class RayK>
 void packet_valid(const RayK &r, uint32_t m, int *valid) {
-    constexpr float large = 1.844e18f;
     for (uint32_t i = 0; i < 16; ++i) {
-        bool finite = (std::abs(r.org_x[i]) <= large) & (std::abs(r.org_y[i]) <= large) &
-                      (std::abs(r.org_z[i]) <= large) & (std::abs(r.dir_x[i]) <= large) &
-                      (std::abs(r.dir_y[i]) <= large) & (std::abs(r.dir_z[i]) <= large);
-        bool ok = (i < m) & finite & (r.tnear[i] == r.tnear[i]) & (r.tfar[i] == r.tfar[i]);
+        bool ok = (i < m) & embree_can_trace(r.org_x[i], r.org_y[i], r.org_z[i], r.dir_x[i], r.dir_y[i], r.dir_z[i],
+                                             r.tnear[i], r.tfar[i]);
         valid[i] = ok ? -1 : 0;
     }
 }
