@@ -53,13 +53,16 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM killer) fail
     // mid-render: per pixel, the sums (2 x 3 doubles) and count here plus the developed images.
     double bytes = 0.0;
-    // Multi-view path tracing adds its accumulators (MvFilm) and one splat buffer per thread.
+    // Multi-view path tracing adds its accumulators (MvFilm) and the sums of a pass.
     bool mv = m_opts.method == RenderMethod::MultiView ||
               (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));
-    int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     double per_pixel = 6 * sizeof(double) + sizeof(uint32_t) + 7 * sizeof(float);
-    if (mv) per_pixel += 11 * sizeof(double) + sizeof(uint32_t) + sizeof(uint64_t) + sizeof(uint16_t) +
-                         2 * sizeof(float) + double(threads) * double(SplatView::bytes_per_pixel);
+    if (mv) {
+        MvEstimator est = MvEstimator::Balance;
+        if (auto *mvi = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) est = mvi->config().estimator;
+        per_pixel += double(MvFilm::bytes_per_pixel(est) + MvPassFilm::bytes_per_pixel(est == MvEstimator::Weighted)) +
+                     2 * sizeof(float);
+    }
     for (int v : m_views) {
         const FilmDesc &f = cams[v]->film;
         bytes += double(f.crop_width) * f.crop_height * per_pixel;

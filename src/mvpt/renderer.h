@@ -58,6 +58,8 @@ struct RenderStats {
     /// Longest pass, to judge how closely a time budget can be met (path tracing without a
     /// time budget runs passes in chunks: there, the longest chunk's mean pass).
     double max_pass_seconds = 0.0;
+    /// Multi-view path tracing: the longest stretch of a pass between two progress reports.
+    double max_chunk_seconds = 0.0;
     int passes = 0;
     bool cancelled = false;
     uint64_t samples = 0;
@@ -108,6 +110,10 @@ private:
                      const std::function<void(const RenderProgress &)> &progress);
     void develop();
     void render_multiview(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress);
+    /// Multi-view path tracing: one pass's sums into every view's accumulators.
+    void fold_pass(MvPassFilm &pass_film);
+    /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
+    void update_native_maps(int passes, double per_pixel);
     void develop_multiview();
 
     const Scene &m_scene;

@@ -21,14 +21,14 @@ namespace mvpt {
 namespace {
 /// Per-thread state of the pass loop.
 struct MvThreadState {
-    SplatBuffer buffer;
+    SplatCache cache;
     std::vector<MvViewStats> stats;
     std::vector<uint64_t> dropped;
     MvScratch scratch;
     MvPrimaries primaries;
     MvPendingSamples pending;
     RayCounters counters;
-    MvThreadState(const std::vector<size_t> &pixels) : buffer(pixels), stats(pixels.size()), dropped(pixels.size(), 0) {}
+    explicit MvThreadState(MvPassFilm &film) : cache(film), stats(film.views()), dropped(film.views(), 0) {}
 };
 
 /// The path tracer and method settings for a multi-view render of `scene`.
@@ -60,13 +60,15 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     m_mv.scene_moves = m_scene.is_animated();
     std::vector<size_t> pixels;
     m_mv_films.clear();
+    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
+    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
     for (int v : m_views) {
         const Camera &cam = *cams[v];
         m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
         m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
         size_t n = size_t(cam.film.crop_width) * cam.film.crop_height;
         pixels.push_back(n);
-        m_mv_films.emplace_back(n);
+        m_mv_films.emplace_back(n, cfg.estimator, use_cv);
         // Shared samples land anywhere in a pixel, so each pixel is a box (§5): another
         // filter cannot be importance-sampled per view and is replaced, with a note.
         if (!cam.film.filter->is_box() || cam.film.filter->radius() != 0.5f)
@@ -94,134 +96,122 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     for (int v : m_views) spp_target = std::max(spp_target, m_opts.spp > 0 ? m_opts.spp : cams[v]->sample_count);
     const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
     double native_done = 0.0; // mean native samples per pixel so far
+    uint64_t pixels_total = 0;
+    for (size_t n : pixels) pixels_total += n;
 
     // Tiles by image region, then view: consecutive tiles render the same region of every
-    // view, whose native samples splat into overlapping neighbourhoods of the other views;
-    // those parts of the thread's splat buffers then stay in cache across the region's tiles
-    // (splat cache misses were 10 % of the light field's time with view-major tiles). Tasks
+    // view, whose native samples splat into overlapping neighbourhoods of the other views, so
+    // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
     // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
     // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
     std::vector<Tile> tiles = make_tiles();
     std::stable_sort(tiles.begin(), tiles.end(),
                      [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
 
-    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
-    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
-    tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pixels); });
+    MvPassFilm pass_film(pixels, cfg.estimator == MvEstimator::Weighted);
+    tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pass_film); });
+    auto render_tile = [&](MvThreadState &ts, const Tile &tile) {
+        MvSplatSink sink{ts.cache, ts.dropped.data()};
+        const FilmDesc &film = m_mv.views[tile.view_slot].camera->film;
+        const MvFilm &mf = m_mv_films[tile.view_slot];
+        MvPrimaries &prim = ts.primaries;
+        prim.clear();
+        for (int y = tile.y0; y < tile.y1; ++y)
+            for (int x = tile.x0; x < tile.x1; ++x) {
+                size_t p = size_t(y) * film.crop_width + x;
+                for (uint32_t j = 0; j < mf.map[p]; ++j) prim.push(x + film.crop_x, y + film.crop_y, mf.native[p] + j);
+            }
+        // The tile's camera rays as one stream, then each native sample.
+        mv_trace_primaries(m_mv, tile.view_slot, prim);
+        for (size_t i = 0; i < prim.size(); ++i)
+            mv_native_sample(m_mv, tile.view_slot, prim, i, ts.scratch, ts.pending, sink, ts.counters, ts.stats.data());
+        // The tile's suffixes as one wavefront of the path tracer.
+        mv_finish_samples(m_mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
+        return prim.size();
+    };
+
+    // A pass runs in chunks of tiles of about ChunkSeconds each, so that progress is reported
+    // that often whatever the number of views and pixels; between tiles, every task checks for
+    // cancellation and for the end of the time budget, which abandon the pass (every view takes
+    // part in every pass: an unfinished pass cannot enter the estimates).
+    constexpr double ChunkSeconds = 0.25;
+    const double budget = m_opts.time_budget;
+    double seconds_per_sample = 0.0; // measured on the chunks so far
     auto t_start = clock::now();
+    auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
     double last_pass = 0.0;
     for (int pass = 0; unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
-        double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
-        if (pass > 0 && m_opts.time_budget > 0.0 && elapsed + last_pass > m_opts.time_budget) break;
-        auto t_pass = clock::now();
-
-        arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
-                MvThreadState &ts = state.local();
-                MvSplatSink sink{ts.buffer, ts.dropped.data()};
-                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
-                    const Tile &tile = tiles[ti];
-                    const FilmDesc &film = m_mv.views[tile.view_slot].camera->film;
-                    const MvFilm &mf = m_mv_films[tile.view_slot];
-                    MvPrimaries &prim = ts.primaries;
-                    prim.clear();
-                    for (int y = tile.y0; y < tile.y1; ++y)
-                        for (int x = tile.x0; x < tile.x1; ++x) {
-                            size_t p = size_t(y) * film.crop_width + x;
-                            for (uint32_t j = 0; j < mf.map[p]; ++j) prim.push(x + film.crop_x, y + film.crop_y, mf.native[p] + j);
-                        }
-                    // The tile's camera rays as one stream, then each native sample.
-                    mv_trace_primaries(m_mv, tile.view_slot, prim);
-                    for (size_t i = 0; i < prim.size(); ++i)
-                        mv_native_sample(m_mv, tile.view_slot, prim, i, ts.scratch, ts.pending, sink, ts.counters,
-                                         ts.stats.data());
-                    // The tile's suffixes as one wavefront of the path tracer.
-                    mv_finish_samples(m_mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
-                }
-            });
-
-            // Merge the thread buffers (exact integer sums), one view per task.
-            tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) {
-                MvFilm &mf = m_mv_films[slot];
-                FilmBuffer &fb = m_films[slot];
-                const size_t n = pixels[slot];
-                SplatView total;
-                total.allocate(n);
-                for (MvThreadState &ts : state) {
-                    SplatView &buf = ts.buffer.view(int(slot));
-                    if (!buf.empty()) total.take(buf);
-                }
-                for (size_t p = 0; p < n; ++p) {
-                    const SplatPixel &t = total.shared[p];
-                    double w = double(t.w) / SplatScale;
-                    double e_lum = 0.0, v_lum = 0.0;
-                    for (int c = 0; c < 3; ++c) {
-                        double lw = double(t.lw[c]) / SplatScale, e = double(total.native[3 * p + c]) / SplatScale;
-                        // The balance estimate of this pass, lw + e, plus the control variate
-                        // beta (1 - sum W): E[sum W] = 1 exactly when D sums over every valid
-                        // strategy, and beta, the ratio estimate of the earlier passes, is
-                        // independent of this pass, so the estimate stays unbiased while the
-                        // noise of how many contributions happened to land in the pixel cancels.
-                        double beta = use_cv && mf.w[p] > 0.0 ? (mf.lw[3 * p + c] + mf.e[3 * p + c]) / mf.w[p] : 0.0;
-                        double v = lw + e + beta * (1.0 - w);
-                        mf.lw[3 * p + c] += lw;
-                        mf.e[3 * p + c] += e;
-                        e_lum += e / 3.0;
-                        v_lum += v / 3.0;
-                        fb.sum[3 * p + c] += v;
-                        fb.sum_sq[3 * p + c] += v * v;
-                    }
-                    mf.w[p] += w;
-                    mf.e_sum[p] += e_lum;
-                    mf.e_sq[p] += e_lum * e_lum;
-                    mf.s_sum[p] += v_lum - e_lum;
-                    mf.s_sq[p] += (v_lum - e_lum) * (v_lum - e_lum);
-                    mf.received[p] += total.count[p];
-                    mf.native[p] += mf.map[p];
-                    ++fb.count[p];
-                }
-            });
-        });
+        if (pass > 0 && budget > 0.0 && seconds() + last_pass > budget) break;
+        const double t_pass = seconds();
         uint64_t pass_samples = 0;
         for (const MvFilm &mf : m_mv_films)
             for (uint16_t c : mf.map) pass_samples += c;
-        uint64_t pixels_total = 0;
-        for (size_t n : pixels) pixels_total += n;
 
+        // ---------------- Native samples, tile by tile, in chunks ----------------
+        std::atomic<bool> abandoned{false};
+        uint64_t samples_done = 0;
+        for (size_t first = 0; first < tiles.size() && !abandoned.load();) {
+            const double t_chunk = seconds();
+            const double expected = seconds_per_sample * double(pass_samples) / double(tiles.size()); // per tile
+            const size_t count = expected > 0.0 ? size_t(std::clamp(ChunkSeconds * threads / expected, 1.0, 1e9))
+                                                : size_t(2 * threads);
+            const size_t last = std::min(tiles.size(), first + count);
+            std::atomic<uint64_t> chunk_samples{0};
+            arena.execute([&] {
+                tbb::parallel_for(tbb::blocked_range<size_t>(first, last, 1), [&](const tbb::blocked_range<size_t> &r) {
+                    MvThreadState &ts = state.local();
+                    uint64_t done = 0;
+                    for (size_t ti = r.begin(); ti != r.end(); ++ti) {
+                        // Pass 0 always completes: without it there is no image.
+                        if (cancel.load() || (pass > 0 && budget > 0.0 && seconds() > budget)) abandoned = true;
+                        if (abandoned.load(std::memory_order_relaxed)) break;
+                        done += render_tile(ts, tiles[ti]);
+                    }
+                    chunk_samples += done;
+                });
+            });
+            const double took = seconds() - t_chunk;
+            samples_done += chunk_samples.load();
+            if (chunk_samples.load() > 0) seconds_per_sample = took * threads / double(chunk_samples.load());
+            m_stats.max_chunk_seconds = std::max(m_stats.max_chunk_seconds, took);
+            first = last;
+            if (progress && !abandoned.load() && first < tiles.size()) {
+                RenderProgress p;
+                p.pass = pass;
+                p.elapsed = seconds();
+                p.samples = m_stats.samples + samples_done;
+                p.fraction = unbounded ? 0.0 : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) / spp_target);
+                if (budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / budget));
+                progress(p);
+            }
+        }
+        if (abandoned.load()) {
+            for (MvThreadState &ts : state) ts.cache.discard();
+            m_stats.cancelled = cancel.load();
+            break;
+        }
+
+        // ---------------- The pass into the accumulators ----------------
+        arena.execute([&] {
+            // What the caches still hold goes to the pass sums (exact integer sums).
+            tbb::parallel_for(state.range(1), [](auto &r) {
+                for (MvThreadState &ts : r) ts.cache.flush();
+            });
+            fold_pass(pass_film);
+        });
         native_done += double(pass_samples) / double(pixels_total);
         // Native-sample maps of the next pass (§8), frozen during it.
         if (cfg.adaptive && pass + 1 >= std::max(2, cfg.adaptive_warmup)) {
             double per_pixel = cfg.adaptive_budget;
             if (!unbounded) per_pixel = std::min(per_pixel, double(spp_target) - double(native_done));
-            per_pixel = std::max(per_pixel, 1.0);
-            arena.execute([&] {
-                tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) {
-                    const FilmDesc &f = m_mv.views[slot].camera->film;
-                    AdaptiveInput in;
-                    in.width = f.crop_width;
-                    in.height = f.crop_height;
-                    in.passes = pass + 1;
-                    in.e_sum = m_mv_films[slot].e_sum.data();
-                    in.e_sq = m_mv_films[slot].e_sq.data();
-                    in.s_sum = m_mv_films[slot].s_sum.data();
-                    in.s_sq = m_mv_films[slot].s_sq.data();
-                    in.native = m_mv_films[slot].native.data();
-                    in.received = m_mv_films[slot].received.data();
-                    in.previous_level = m_mv_films[slot].level;
-                    in.eps = cfg.adaptive_eps;
-                    m_mv_films[slot].level =
-                        adapt_native_map(in, cfg.adaptive_max, per_pixel * double(pixels[slot]), m_mv_films[slot].map);
-                });
-            });
-            for (size_t slot = 0; slot < m_views.size(); ++slot) m_mv.native_map[slot] = m_mv_films[slot].map.data();
+            arena.execute([&] { update_native_maps(pass + 1, std::max(per_pixel, 1.0)); });
         }
-
-        last_pass = std::chrono::duration<double>(clock::now() - t_pass).count();
-        finish_pass(pass, pass_samples, last_pass, std::chrono::duration<double>(clock::now() - t_start).count(),
+        last_pass = seconds() - t_pass;
+        finish_pass(pass, pass_samples, last_pass, seconds(),
                     unbounded ? 0.0 : std::min(1.0, native_done / double(spp_target)), progress);
     }
-    m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
+    m_stats.seconds = seconds();
     std::vector<MvViewStats> per_view(m_views.size());
     for (MvThreadState &ts : state) {
         m_stats.counters += ts.counters;
@@ -235,10 +225,56 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     for (size_t s = 0; s < m_views.size(); ++s) {
         // Contributions received: those in the film plus those dropped as not finite (counted
         // from the films rather than per splat).
-        for (uint64_t r : m_mv_films[s].received) per_view[s].received += r;
+        for (uint32_t r : m_mv_films[s].received) per_view[s].received += r;
         for (MvThreadState &ts : state) per_view[s].received += ts.dropped[s];
         m_results[s].mv = per_view[s];
         m_stats.mv += per_view[s];
+    }
+}
+
+void Renderer::fold_pass(MvPassFilm &pass_film) {
+    // Each pixel's pass estimate into the accumulators, in blocks of pixels of one view.
+    constexpr size_t Block = 4096;
+    std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
+    for (size_t slot = 0; slot < m_views.size(); ++slot)
+        for (size_t p = 0; p < m_mv_films[slot].native.size(); p += Block) blocks.emplace_back(slot, p);
+    tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
+        const auto [slot, begin] = blocks[b];
+        FilmBuffer &fb = m_films[slot];
+        MvFilm &mf = m_mv_films[slot];
+        const size_t end = std::min(mf.native.size(), begin + Block);
+        mf.fold(pass_film, pass_film.offset(int(slot)), begin, end, {fb.sum.data(), fb.sum_sq.data(), fb.count.data()});
+    });
+}
+
+void Renderer::update_native_maps(int passes, double per_pixel) {
+    // Views in groups of about 2^22 pixels, the views of a group in parallel and each view's
+    // map in parallel over its pixels: the temporary arrays of the maps stay within a fixed
+    // size however many threads run.
+    constexpr size_t GroupPixels = size_t(1) << 22;
+    for (size_t first = 0; first < m_views.size();) {
+        size_t last = first, group = 0;
+        while (last < m_views.size() && (last == first || group + m_mv_films[last].native.size() <= GroupPixels))
+            group += m_mv_films[last++].native.size();
+        tbb::parallel_for(first, last, [&](size_t slot) {
+            const FilmDesc &f = m_mv.views[slot].camera->film;
+            MvFilm &mf = m_mv_films[slot];
+            AdaptiveInput in;
+            in.width = f.crop_width;
+            in.height = f.crop_height;
+            in.passes = passes;
+            in.v_sum = m_films[slot].sum.data();
+            in.e_sum = mf.e_sum.data();
+            in.e_sq = mf.e_sq.data();
+            in.s_sq = mf.s_sq.data();
+            in.native = mf.native.data();
+            in.received = mf.received.data();
+            in.previous_level = mf.level;
+            in.eps = m_mv.cfg.adaptive_eps;
+            mf.level = adapt_native_map(in, m_mv.cfg.adaptive_max, per_pixel * double(mf.native.size()), mf.map);
+            m_mv.native_map[slot] = mf.map.data();
+        });
+        first = last;
     }
 }
 
@@ -258,9 +294,9 @@ void Renderer::develop_multiview() {
         r.weight_sum.resize(n);
         r.samples = 0;
         for (size_t p = 0; p < n; ++p) {
-            double k = fb.count[p]; // passes
+            const uint32_t k = fb.count[p]; // passes
             r.samples += mf.native[p];
-            r.weight_sum[p] = k > 0 ? float(mf.w[p] / k) : 0.f;
+            r.weight_sum[p] = mf.weight_sum(p, k);
             if (weighted && k > 0)
                 for (int c = 0; c < 3; ++c)
                     r.rgb[3 * p + c] = float(mf.e[3 * p + c] / k + (mf.w[p] > 0.0 ? mf.lw[3 * p + c] / mf.w[p] : 0.0));

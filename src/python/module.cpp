@@ -136,6 +136,7 @@ public:
         nb::dict d;
         d["seconds"] = s.seconds;
         d["max_pass_seconds"] = s.max_pass_seconds;
+        d["max_chunk_seconds"] = s.max_chunk_seconds;
         d["passes"] = s.passes;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;

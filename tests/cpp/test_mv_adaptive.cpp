@@ -42,11 +42,24 @@ struct Stats {
                 received[i] = uint64_t(passes) * uint64_t(1 + (rng() % 12));
             }
     }
+    /// The statistics as the renderer keeps them: sums of the pass estimate v = E + S per
+    /// channel (grey here), single-precision sums of E, E^2 and S^2, 32-bit counts.
+    mutable std::vector<double> v_sum;
+    mutable std::vector<float> e_sum_f, e_sq_f, s_sq_f;
+    mutable std::vector<uint32_t> received_32;
     AdaptiveInput input(double previous = 0.0) const {
+        const size_t n = e_sum.size();
+        v_sum.resize(3 * n), e_sum_f.resize(n), e_sq_f.resize(n), s_sq_f.resize(n), received_32.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            for (int c = 0; c < 3; ++c) v_sum[3 * i + c] = e_sum[i] + s_sum[i];
+            e_sum_f[i] = float(e_sum[i]), e_sq_f[i] = float(e_sq[i]), s_sq_f[i] = float(s_sq[i]);
+            received_32[i] = uint32_t(received[i]);
+        }
         AdaptiveInput in;
         in.width = w, in.height = h, in.passes = passes;
-        in.e_sum = e_sum.data(), in.e_sq = e_sq.data(), in.s_sum = s_sum.data(), in.s_sq = s_sq.data();
-        in.native = native.data(), in.received = received.data();
+        in.v_sum = v_sum.data();
+        in.e_sum = e_sum_f.data(), in.e_sq = e_sq_f.data(), in.s_sq = s_sq_f.data();
+        in.native = native.data(), in.received = received_32.data();
         in.previous_level = previous;
         return in;
     }
@@ -99,13 +112,15 @@ TEST(MvAdaptive, CountsAreTheRoundedRootsAtTheReturnedLevel) {
         st.received[i] = st.received[0];
     }
     std::vector<uint16_t> map;
-    const double c = adapt_native_map(st.input(), 64, 5.0 * 64, map);
-    const double k = st.passes, mean = (st.e_sum[0] + st.s_sum[0]) / k;
+    const AdaptiveInput in = st.input();
+    const double c = adapt_native_map(in, 64, 5.0 * 64, map);
+    // (From the statistics as the input holds them: single-precision sums of squares.)
+    const double k = st.passes, v_sum = in.v_sum[0], e_sum = in.e_sum[0], mean = v_sum / k;
     auto var = [k](double s, double q) { return std::max(0.0, (q - s * s / k) / (k - 1.0)); };
     const double scale = 1.0 / (mean * mean + 0.01 * mean * mean);
     const double own = st.native[0] / k, received = double(st.received[0]) / k;
-    const double a = var(st.e_sum[0], st.e_sq[0]) * own * scale;
-    const double b = var(st.s_sum[0], st.s_sq[0]) * std::max(received, 1.0) * scale;
+    const double a = var(e_sum, in.e_sq[0]) * own * scale;
+    const double b = var(v_sum - e_sum, in.s_sq[0]) * std::max(received, 1.0) * scale;
     const double r = std::max(0.0, received - own);
     // The root by bisection on n (the left side decreases in n).
     double lo = 1e-9, hi = 1e9;

@@ -2,16 +2,39 @@
 
 #include "../core/multi_isa.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cmath>
 
 namespace mvpt {
 
 namespace {
-/// 3x3 box blur with clamped borders.
+/// Pixels per block of the parallel loops: sums of doubles are taken per block, then over the
+/// blocks in order, so that they do not depend on how the blocks meet the threads.
+constexpr size_t BlockPixels = 8192;
+
+/// f(begin, end) for every block of [0, n), in parallel.
+template <typename F> void for_blocks(size_t n, F &&f) {
+    tbb::parallel_for(size_t(0), (n + BlockPixels - 1) / BlockPixels, [&](size_t b) {
+        f(b * BlockPixels, std::min(n, (b + 1) * BlockPixels));
+    });
+}
+
+/// The sum over [0, n) of f(begin, end) per block, added in block order.
+template <typename F> double sum_blocks(size_t n, F &&f) {
+    std::vector<double> part((n + BlockPixels - 1) / BlockPixels);
+    for_blocks(n, [&](size_t begin, size_t end) { part[begin / BlockPixels] = f(begin, end); });
+    double s = 0.0;
+    for (double v : part) s += v;
+    return s;
+}
+
+/// 3x3 box blur with clamped borders, in parallel over rows.
 std::vector<double> blur3(const std::vector<double> &v, int w, int h) {
     std::vector<double> out(v.size());
-    for (int y = 0; y < h; ++y)
+    tbb::parallel_for(0, h, [&](int y) {
         for (int x = 0; x < w; ++x) {
             double s = 0.0;
             int n = 0;
@@ -24,6 +47,7 @@ std::vector<double> blur3(const std::vector<double> &v, int w, int h) {
                 }
             out[size_t(y) * w + x] = s / n;
         }
+    });
     return out;
 }
 
@@ -40,10 +64,12 @@ inline int32_t native_count(double c, double a, double u, double r, double top) 
     return int32_t(v); // truncation = floor for v >= 1
 }
 
-/// The native counts of n pixels at level c, into `out` (run once per bisection step).
-MVPT_MULTI_ISA void native_counts(double c, double top, const double *__restrict a, const double *__restrict u,
-                                  const double *__restrict r, int32_t *__restrict out, size_t n) {
-    for (size_t i = 0; i < n; ++i) out[i] = native_count(c, a[i], u[i], r[i], top);
+/// The total of the native counts of n pixels at level c (run once per bisection step).
+MVPT_MULTI_ISA int64_t native_total(double c, double top, const double *__restrict a, const double *__restrict u,
+                                     const double *__restrict r, size_t n) {
+    int64_t s = 0;
+    for (size_t i = 0; i < n; ++i) s += native_count(c, a[i], u[i], r[i], top);
+    return s;
 }
 } // namespace
 
@@ -60,37 +86,49 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
     }
     const double k = in.passes;
     std::vector<double> mean(n), a(n), b(n), others(n);
-    double view_mean = 0.0;
     auto variance = [k](double sum, double sq) { return std::max(0.0, (sq - sum * sum / k) / (k - 1.0)); };
-    for (size_t i = 0; i < n; ++i) {
-        mean[i] = (in.e_sum[i] + in.s_sum[i]) / k;
-        view_mean += mean[i];
-        double own = double(in.native[i]) / k, received = double(in.received[i]) / k;
-        // Var(E_pass) ~ a / n and Var(S_pass) ~ b / (n + r) at the mean counts of the passes so far.
-        a[i] = variance(in.e_sum[i], in.e_sq[i]) * own;
-        b[i] = variance(in.s_sum[i], in.s_sq[i]) * std::max(received, 1.0);
-        others[i] = std::max(0.0, received - own);
-    }
+    double view_mean = sum_blocks(n, [&](size_t begin, size_t end) {
+        double s = 0.0;
+        for (size_t i = begin; i < end; ++i) {
+            const double v_sum = (in.v_sum[3 * i] + in.v_sum[3 * i + 1] + in.v_sum[3 * i + 2]) / 3.0;
+            const double e_sum = in.e_sum[i], s_sum = v_sum - e_sum;
+            mean[i] = v_sum / k;
+            s += mean[i];
+            double own = double(in.native[i]) / k, received = double(in.received[i]) / k;
+            // Var(E_pass) ~ a / n and Var(S_pass) ~ b / (n + r) at the mean counts of the passes so far.
+            a[i] = variance(e_sum, in.e_sq[i]) * own;
+            b[i] = variance(s_sum, in.s_sq[i]) * std::max(received, 1.0);
+            others[i] = std::max(0.0, received - own);
+        }
+        return s;
+    });
     view_mean /= double(n);
     const double eps = std::max({0.01 * view_mean * view_mean, in.eps, 1e-12}); // (view mean / 10)^2, in.eps
-    for (size_t i = 0; i < n; ++i) {
-        double scale = 1.0 / (mean[i] * mean[i] + eps);
-        a[i] = std::isfinite(a[i] * scale) ? a[i] * scale : 0.0;
-        b[i] = std::isfinite(b[i] * scale) ? b[i] * scale : 0.0;
-    }
+    for_blocks(n, [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+            double scale = 1.0 / (mean[i] * mean[i] + eps);
+            a[i] = std::isfinite(a[i] * scale) ? a[i] * scale : 0.0;
+            b[i] = std::isfinite(b[i] * scale) ? b[i] * scale : 0.0;
+        }
+    });
     a = blur3(a, in.width, in.height);
     b = blur3(b, in.width, in.height);
     others = blur3(others, in.width, in.height);
-    std::vector<double> unit(n);
-    for (size_t i = 0; i < n; ++i) unit[i] = a[i] + b[i]; // relative variance of one more native sample
+    std::vector<double> &unit = mean; // relative variance of one more native sample
+    for_blocks(n, [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) unit[i] = a[i] + b[i];
+    });
+    b = {};
 
     const double top = double(max_n);
-    std::vector<int32_t> counts(n);
     auto total = [&](double c) {
-        native_counts(c, top, a.data(), unit.data(), others.data(), counts.data(), n);
-        int64_t s = 0;
-        for (int32_t v : counts) s += v;
-        return double(s);
+        return double(tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, n, BlockPixels), int64_t(0),
+            [&](const tbb::blocked_range<size_t> &r, int64_t s) {
+                return s + native_total(c, top, a.data() + r.begin(), unit.data() + r.begin(), others.data() + r.begin(),
+                                        r.size());
+            },
+            [](int64_t x, int64_t y) { return x + y; })); // integer sums: the order does not matter
     };
     double hi = 0.0;
     for (double u : unit) hi = std::max(hi, u);
@@ -105,8 +143,11 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
     // over the pixels). The bracket starts around the last pass's c (the statistics change
     // little between passes), else around the c of a/n = c with every n free, and is widened
     // until it holds the answer.
-    double sum_unit = 0.0;
-    for (double u : unit) sum_unit += u;
+    const double sum_unit = sum_blocks(n, [&](size_t begin, size_t end) {
+        double s = 0.0;
+        for (size_t i = begin; i < end; ++i) s += unit[i];
+        return s;
+    });
     const double lowest = hi * 1e-12, highest = hi * 2.0; // total(2 hi) = n
     const bool warm = in.previous_level >= lowest && in.previous_level <= highest;
     const double guess = warm ? in.previous_level : std::clamp(sum_unit / budget, lowest, highest);
@@ -120,7 +161,9 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
         if (total(mid) <= budget) hi_c = mid;
         else lo_c = mid;
     }
-    for (size_t i = 0; i < n; ++i) map[i] = uint16_t(native_count(hi_c, a[i], unit[i], others[i], top));
+    for_blocks(n, [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) map[i] = uint16_t(native_count(hi_c, a[i], unit[i], others[i], top));
+    });
     return hi_c;
 }
 

@@ -13,12 +13,13 @@ namespace mvpt {
 /// the shared part S (everything that other views' samples also bring).
 struct AdaptiveInput {
     int width = 0, height = 0, passes = 0;
-    const double *e_sum = nullptr, *e_sq = nullptr; ///< sums over passes of E and E^2
-    const double *s_sum = nullptr, *s_sq = nullptr; ///< sums over passes of S and S^2
-    const uint32_t *native = nullptr;               ///< native samples taken so far
-    const uint64_t *received = nullptr;             ///< contributions received so far
-    double previous_level = 0.0;                    ///< the level c of the last map (0: none)
-    double eps = 0.0;                               ///< lower bound of the eps below
+    const double *v_sum = nullptr;                ///< sums over passes of the pass estimate (RGB)
+    const float *e_sum = nullptr, *e_sq = nullptr; ///< sums over passes of E and E^2 (mean of RGB)
+    const float *s_sq = nullptr;                  ///< sums over passes of S^2, S = mean(v) - E
+    const uint32_t *native = nullptr;             ///< native samples taken so far
+    const uint32_t *received = nullptr;           ///< contributions received so far
+    double previous_level = 0.0;                  ///< the level c of the last map (0: none)
+    double eps = 0.0;                             ///< lower bound of the eps below
 };
 
 /// Set the native counts of the next pass so that the expected relative variance of a pass
@@ -31,7 +32,8 @@ struct AdaptiveInput {
 /// max(in.eps, (view mean / 10)^2) judges dark pixels by absolute error. Without
 /// statistics (fewer than 2 passes, a black image) the budget is spread evenly. Returns the
 /// level c (0 without statistics); passed back as `previous_level`, it brackets the next
-/// pass's search, whose statistics change little from pass to pass.
+/// pass's search, whose statistics change little from pass to pass. Runs in parallel over
+/// blocks of pixels of a fixed size: the map does not depend on the number of threads.
 double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::vector<uint16_t> &map);
 
 } // namespace mvpt

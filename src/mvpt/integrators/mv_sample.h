@@ -9,7 +9,7 @@
 #include "mv_shift.h"
 #include "mvpath.h"
 
-#include "../mv_film.h"
+#include "../splat_film.h"
 #include "../render/camera_projection.h"
 #include "../scene/rig_visibility.h"
 
@@ -179,11 +179,11 @@ struct MvSplatTerms {
 /// zero when the sample is not valid.
 Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w);
 
-/// Adds entries [begin, end) of one sample to `buffer`: W·L (mv_entry_value) and W into pixel
-/// pixels[i] of view slots[i], the same bits as SplatBuffer::add; entries that do not fit are
+/// Adds entries [begin, end) of one sample to `cache`: W·L (mv_entry_value) and W into pixel
+/// pixels[i] of view slots[i], the same bits as SplatCache::add; entries that do not fit are
 /// counted in dropped[slot]. f_nee and f_bounce are read 16 bytes per entry: one Spectrum past
 /// `end` must be readable.
-void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
+void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
                       const float *w, const int *slots, const uint32_t *pixels, size_t begin, size_t end,
                       uint64_t *dropped);
 

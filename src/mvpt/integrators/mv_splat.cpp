@@ -24,18 +24,17 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
 // then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer (to nearest even) in its
 // low bits: exactly to_fixed's llrint when |v| < 2^21. Other values that fit take to_fixed per
 // channel.
-MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
+MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
                                      const Spectrum *__restrict f_bounce, const float *__restrict w,
                                      const int *__restrict slots, const uint32_t *__restrict pixels, size_t begin,
                                      size_t end, uint64_t *__restrict dropped) {
 #if !defined(__SSE2__) // not x86-64: entry by entry
     for (size_t i = begin; i < end; ++i)
-        if (!buffer.add(slots[i], pixels[i], mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i])) ++dropped[slots[i]];
+        if (!cache.add(slots[i], pixels[i], mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i])) ++dropped[slots[i]];
 #else
     typedef double D4 __attribute__((vector_size(32)));
     typedef int64_t I4 __attribute__((vector_size(32)));
     static_assert(sizeof(Spectrum) == 12, "entries are read as 16 bytes from each Spectrum");
-    for (size_t i = begin; i < end; ++i) buffer.view_of(slots[i]); // allocated here: no call in the loop
     const __m128i lanes3 = _mm_set_epi32(0, -1, -1, -1), lane3 = _mm_set_epi32(-1, 0, 0, 0);
     const __m128 nee_mask = _mm_castsi128_ps(t.nee ? lanes3 : _mm_setzero_si128());
     const __m128 bounce_mask = _mm_castsi128_ps(t.bounce ? lanes3 : _mm_setzero_si128());
@@ -55,10 +54,13 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t,
         const __m128 wi = _mm_set1_ps(w[i]);
         const __m128 v = _mm_or_ps(_mm_and_ps(_mm_mul_ps(L, wi), valid_mask), _mm_and_ps(wi, _mm_castsi128_ps(lane3)));
         const __m128 mag = _mm_and_ps(v, abs_mask);
-        SplatView &view = buffer.view(slots[i]);
-        SplatPixel &p = view.shared[pixels[i]];
         float f[4];
         _mm_storeu_ps(f, v);
+        if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) != 0xf) {
+            ++dropped[slots[i]];
+            continue;
+        }
+        SplatEntry &p = cache.at(slots[i], pixels[i]);
         if (_mm_movemask_ps(_mm_cmplt_ps(mag, exact)) == 0xf) {
             const D4 x = D4{f[0], f[1], f[2], f[3]} * scale + magic;
             I4 fixed, sum;
@@ -66,14 +68,11 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatBuffer &buffer, const MvSplatTerms &t,
             __builtin_memcpy(&sum, &p, sizeof(sum));
             sum += fixed - magic_bits;
             __builtin_memcpy(static_cast<void *>(&p), &sum, sizeof(sum));
-        } else if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) == 0xf) {
+        } else {
             for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(f[c]);
             p.w += to_fixed(f[3]);
-        } else {
-            ++dropped[slots[i]];
-            continue;
         }
-        ++view.count[pixels[i]];
+        ++p.count;
     }
 #endif
 }
@@ -115,10 +114,10 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
         sink.native(slots[0], pixels[0], value(0), w[0], rec.e);
         if (delta > 0) {
             sink.shared(slots[delta], pixels[delta], value(delta), w[delta]);
-            mv_splat_entries(sink.buffer, t, f_nee, f_bounce, w, slots, pixels, 1, size_t(delta), sink.dropped);
-            mv_splat_entries(sink.buffer, t, f_nee, f_bounce, w, slots, pixels, size_t(delta) + 1, n, sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, 1, size_t(delta), sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, size_t(delta) + 1, n, sink.dropped);
         } else
-            mv_splat_entries(sink.buffer, t, f_nee, f_bounce, w, slots, pixels, 1, n, sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, 1, n, sink.dropped);
     }
     pending.clear();
 }
