@@ -5,9 +5,12 @@
 
 namespace mvpt {
 
-MvFilm::MvFilm(size_t pixels, MvEstimator est, bool cv)
-    : estimator(est), control_variate(cv), e_sum(pixels, 0.f), e_sq(pixels, 0.f), s_sq(pixels, 0.f),
-      native(pixels, 0), received(pixels, 0), map(pixels, 1) {
+MvFilm::MvFilm(int width_, int height_, int margin_, MvEstimator est, bool cv)
+    : estimator(est), control_variate(cv), width(width_), height(height_), margin(margin_) {
+    const size_t pixels = size_t(width) * size_t(height);
+    e_sum.assign(pixels, 0.f), e_sq.assign(pixels, 0.f), s_sq.assign(pixels, 0.f);
+    native.assign(pixels, 0), received.assign(pixels, 0);
+    map.assign(size_t(width + 2 * margin) * size_t(height + 2 * margin), 1);
     if (estimator == MvEstimator::Balance) {
         ratio.assign(4 * pixels, 0.f);
     } else {
@@ -64,8 +67,14 @@ void MvFilm::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, P
         e_sq[p] += float(e_mean * e_mean);
         s_sq[p] += float(s * s);
         received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));
-        native[p] += map[p];
+        native[p] += n(p);
     }
+}
+
+void MvFilm::set_map(const std::vector<uint16_t> &crop) {
+    const size_t w = size_t(width + 2 * margin);
+    for (size_t y = 0; y < size_t(height); ++y)
+        std::copy_n(crop.begin() + long(y * size_t(width)), width, map.begin() + long((y + size_t(margin)) * w + size_t(margin)));
 }
 
 float MvFilm::weight_sum(size_t p, uint32_t passes) const {

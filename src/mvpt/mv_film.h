@@ -34,11 +34,22 @@ struct MvFilm {
     std::vector<float> e_sum, e_sq, s_sq;
     std::vector<uint32_t> native;   ///< native samples taken so far (the next sample index)
     std::vector<uint32_t> received; ///< contributions received (saturating)
-    std::vector<uint16_t> map;      ///< n_k(i) of the current pass
+    /// n_k(i) of the current pass over the view's sample window: the crop window's pixels
+    /// and, around them, `margin` pixels of the filter's reach that take one sample per pass.
+    std::vector<uint16_t> map;
+    int width = 0, height = 0, margin = 0; ///< the crop window's size; the margin of the map
     double level = 0.0;             ///< the level c the adaptive map was last solved for
 
     MvFilm() = default;
-    MvFilm(size_t pixels, MvEstimator estimator, bool control_variate);
+    MvFilm(int width, int height, int margin, MvEstimator estimator, bool control_variate);
+    size_t pixels() const { return native.size(); }
+    /// n of crop-window pixel p this pass.
+    uint16_t n(size_t p) const {
+        const size_t x = p % size_t(width), y = p / size_t(width), w = size_t(width + 2 * margin);
+        return map[(y + size_t(margin)) * w + x + size_t(margin)];
+    }
+    /// Sets n of the crop window's pixels (row-major, as many as pixels()).
+    void set_map(const std::vector<uint16_t> &crop);
     /// Bytes per pixel of a film (for memory estimates).
     static size_t bytes_per_pixel(MvEstimator estimator);
 

@@ -58,25 +58,25 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     m_mv.path = path;
     m_mv.cfg = cfg;
     m_mv.scene_moves = m_scene.is_animated();
-    std::vector<size_t> pixels;
     m_mv_films.clear();
-    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
-    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
     for (int v : m_views) {
         const Camera &cam = *cams[v];
         m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
         m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
-        size_t n = size_t(cam.film.crop_width) * cam.film.crop_height;
-        pixels.push_back(n);
-        m_mv_films.emplace_back(n, cfg.estimator, use_cv);
-        // Shared samples land anywhere in a pixel, so each pixel is a box (§5): another
-        // filter cannot be importance-sampled per view and is replaced, with a note.
-        if (!cam.film.filter->is_box() || cam.film.filter->radius() != 0.5f)
-            m_stats.notes.push_back("view '" + cam.id + "': multi-view path tracing uses a box filter of radius 0.5 "
-                                    "(the sensor's rfilter applies to independent path tracing only)");
+        if (!cam.film.filter->is_box() && cam.film.filter->radius() > float(SplatFootprint::MaxRadius))
+            throw std::runtime_error("view '" + cam.id + "': multi-view path tracing splats with filters of radius up to " +
+                                     std::to_string(SplatFootprint::MaxRadius) + " pixels");
     }
-    for (MvFilm &f : m_mv_films) m_mv.native_map.push_back(f.map.data());
-    m_mv.prepare();
+    m_mv.prepare(); // the sample windows: crop windows grown by the filters' reach
+    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
+    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
+    std::vector<SplatFootprint> footprints;
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        const FilmDesc &f = m_mv.views[slot].camera->film;
+        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter));
+        m_mv_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv);
+        m_mv.native_map.push_back(m_mv_films.back().map.data());
+    }
     m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
     m_mv.rig.reset();
     if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2) {
@@ -97,29 +97,43 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
     double native_done = 0.0; // mean native samples per pixel so far
     uint64_t pixels_total = 0;
-    for (size_t n : pixels) pixels_total += n;
+    for (const MvFilm &mf : m_mv_films) pixels_total += mf.pixels();
 
     // Tiles by image region, then view: consecutive tiles render the same region of every
     // view, whose native samples splat into overlapping neighbourhoods of the other views, so
     // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
     // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
     // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
-    std::vector<Tile> tiles = make_tiles();
+    // (Tiles cover the sample windows, in window coordinates.)
+    std::vector<Tile> tiles;
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        constexpr int TileSize = 16;
+        const SampleWindow &w = m_mv.windows[slot];
+        for (int y = 0; y < w.height(); y += TileSize)
+            for (int x = 0; x < w.width(); x += TileSize)
+                tiles.push_back({int(slot), x, y, std::min(x + TileSize, w.width()), std::min(y + TileSize, w.height())});
+    }
     std::stable_sort(tiles.begin(), tiles.end(),
                      [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
 
-    MvPassFilm pass_film(pixels, cfg.estimator == MvEstimator::Weighted);
+    MvPassFilm pass_film(footprints, cfg.estimator == MvEstimator::Weighted);
     tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pass_film); });
+    int pass = 0;
     auto render_tile = [&](MvThreadState &ts, const Tile &tile) {
         MvSplatSink sink{ts.cache, ts.dropped.data()};
-        const FilmDesc &film = m_mv.views[tile.view_slot].camera->film;
+        const SampleWindow &w = m_mv.windows[tile.view_slot];
         const MvFilm &mf = m_mv_films[tile.view_slot];
         MvPrimaries &prim = ts.primaries;
         prim.clear();
         for (int y = tile.y0; y < tile.y1; ++y)
             for (int x = tile.x0; x < tile.x1; ++x) {
-                size_t p = size_t(y) * film.crop_width + x;
-                for (uint32_t j = 0; j < mf.map[p]; ++j) prim.push(x + film.crop_x, y + film.crop_y, mf.native[p] + j);
+                // Inside the crop window: the pixel's next native samples; in the margin: one
+                // sample per pass.
+                const int cx = x - w.margin, cy = y - w.margin;
+                const bool inside = cx >= 0 && cy >= 0 && cx < mf.width && cy < mf.height;
+                const uint32_t first = inside ? mf.native[size_t(cy) * size_t(mf.width) + size_t(cx)] : uint32_t(pass);
+                const uint16_t n = mf.map[size_t(y) * size_t(w.width()) + size_t(x)];
+                for (uint32_t j = 0; j < n; ++j) prim.push(x + w.x0, y + w.y0, first + j);
             }
         // The tile's camera rays as one stream, then each native sample.
         mv_trace_primaries(m_mv, tile.view_slot, prim);
@@ -140,13 +154,13 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     auto t_start = clock::now();
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
     double last_pass = 0.0;
-    for (int pass = 0; unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
+    for (; unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         if (pass > 0 && budget > 0.0 && seconds() + last_pass > budget) break;
         const double t_pass = seconds();
-        uint64_t pass_samples = 0;
+        uint64_t pass_samples = 0; // of the crop windows
         for (const MvFilm &mf : m_mv_films)
-            for (uint16_t c : mf.map) pass_samples += c;
+            for (size_t p = 0; p < mf.pixels(); ++p) pass_samples += mf.n(p);
 
         // ---------------- Native samples, tile by tile, in chunks ----------------
         std::atomic<bool> abandoned{false};
@@ -237,12 +251,12 @@ void Renderer::fold_pass(MvPassFilm &pass_film) {
     constexpr size_t Block = 4096;
     std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
     for (size_t slot = 0; slot < m_views.size(); ++slot)
-        for (size_t p = 0; p < m_mv_films[slot].native.size(); p += Block) blocks.emplace_back(slot, p);
+        for (size_t p = 0; p < m_mv_films[slot].pixels(); p += Block) blocks.emplace_back(slot, p);
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
         const auto [slot, begin] = blocks[b];
         FilmBuffer &fb = m_films[slot];
         MvFilm &mf = m_mv_films[slot];
-        const size_t end = std::min(mf.native.size(), begin + Block);
+        const size_t end = std::min(mf.pixels(), begin + Block);
         mf.fold(pass_film, pass_film.offset(int(slot)), begin, end, {fb.sum.data(), fb.sum_sq.data(), fb.count.data()});
     });
 }
@@ -254,8 +268,8 @@ void Renderer::update_native_maps(int passes, double per_pixel) {
     constexpr size_t GroupPixels = size_t(1) << 22;
     for (size_t first = 0; first < m_views.size();) {
         size_t last = first, group = 0;
-        while (last < m_views.size() && (last == first || group + m_mv_films[last].native.size() <= GroupPixels))
-            group += m_mv_films[last++].native.size();
+        while (last < m_views.size() && (last == first || group + m_mv_films[last].pixels() <= GroupPixels))
+            group += m_mv_films[last++].pixels();
         tbb::parallel_for(first, last, [&](size_t slot) {
             const FilmDesc &f = m_mv.views[slot].camera->film;
             MvFilm &mf = m_mv_films[slot];
@@ -271,8 +285,9 @@ void Renderer::update_native_maps(int passes, double per_pixel) {
             in.received = mf.received.data();
             in.previous_level = mf.level;
             in.eps = m_mv.cfg.adaptive_eps;
-            mf.level = adapt_native_map(in, m_mv.cfg.adaptive_max, per_pixel * double(mf.native.size()), mf.map);
-            m_mv.native_map[slot] = mf.map.data();
+            std::vector<uint16_t> map;
+            mf.level = adapt_native_map(in, m_mv.cfg.adaptive_max, per_pixel * double(mf.pixels()), map);
+            mf.set_map(map);
         });
         first = last;
     }
@@ -288,7 +303,7 @@ void Renderer::develop_multiview() {
         const FilmBuffer &fb = m_films[slot];
         const MvFilm &mf = m_mv_films[slot];
         ViewResult &r = m_results[slot];
-        const size_t n = mf.native.size();
+        const size_t n = mf.pixels();
         r.sample_count = mf.native;
         r.contributions.assign(mf.received.begin(), mf.received.end());
         r.weight_sum.resize(n);

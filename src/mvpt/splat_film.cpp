@@ -1,14 +1,27 @@
 #include "splat_film.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace mvpt {
 
-MvPassFilm::MvPassFilm(const std::vector<size_t> &pixels, bool e_rgb) : m_e_channels(e_rgb ? 3 : 1) {
+SplatFootprint SplatFootprint::of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter) {
+    SplatFootprint f{crop_x, crop_y, width, height, nullptr, 0.5f, 1.f};
+    if (!filter.is_box()) {
+        f.filter = &filter;
+        f.radius = filter.radius();
+        f.peak = filter.peak_1d() * filter.peak_1d();
+    }
+    return f;
+}
+
+MvPassFilm::MvPassFilm(const std::vector<SplatFootprint> &views, bool e_rgb)
+    : m_footprint(views), m_e_channels(e_rgb ? 3 : 1) {
     size_t total = 0;
     m_offset.push_back(0);
-    for (size_t n : pixels) {
-        total += n;
+    for (const SplatFootprint &v : views) {
+        total += v.pixels();
         if (total >= UINT32_MAX) throw std::runtime_error("multi-view path tracing renders at most 2^32 - 2 view-pixels");
         m_offset.push_back(uint32_t(total));
     }
@@ -48,10 +61,44 @@ SplatCache::SplatCache(MvPassFilm &film, size_t entries)
     m_mask = uint32_t(entries - 1);
     for (size_t s = 0; s < film.views(); ++s) {
         m_offset.push_back(film.offset(int(s)));
+        m_box.push_back(film.footprint(int(s)).is_box());
+        m_peak.push_back(film.footprint(int(s)).peak);
         // Views start at multiples of the golden ratio of the cache: the same pixel of
         // different views falls on different entries.
         m_base.push_back(uint32_t(((uint64_t(s) * 0x9E3779B97F4A7C15ull) >> 32) * entries >> 32));
     }
+}
+
+void SplatCache::add_footprint(int slot, Vec2f film, const float v[4], const float *e) {
+    // Pixels i of the crop window whose centre i + 1/2 lies within the radius of x, per axis.
+    const SplatFootprint &f = m_film->footprint(slot);
+    constexpr int MaxTaps = 2 * SplatFootprint::MaxRadius;
+    float wx[MaxTaps], wy[MaxTaps];
+    auto taps = [&](float x, int lo, int hi, float *w, int *first) {
+        int i0 = std::max(lo, int(std::floor(x - 0.5f - f.radius)) + 1);
+        int i1 = std::min(hi - 1, int(std::ceil(x - 0.5f + f.radius)) - 1);
+        int n = 0;
+        for (int i = i0; i <= i1 && n < MaxTaps; ++i) w[n++] = f.filter->eval_1d(x - (float(i) + 0.5f));
+        *first = i0;
+        return n;
+    };
+    int x0, y0;
+    const int nx = taps(film.x, f.crop_x, f.crop_x + f.width, wx, &x0);
+    const int ny = taps(film.y, f.crop_y, f.crop_y + f.height, wy, &y0);
+    const int hx = int(std::floor(film.x)), hy = int(std::floor(film.y)); // the pixel that holds x
+    const int e_channels = m_e_rgb ? 3 : 1;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const float h = wx[i] * wy[j];
+            if (h == 0.f) continue;
+            const int px = x0 + i, py = y0 + j;
+            SplatEntry &entry = at(slot, uint32_t(py - f.crop_y) * uint32_t(f.width) + uint32_t(px - f.crop_x));
+            for (int c = 0; c < 3; ++c) entry.lw[c] += to_fixed(v[c] * h);
+            entry.w += to_fixed(v[3] * h);
+            if (e)
+                for (int c = 0; c < e_channels; ++c) entry.e[c] += to_fixed(e[c] * h);
+            entry.count += (px == hx) & (py == hy);
+        }
 }
 
 void SplatCache::replace(SplatEntry &e, uint32_t key) {

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "render/filter.h"
 
 #include <atomic>
 #include <cmath>
@@ -38,6 +39,25 @@ struct alignas(64) SplatEntry {
     uint32_t count = 0;
 };
 
+/// Where a view's contributions land: its crop window (full-film pixels) and its pixel filter
+/// (design doc §5, "Pixel filters"). A contribution at film position x adds h(x - c_i) times
+/// its value to every pixel i of the window whose centre c_i lies within the filter's radius,
+/// h the density from which path tracing draws its film offsets; with the box filter that is
+/// the pixel that holds x, with weight 1.
+struct SplatFootprint {
+    /// The largest filter radius (pixels) that multi-view path tracing splats with.
+    static constexpr int MaxRadius = 16;
+    int crop_x = 0, crop_y = 0, width = 0, height = 0;
+    const ReconstructionFilter *filter = nullptr; ///< nullptr or a box: one pixel, weight 1
+    float radius = 0.5f, peak = 1.f;              ///< the filter's radius and the largest h(x, y)
+    /// A box-filtered window of width x height pixels at the film's origin.
+    static SplatFootprint box(int width, int height) { return {0, 0, width, height, nullptr, 0.5f, 1.f}; }
+    /// The crop window and filter of `film`.
+    static SplatFootprint of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter);
+    bool is_box() const { return filter == nullptr; }
+    size_t pixels() const { return size_t(width) * size_t(height); }
+};
+
 /// The sums of the current pass of every rendered view, one array over all views' pixels
 /// (view slot s starts at offset(s)); any thread adds to them (atomically), the pass's fold
 /// reads and clears them. E is kept as the mean of its channels (what the adaptive maps
@@ -50,9 +70,10 @@ public:
     };
 
     MvPassFilm() = default;
-    /// Sums for views of `pixels[s]` pixels (at most 2^32 - 2 view-pixels in all).
-    MvPassFilm(const std::vector<size_t> &pixels, bool e_rgb);
+    /// Sums for views of the windows `views` (at most 2^32 - 2 view-pixels in all).
+    MvPassFilm(const std::vector<SplatFootprint> &views, bool e_rgb);
     uint32_t offset(int slot) const { return m_offset[size_t(slot)]; }
+    const SplatFootprint &footprint(int slot) const { return m_footprint[size_t(slot)]; }
     size_t views() const { return m_offset.size() - 1; }
     size_t size() const { return m_count.size(); }
     /// Channels of E: 1 (the mean of R, G, B) or 3.
@@ -69,6 +90,7 @@ public:
 
 private:
     std::vector<uint32_t> m_offset;
+    std::vector<SplatFootprint> m_footprint;
     int m_e_channels = 1;
     std::vector<Shared> m_shared;
     std::vector<int64_t> m_e; ///< E, e_channels per pixel
@@ -95,24 +117,41 @@ public:
         if (e.key != key) [[unlikely]] replace(e, key);
         return e;
     }
-    /// Add one shared contribution W*L, W; false (nothing added) when a value does not fit.
-    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w) {
-        if (!(fits(lw) & fits(w))) return false;
-        add_fitting(at(slot, pixel), lw[0], lw[1], lw[2], w);
+    /// Add one shared contribution W*L, W at film position `film` (of the pixel with window
+    /// index `pixel`, which the box filter uses); false (nothing added) when a value does not fit.
+    bool add(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w) {
+        const float v[4] = {lw[0], lw[1], lw[2], w};
+        if (!fits(v, m_peak[size_t(slot)])) return false;
+        if (m_box[size_t(slot)]) add_fitting(at(slot, pixel), v[0], v[1], v[2], v[3]);
+        else add_footprint(slot, film, v, nullptr);
         return true;
     }
-    /// The same for the native view's own pixel, with the radiance E only it estimates.
-    bool add(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
+    /// The same for the native view's own pixel, with the radiance E only it estimates (added to
+    /// W*L, and on its own as the mean of its channels or in RGB, as the film keeps it).
+    bool add(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w, const Spectrum &e) {
         const Spectrum sum = lw + e;
-        if (!(fits(lw) & fits(w) & fits(e) & fits(sum))) return false;
-        SplatEntry &entry = at(slot, pixel);
-        add_fitting(entry, sum[0], sum[1], sum[2], w);
-        if (m_e_rgb)
-            for (int c = 0; c < 3; ++c) entry.e[c] += to_fixed(e[c]);
-        else
-            entry.e[0] += to_fixed((e[0] + e[1] + e[2]) * (1.f / 3.f));
+        const float v[4] = {sum[0], sum[1], sum[2], w};
+        if (!(fits(lw) & fits(e) & fits(v, m_peak[size_t(slot)]))) return false;
+        const float e_kept[3] = {m_e_rgb ? e[0] : (e[0] + e[1] + e[2]) * (1.f / 3.f), e[1], e[2]};
+        if (!fits(e_kept, m_e_rgb ? 3 : 1, m_peak[size_t(slot)])) return false;
+        if (m_box[size_t(slot)]) {
+            SplatEntry &entry = at(slot, pixel);
+            add_fitting(entry, v[0], v[1], v[2], v[3]);
+            for (int c = 0; c < (m_e_rgb ? 3 : 1); ++c) entry.e[c] += to_fixed(e_kept[c]);
+        } else {
+            add_footprint(slot, film, v, e_kept);
+        }
         return true;
     }
+    /// Whether every value of v (and times the filter's peak weight) fits.
+    static bool fits(const float *v, int n, float peak) {
+        bool ok = true;
+        for (int i = 0; i < n; ++i) ok &= fits(v[i]) & fits(v[i] * peak);
+        return ok;
+    }
+    static bool fits(const float v[4], float peak) { return fits(v, 4, peak); }
+    /// Whether view `slot` has a box filter (a contribution goes to one pixel, weight 1).
+    bool is_box(int slot) const { return m_box[size_t(slot)]; }
     /// Add W*L (per channel) and W that fit, and count the contribution.
     static void add_fitting(SplatEntry &e, float lw_r, float lw_g, float lw_b, float w) {
         e.lw[0] += to_fixed(lw_r);
@@ -121,6 +160,10 @@ public:
         e.w += to_fixed(w);
         ++e.count;
     }
+    /// Add `v` (W*L, W) and `e` (E as the film keeps it, or none) that fit, spread over the
+    /// pixels of view `slot` that the filter at film position `film` covers; counted in the
+    /// pixel that holds `film`.
+    void add_footprint(int slot, Vec2f film, const float v[4], const float *e);
     /// Adds every entry to the film and empties the cache (the end of a pass).
     void flush();
     /// Empties the cache without adding anything (a pass that is abandoned).
@@ -132,6 +175,8 @@ private:
     MvPassFilm *m_film;
     bool m_e_rgb;
     std::vector<uint32_t> m_offset; ///< the film's offset of each view
+    std::vector<uint8_t> m_box;     ///< each view's filter is a box
+    std::vector<float> m_peak;      ///< each view's largest filter weight
     std::vector<uint32_t> m_base;   ///< where each view's pixels start in the cache (spread apart)
     std::vector<SplatEntry> m_entries;
     uint32_t m_mask;
@@ -142,14 +187,15 @@ private:
 struct MvSplatSink {
     SplatCache &cache;
     uint64_t *dropped;
-    /// A contribution W*L, W to a view that shares the sample.
-    void shared(int slot, uint32_t pixel, const Spectrum &lw, float w) {
-        if (!cache.add(slot, pixel, lw, w)) ++dropped[slot];
+    /// A contribution W*L, W at film position `film` (window pixel `pixel`) of a view that
+    /// shares the sample.
+    void shared(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w) {
+        if (!cache.add(slot, pixel, film, lw, w)) ++dropped[slot];
     }
-    /// The contribution to the native view's own pixel, with its native-only radiance E
-    /// (emission seen directly, paths through purely specular first vertices) divided by n_l.
-    void native(int slot, uint32_t pixel, const Spectrum &lw, float w, const Spectrum &e) {
-        if (!cache.add(slot, pixel, lw, w, e)) ++dropped[slot];
+    /// The contribution to the native view, with its native-only radiance E (emission seen
+    /// directly, paths through purely specular first vertices) divided by n_l.
+    void native(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w, const Spectrum &e) {
+        if (!cache.add(slot, pixel, film, lw, w, e)) ++dropped[slot];
     }
 };
 

@@ -381,12 +381,12 @@ TEST(CameraProjection, BatchOverStaticCamerasEqualsEachCamera) {
     auto s = load(CameraXml);
     std::vector<const Camera *> cams;
     std::vector<CameraProjection> proj;
-    std::vector<const FilmDesc *> films;
+    std::vector<SampleWindow> films;
     for (const auto &cam : s->cameras())
         if (const CameraProjection *p = cam->static_projection()) {
             cams.push_back(cam.get());
             proj.push_back(*p);
-            films.push_back(&cam->film);
+            films.emplace_back(cam->film);
         }
     ASSERT_GE(cams.size(), 3u);
     ProjectionTable table(proj);

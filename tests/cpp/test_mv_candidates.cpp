@@ -80,7 +80,7 @@ TEST_P(StaticShiftLoop, EqualsEachCamera) {
             ShiftGeometry g;
             bool ok = cams[k]->shift_geometry(y.p, y.n, 0.f, y.lens, &g);
             uint32_t pixel = 0;
-            uint32_t status = shift_status(y, ok, g, cams[k]->film, &pixel);
+            uint32_t status = shift_status(y, ok, g, SampleWindow(cams[k]->film), &pixel);
             ASSERT_EQ(vs.status[k], status) << "view " << k << ", trial " << trial;
             if (status & ShiftDepth) continue;
             EXPECT_TRUE(same_bits(vs.geo.density[k], g.density));

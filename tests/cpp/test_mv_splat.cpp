@@ -34,6 +34,7 @@ TEST(MvSplat, EntryKernelEqualsScalarAdds) {
         std::vector<float> w(n);
         std::vector<int> slots(n);
         std::vector<uint32_t> pixels(n);
+        std::vector<Vec2f> films(n);
         for (size_t i = 0; i <= n; ++i) {
             f_nee[i] = Spectrum(value(), value(), value());
             f_bounce[i] = Spectrum(value(), value(), value());
@@ -42,22 +43,25 @@ TEST(MvSplat, EntryKernelEqualsScalarAdds) {
             w[i] = u(rng) < 0.9f ? u(rng) : value();
             slots[i] = int(rng() % pixels_per_view.size());
             pixels[i] = uint32_t(rng() % pixels_per_view[size_t(slots[i])]);
+            films[i] = Vec2f(float(pixels[i]) + u(rng), u(rng));
         }
         MvSplatTerms t{Spectrum(u(rng), 2.f * u(rng), u(rng)), Spectrum(value(), u(rng), u(rng)), 0.5f + u(rng),
                        (rng() % 4) != 0, (rng() % 4) != 0, (rng() % 8) != 0};
-        MvPassFilm ref_film(pixels_per_view, false), got_film(pixels_per_view, false);
+        std::vector<SplatFootprint> views;
+        for (size_t n : pixels_per_view) views.push_back(SplatFootprint::box(int(n), 1));
+        MvPassFilm ref_film(views, false), got_film(views, false);
         SplatCache ref(ref_film), got(got_film, 4); // a small cache: entries are displaced mid-sample
         std::vector<uint64_t> ref_dropped(pixels_per_view.size()), got_dropped(pixels_per_view.size());
         for (size_t i = begin; i < end; ++i) {
             const Spectrum v = mv_entry_value(t, f_nee[i], f_bounce[i], w[i]);
-            const bool added = ref.add(slots[i], pixels[i], v, w[i]);
+            const bool added = ref.add(slots[i], pixels[i], films[i], v, w[i]);
             ref_dropped[size_t(slots[i])] += !added;
             const bool exact = std::abs(v[0]) < 0x1p21f && std::abs(v[1]) < 0x1p21f && std::abs(v[2]) < 0x1p21f &&
                                std::abs(w[i]) < 0x1p21f;
             ++paths[!added ? 2 : exact ? 0 : 1];
         }
-        mv_splat_entries(got, t, f_nee.data(), f_bounce.data(), w.data(), slots.data(), pixels.data(), begin, end,
-                         got_dropped.data());
+        mv_splat_entries(got, t, f_nee.data(), f_bounce.data(), w.data(), slots.data(), pixels.data(), films.data(),
+                         begin, end, got_dropped.data());
         ref.flush(), got.flush();
         for (size_t s = 0; s < pixels_per_view.size(); ++s)
             ASSERT_EQ(got_dropped[s], ref_dropped[s]) << "trial " << trial << ", view " << s;

@@ -1,10 +1,12 @@
 // The fixed-point splats of multi-view path tracing (splat_film.h): exact integer sums whatever
 // the order, the cache size or the number of threads; contributions that are not finite or too
 // large rejected whole, whichever channel holds the bad value.
+#include "mvpt/scene/plugin.h"
 #include "mvpt/splat_film.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -13,6 +15,13 @@
 using namespace mvpt;
 
 namespace {
+/// Box-filtered views of n[s] pixels.
+std::vector<SplatFootprint> boxes(const std::vector<size_t> &n) {
+    std::vector<SplatFootprint> out;
+    for (size_t v : n) out.push_back(SplatFootprint::box(int(v), 1));
+    return out;
+}
+
 /// Every view-pixel's sums of `film`, read and cleared.
 std::vector<SplatEntry> take_all(MvPassFilm &film) {
     std::vector<SplatEntry> out;
@@ -58,23 +67,24 @@ std::vector<Contribution> random_contributions(const std::vector<size_t> &pixels
 }
 
 void add_to(SplatCache &cache, const Contribution &c) {
-    bool ok = c.native ? cache.add(c.slot, c.pixel, c.lw, c.w, c.e) : cache.add(c.slot, c.pixel, c.lw, c.w);
+    const Vec2f film(0.f, 0.f);
+    bool ok = c.native ? cache.add(c.slot, c.pixel, film, c.lw, c.w, c.e) : cache.add(c.slot, c.pixel, film, c.lw, c.w);
     ASSERT_TRUE(ok);
 }
 } // namespace
 
 TEST(SplatFilm, SumsAreExactAndOrderFree) {
     for (bool e_rgb : {false, true}) {
-        MvPassFilm a({4}, e_rgb), b({4}, e_rgb);
+        MvPassFilm a(boxes({4}), e_rgb), b(boxes({4}), e_rgb);
         SplatCache ca(a), cb(b, 1); // b's cache holds one entry: every other pixel displaces it
         const float v[3] = {0.1f, 1e-7f, 3.5f};
-        for (int i = 0; i < 3; ++i) ca.add(0, 2, Spectrum(v[i], 2 * v[i], 0.f), v[i]);
+        for (int i = 0; i < 3; ++i) ca.add(0, 2, Vec2f(0.f, 0.f), Spectrum(v[i], 2 * v[i], 0.f), v[i]);
         for (int i = 2; i >= 0; --i) {
-            cb.add(0, 2, Spectrum(v[i], 2 * v[i], 0.f), v[i]);
-            cb.add(0, 1, Spectrum(0.f), 0.f); // displaces pixel 2
+            cb.add(0, 2, Vec2f(0.f, 0.f), Spectrum(v[i], 2 * v[i], 0.f), v[i]);
+            cb.add(0, 1, Vec2f(0.f, 0.f), Spectrum(0.f), 0.f); // displaces pixel 2
         }
-        ca.add(0, 2, Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
-        cb.add(0, 2, Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
+        ca.add(0, 2, Vec2f(0.f, 0.f), Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
+        cb.add(0, 2, Vec2f(0.f, 0.f), Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
         ca.flush(), cb.flush();
         const SplatEntry x = a.take(2), y = b.take(2);
         for (int c = 0; c < 3; ++c) EXPECT_EQ(x.lw[c], y.lw[c]);
@@ -93,7 +103,7 @@ TEST(SplatFilm, SumsAreExactAndOrderFree) {
 TEST(SplatFilm, IndependentOfCacheSizeAndThreads) {
     const std::vector<size_t> pixels = {37, 1, 200, 64};
     const auto contribs = random_contributions(pixels, 20000, 5);
-    MvPassFilm ref(pixels, true);
+    MvPassFilm ref(boxes(pixels), true);
     {
         SplatCache cache(ref, 1);
         for (const Contribution &c : contribs) add_to(cache, c);
@@ -102,7 +112,7 @@ TEST(SplatFilm, IndependentOfCacheSizeAndThreads) {
     const auto expected = take_all(ref);
     for (size_t entries : {size_t(2), size_t(64), size_t(1) << 15})
         for (int threads : {1, 3}) {
-            MvPassFilm film(pixels, true);
+            MvPassFilm film(boxes(pixels), true);
             std::vector<std::thread> pool;
             for (int t = 0; t < threads; ++t)
                 pool.emplace_back([&, t] {
@@ -116,9 +126,9 @@ TEST(SplatFilm, IndependentOfCacheSizeAndThreads) {
 }
 
 TEST(SplatFilm, DiscardAddsNothing) {
-    MvPassFilm film({8}, false);
+    MvPassFilm film(boxes({8}), false);
     SplatCache cache(film, 4);
-    cache.add(0, 3, Spectrum(1.f), 1.f);
+    cache.add(0, 3, Vec2f(0.f, 0.f), Spectrum(1.f), 1.f);
     cache.discard();
     cache.flush();
     EXPECT_EQ(film.take(3).w, 0);
@@ -128,16 +138,16 @@ TEST(SplatFilm, RejectsWholeContributionsThatDoNotFit) {
     const float nan = std::numeric_limits<float>::quiet_NaN(), inf = INFINITY, big = float(SplatMax);
     for (int channel = 0; channel < 4; ++channel)
         for (float bad : {nan, inf, -inf, big, -big}) {
-            MvPassFilm film({1}, true);
+            MvPassFilm film(boxes({1}), true);
             SplatCache cache(film);
             float x[4] = {1.f, 1.f, 1.f, 1.f};
             x[channel] = bad;
-            EXPECT_FALSE(cache.add(0, 0, Spectrum(x[0], x[1], x[2]), x[3])) << "channel " << channel << " value " << bad;
+            EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(x[0], x[1], x[2]), x[3])) << "channel " << channel << " value " << bad;
             // The native view's radiance E is checked too, before anything is added.
             Spectrum e(1.f);
             if (channel < 3) {
                 e[channel] = bad;
-                EXPECT_FALSE(cache.add(0, 0, Spectrum(1.f), 1.f, e));
+                EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(1.f), 1.f, e));
             }
             cache.flush();
             const SplatEntry t = film.take(0);
@@ -146,10 +156,79 @@ TEST(SplatFilm, RejectsWholeContributionsThatDoNotFit) {
             EXPECT_EQ(t.w, 0);
         }
     // W*L and E that fit but whose sum does not.
-    MvPassFilm film({1}, false);
+    MvPassFilm film(boxes({1}), false);
     SplatCache cache(film);
-    EXPECT_FALSE(cache.add(0, 0, Spectrum(0.75f * big), 1.f, Spectrum(0.75f * big)));
-    EXPECT_TRUE(cache.add(0, 0, Spectrum(std::nextafter(big, 0.f)), 1.f, Spectrum(-1.f)));
+    EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(0.75f * big), 1.f, Spectrum(0.75f * big)));
+    EXPECT_TRUE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(std::nextafter(big, 0.f)), 1.f, Spectrum(-1.f)));
     cache.flush();
     EXPECT_EQ(film.take(0).e[0], to_fixed(-1.f));
+}
+
+namespace {
+std::shared_ptr<ReconstructionFilter> make_filter(const std::string &type) {
+    Properties p("rfilter", type);
+    return std::static_pointer_cast<ReconstructionFilter>((*PluginRegistry::find("rfilter", type))(p, LoadContext{}));
+}
+} // namespace
+
+TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
+    // A contribution at film position x adds h(x - c_i) v to every pixel i of the crop window
+    // whose centre c_i is within the radius (h: the density path tracing samples offsets from),
+    // and counts in the pixel that holds x; pixels outside the crop window get nothing.
+    for (const char *type : {"tent", "gaussian"}) {
+        auto filter = make_filter(type);
+        const float r = filter->radius();
+        // A 10 x 8 crop window at (20, 30) of the full film.
+        MvPassFilm film({SplatFootprint::of(20, 30, 10, 8, *filter)}, false);
+        SplatCache cache(film, 8); // small: entries are displaced while the footprint is added
+        for (Vec2f x : {Vec2f(25.3f, 33.8f), Vec2f(20.2f, 30.9f), Vec2f(19.7f, 37.7f), Vec2f(29.99f, 36.01f)}) {
+            ASSERT_TRUE(cache.add(0, 0, x, Spectrum(2.f, 1.f, 0.5f), 0.25f, Spectrum(0.f, 3.f, 0.f)));
+            cache.flush();
+            double total = 0.0;
+            uint32_t counted = 0;
+            for (int py = 30; py < 38; ++py)
+                for (int px = 20; px < 30; ++px) {
+                    const SplatEntry e = film.take(uint32_t((py - 30) * 10 + (px - 20)));
+                    const float dx = x.x - (float(px) + 0.5f), dy = x.y - (float(py) + 0.5f);
+                    const float h = std::abs(dx) < r && std::abs(dy) < r ? filter->eval_1d(dx) * filter->eval_1d(dy) : 0.f;
+                    EXPECT_EQ(e.w, to_fixed(0.25f * h)) << type << " pixel " << px << "," << py;
+                    EXPECT_EQ(e.lw[1], to_fixed(4.f * h)) << type; // W*L + E
+                    EXPECT_EQ(e.e[0], to_fixed(1.f * h)) << type;  // E's mean
+                    const bool holds = px == int(std::floor(x.x)) && py == int(std::floor(x.y));
+                    EXPECT_EQ(e.count, holds ? 1u : 0u) << type;
+                    total += h, counted += e.count;
+                }
+            EXPECT_EQ(counted, x.x >= 20.f && x.y >= 30.f ? 1u : 0u);
+            // Inside the window the weights sum to about 1 (a partition of unity for the tent).
+            if (x.x > 20.f + r && x.x < 30.f - r && x.y > 30.f + r && x.y < 38.f - r) EXPECT_NEAR(total, 1.0, 0.02) << type;
+            if (x.x < 20.f) EXPECT_GT(total, 0.0) << type; // the margin reaches the window
+        }
+    }
+}
+
+TEST(SplatFilm, FilterDensityIsWhatPathTracingSamples) {
+    // eval_1d is the density of sample()'s offsets: a histogram of many samples matches it.
+    for (const char *type : {"box", "tent", "gaussian"}) {
+        auto filter = make_filter(type);
+        const float r = filter->radius();
+        constexpr int Bins = 40, N = 400000;
+        std::vector<double> hist(Bins, 0.0);
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<float> u(0.f, 1.f);
+        for (int i = 0; i < N; ++i) {
+            float d = filter->sample(Vec2f(u(rng), u(rng))).x;
+            int b = std::min(Bins - 1, int((d + r) / (2.f * r) * Bins));
+            hist[size_t(b)] += 1.0;
+        }
+        double peak = 0.0;
+        for (int b = 0; b < Bins; ++b) {
+            // The density's mean over the bin, by a fine midpoint rule.
+            double mean = 0.0;
+            for (int k = 0; k < 100; ++k) mean += filter->eval_1d(-r + (float(b) + (k + 0.5f) / 100.f) * 2.f * r / Bins) / 100.0;
+            const double expected = mean * 2.0 * r / Bins * N;
+            EXPECT_NEAR(hist[size_t(b)], expected, 5.0 * std::sqrt(expected) + 1.0) << type << " bin " << b;
+            peak = std::max(peak, mean);
+        }
+        EXPECT_LE(peak, filter->peak_1d() * 1.0001) << type;
+    }
 }

@@ -1,6 +1,7 @@
 #include "mv_candidates.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "../core/multi_isa.h"
 #include "../core/sampler.h"
@@ -8,14 +9,21 @@
 
 namespace mvpt {
 
-FilmTable::FilmTable(const std::vector<const FilmDesc *> &films, size_t padded)
+SampleWindow::SampleWindow(const FilmDesc &film) {
+    // Pixel centres lie half a pixel inside their pixel: the filters of the crop window's
+    // pixels reach radius - 1/2 beyond it.
+    margin = film.filter && !film.filter->is_box() ? int(std::ceil(film.filter->radius() - 0.5f)) : 0;
+    x0 = film.crop_x - margin, y0 = film.crop_y - margin;
+    x1 = film.crop_x + film.crop_width + margin, y1 = film.crop_y + film.crop_height + margin;
+}
+
+FilmTable::FilmTable(const std::vector<SampleWindow> &windows, size_t padded)
     : x0(padded, 0), y0(padded, 0), x1(padded, 0), y1(padded, 0) {
-    for (size_t k = 0; k < films.size(); ++k) {
-        const FilmDesc &f = *films[k];
-        x0[k] = f.crop_x;
-        y0[k] = f.crop_y;
-        x1[k] = f.crop_x + f.crop_width;
-        y1[k] = f.crop_y + f.crop_height;
+    for (size_t k = 0; k < windows.size(); ++k) {
+        x0[k] = windows[k].x0;
+        y0[k] = windows[k].y0;
+        x1[k] = windows[k].x1;
+        y1[k] = windows[k].y1;
     }
 }
 
@@ -43,7 +51,7 @@ namespace {
     float cx = g.film.x > fx0 ? g.film.x : fx0, cy = g.film.y > fy0 ? g.film.y : fy0;
     cx = cx < fx1 - 1.f ? cx : fx1 - 1.f;
     cy = cy < fy1 - 1.f ? cy : fy1 - 1.f;
-    *pixel = uint32_t(int32_t(cy) - y0) * uint32_t(x1 - x0) + uint32_t(int32_t(cx) - x0);
+    *pixel = uint32_t(int32_t(std::floor(cy)) - y0) * uint32_t(x1 - x0) + uint32_t(int32_t(std::floor(cx)) - x0);
     return (depth ? 0u : uint32_t(ShiftDepth)) | (facing ? 0u : uint32_t(ShiftFacing)) |
            (inside ? 0u : uint32_t(ShiftOutside));
 }
@@ -163,9 +171,9 @@ MVPT_MULTI_ISA void selection_kernel(const float *__restrict g, float g0, const 
 
 } // namespace
 
-uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const FilmDesc &film, uint32_t *pixel) {
-    return status_of(y, depth_ok, g, film.crop_x, film.crop_y, film.crop_x + film.crop_width,
-                     film.crop_y + film.crop_height, pixel);
+uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const SampleWindow &window,
+                      uint32_t *pixel) {
+    return status_of(y, depth_ok, g, window.x0, window.y0, window.x1, window.y1, pixel);
 }
 
 void shift_static_views(const ProjectionTable &table, const FilmTable &films, const MvVertex &y, ViewShifts &out) {
@@ -182,6 +190,7 @@ void MvCandidates::reserve(size_t views) {
     if (slot.size() >= views) return;
     slot.resize(views);
     pixel.resize(views);
+    film.resize(views);
     for (auto *v : {&g, &n, &lx, &ly, &lz, &vis}) v->resize(views);
     wi.resize(views);
 }

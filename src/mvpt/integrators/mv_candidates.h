@@ -23,7 +23,7 @@ inline size_t whole_lanes(size_t n) { return (n + ViewLanes - 1) / ViewLanes * V
 enum ShiftStatus : uint8_t {
     ShiftDepth = 1,   ///< y's depth is outside k's clip range or G_k <= 0 (the native view checks only this)
     ShiftFacing = 2,  ///< k's lens point is on the other side of the surface, or y lies at k's near plane
-    ShiftOutside = 4, ///< x_k falls outside k's crop window
+    ShiftOutside = 4, ///< x_k falls outside k's sample window
     ShiftTimeOff = 8, ///< the time test failed
 };
 
@@ -33,12 +33,30 @@ inline ShiftTest first_failed_test(uint32_t status) {
                                                                                          : ShiftTest::Image;
 }
 
-/// Crop windows of many views as arrays (by slot), for the image test.
+/// A view's window of native samples, [x0, x1) x [y0, y1) in full-film pixels: its crop
+/// window grown by the margin of its pixel filter, the pixels outside the image whose samples
+/// still reach it (design doc §5, "Pixel filters"; none for the box filter).
+struct SampleWindow {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    int margin = 0; ///< pixels beyond the crop window on each side
+    SampleWindow() = default;
+    explicit SampleWindow(const FilmDesc &film);
+    int width() const { return x1 - x0; }
+    int height() const { return y1 - y0; }
+    size_t size() const { return size_t(width()) * size_t(height()); }
+    bool contains(Vec2f pos) const {
+        return pos.x >= float(x0) && pos.x < float(x1) && pos.y >= float(y0) && pos.y < float(y1);
+    }
+    /// Index of full-film pixel (x, y) in the window (row-major).
+    uint32_t index(int x, int y) const { return uint32_t(y - y0) * uint32_t(width()) + uint32_t(x - x0); }
+};
+
+/// Sample windows of many views as arrays (by slot), for the image test.
 struct FilmTable {
     std::vector<int32_t> x0, y0, x1, y1; ///< [x0, x1) x [y0, y1), full-film pixels
     FilmTable() = default;
-    /// The windows of `films`, then empty windows (every shift falls outside) up to `padded` entries.
-    FilmTable(const std::vector<const FilmDesc *> &films, size_t padded);
+    /// The windows of `windows`, then empty windows (every shift falls outside) up to `padded` entries.
+    FilmTable(const std::vector<SampleWindow> &windows, size_t padded);
 };
 
 /// Shift geometry of many views as arrays by view.
@@ -50,15 +68,16 @@ struct ShiftBatch {
 struct ViewShifts {
     ShiftBatch geo;                ///< x_k, u_k, G_k, visible length (meaningful where status = 0)
     std::vector<uint32_t> status;  ///< ShiftStatus bits (32-bit: the vector loop's lanes stay float-wide)
-    std::vector<uint32_t> pixel;   ///< crop-window pixel index of x_k (where status = 0)
+    std::vector<uint32_t> pixel;   ///< sample-window pixel index of x_k (where status = 0)
     void resize(size_t n);
 };
 
 /// Status and pixel of one view's shift geometry `g` (the same tests as the vector loop).
-uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const FilmDesc &film, uint32_t *pixel);
+uint32_t shift_status(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, const SampleWindow &window,
+                      uint32_t *pixel);
 
 /// The shift of y to every static view of `table` with the cheap tests (§3 tests 2–3), in one
-/// vector loop; `films` holds the same views' crop windows (both padded with whole_lanes).
+/// vector loop; `films` holds the same views' sample windows (both padded with whole_lanes).
 void shift_static_views(const ProjectionTable &table, const FilmTable &films, const MvVertex &y, ViewShifts &out);
 
 /// The candidates of one native sample: index 0 is the native view l, then every view that
@@ -66,7 +85,8 @@ void shift_static_views(const ProjectionTable &table, const FilmTable &films, co
 struct MvCandidates {
     size_t size = 0;
     std::vector<int32_t> slot;
-    std::vector<uint32_t> pixel;
+    std::vector<uint32_t> pixel;   ///< sample-window pixel index of x_k
+    std::vector<Vec2f> film;       ///< x_k (full-film pixels)
     std::vector<float> g;          ///< film density G_k at y (§4)
     std::vector<float> n;          ///< n_k of the candidate's pixel this pass
     std::vector<float> lx, ly, lz; ///< lens point u_k
@@ -80,6 +100,7 @@ struct MvCandidates {
         size_t i = size++;
         this->slot[i] = slot;
         pixel[i] = shifts.pixel[slot];
+        film[i] = Vec2f(b.film_x[slot], b.film_y[slot]);
         g[i] = b.density[slot];
         n[i] = n_k;
         lx[i] = b.lens_x[slot], ly[i] = b.lens_y[slot], lz[i] = b.lens_z[slot];

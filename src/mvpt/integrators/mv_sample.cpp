@@ -41,9 +41,9 @@ void MvContext::prepare() {
     const size_t padded = whole_lanes(views.size());
     if (!proj.empty()) proj.resize(padded, proj.back());
     projections = ProjectionTable(proj);
-    std::vector<const FilmDesc *> film_list;
-    for (const MvView &v : views) film_list.push_back(&v.camera->film);
-    films = FilmTable(film_list, padded);
+    windows.clear();
+    for (const MvView &v : views) windows.emplace_back(v.camera->film);
+    films = FilmTable(windows, padded);
     if (views.size() >= 2) {
         auto centre = [](const MvView &v) {
             const FilmDesc &f = v.camera->film;
@@ -102,7 +102,7 @@ void shift_all_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScra
         }
         ShiftGeometry g;
         bool ok = vk.camera->shift_geometry(y.p, y.n, t_k, y.lens, &g);
-        vs.status[k] = shift_status(y, ok, g, vk.camera->film, &vs.pixel[k]);
+        vs.status[k] = shift_status(y, ok, g, ctx.windows[k], &vs.pixel[k]);
         b.film_x[k] = g.film.x, b.film_y[k] = g.film.y;
         b.lens_x[k] = g.lens_point.x, b.lens_y[k] = g.lens_point.y, b.lens_z[k] = g.lens_point.z;
         b.density[k] = g.density;
@@ -113,8 +113,8 @@ void shift_all_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScra
 /// The candidates of §3 for the native sample of view `slot_l` (pixel `pixel_l`) with first hit
 /// `y`: the native view first, then every view that passes the cheap tests, with its native
 /// count and viewing direction (and lobe, for the material similarity).
-void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvVertex &y, const Bsdf &bsdf,
-                   const SurfaceInteraction &si, MvScratch &sc, MvViewStats *st_l) {
+void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, Vec2f film_l, const MvVertex &y,
+                   const Bsdf &bsdf, const SurfaceInteraction &si, MvScratch &sc, MvViewStats *st_l) {
     const int nv = int(ctx.views.size());
     shift_all_views(ctx, slot_l, y, sc);
     const ViewShifts &vs = sc.shifts;
@@ -123,6 +123,7 @@ void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, const MvV
     c.size = 0;
     c.push(vs, slot_l, float(ctx.native_map[slot_l][pixel_l]));
     c.pixel[0] = pixel_l;
+    c.film[0] = film_l;
     if (!(vs.status[slot_l] & ShiftDepth)) {
         if (st_l) st_l->tried += uint64_t(nv - 1);
         for (int k = 0; k < nv; ++k) {
@@ -260,16 +261,16 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
 
 std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, int slot, const SurfaceInteraction &hit,
                                                         Point3f lens_point, float time, Vec2f lens, MvScratch &sc) {
-    const FilmDesc &film = ctx.views[slot].camera->film;
+    const SampleWindow &window = ctx.windows[slot];
     SurfaceInteraction si = hit;
     si.wi = si.to_local(normalize(lens_point - si.p));
     ShiftGeometry geo;
     std::vector<std::pair<int, float>> out;
-    if (!ctx.views[slot].camera->shift_geometry(si.p, si.n, time, lens, &geo) || !film.contains(geo.film)) return out;
-    uint32_t pixel = uint32_t(int(geo.film.y) - film.crop_y) * uint32_t(film.crop_width) + uint32_t(int(geo.film.x) - film.crop_x);
+    if (!ctx.views[slot].camera->shift_geometry(si.p, si.n, time, lens, &geo) || !window.contains(geo.film)) return out;
+    uint32_t pixel = window.index(int(std::floor(geo.film.x)), int(std::floor(geo.film.y)));
     MvVertex y{si.p, si.n, time, lens, dot(si.n, lens_point - si.p)};
     const Bsdf &bsdf = *si.shape->bsdf;
-    gather_shifts(ctx, slot, pixel, y, bsdf, si, sc, nullptr);
+    gather_shifts(ctx, slot, pixel, geo.film, y, bsdf, si, sc, nullptr);
     RayCounters counters;
     trace_visibility(ctx, sc, si, time, false, counters, nullptr);
     std::vector<int> targets;
@@ -292,7 +293,7 @@ size_t MvPendingSamples::add_entries(size_t n) {
     entries += n;
     if (entries > slot.size()) { // grow geometrically: no per-sample resizing (and zero fills)
         const size_t size = std::max(entries, 2 * slot.size());
-        slot.resize(size), pixel.resize(size), w.resize(size);
+        slot.resize(size), pixel.resize(size), film.resize(size), w.resize(size);
         f_nee.resize(size + 1), f_bounce.resize(size + 1); // + 1: mv_splat.cpp reads 16 bytes per entry
     }
     return first;
@@ -315,7 +316,8 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
                                 prim.py.data(), prim.sample_index.data(), n, prim.pixel_hash.data(),
                                 prim.sample_hash.data(), out);
         for (size_t i = 0; i < n; ++i) {
-            prim.film[i] = Vec2f(float(prim.px[i]) + out[0][i], float(prim.py[i]) + out[1][i]);
+            // (Pixels of the window's margin have negative coordinates, stored as uint32.)
+            prim.film[i] = Vec2f(float(int32_t(prim.px[i])) + out[0][i], float(int32_t(prim.py[i])) + out[1][i]);
             prim.xi[i] = warp::square_to_uniform_disk_concentric(Vec2f(out[2][i], out[3][i]));
             prim.time[i] = cam.sample_time(out[4][i]);
         }
@@ -328,7 +330,7 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
             Vec2f u_film = sampler.next_2d();
             Vec2f u_lens = sampler.next_2d();
             float u_time = sampler.next_1d();
-            prim.film[i] = Vec2f(float(prim.px[i]) + u_film.x, float(prim.py[i]) + u_film.y);
+            prim.film[i] = Vec2f(float(int32_t(prim.px[i])) + u_film.x, float(int32_t(prim.py[i])) + u_film.y);
             prim.xi[i] = warp::square_to_uniform_disk_concentric(u_lens);
             prim.time[i] = cam.sample_time(u_time);
         }
@@ -344,9 +346,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     const uint32_t max_depth = pc.max_depth < 0 ? UINT_MAX : uint32_t(pc.max_depth);
     const MvView &l = ctx.views[slot_l];
     const Camera &cam = *l.camera;
-    const FilmDesc &film = cam.film;
     const int px = int(prim.px[i_prim]), py = int(prim.py[i_prim]);
-    const uint32_t pixel_l = uint32_t(py - film.crop_y) * uint32_t(film.crop_width) + uint32_t(px - film.crop_x);
+    const uint32_t pixel_l = ctx.windows[slot_l].index(px, py);
+    const Vec2f film_l = prim.film[i_prim];
     const float n_l = float(ctx.native_map[slot_l][pixel_l]);
     MvViewStats &st_l = stats[slot_l];
     const uint64_t rays_before = counters.rays + counters.shadow_rays;
@@ -375,7 +377,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
     // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
     auto native_only = [&](const Spectrum &L) {
-        sink.native(slot_l, pixel_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
+        sink.native(slot_l, pixel_l, film_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
         ++st_l.sharing;
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
     };
@@ -407,7 +409,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
 
     // ---------------- Shifts (§3 tests 1-3), selection (§6), visibility (test 5) ----------------
     MvVertex y{si.p, si.n, t, xi, dot(si.n, ray.o - si.p)};
-    gather_shifts(ctx, slot_l, pixel_l, y, bsdf, si, sc, &st_l);
+    gather_shifts(ctx, slot_l, pixel_l, film_l, y, bsdf, si, sc, &st_l);
     const MvCandidates &cand = sc.cand;
     const size_t m = cand.size;
     // Without a selection term every candidate stays selected (gather_shifts set s = 1): no draws.
@@ -532,16 +534,19 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     rec.e = le_y * (1.f / n_l);
     int *const slot_out = pending.slot.data() + first;
     uint32_t *const pixel_out = pending.pixel.data() + first;
+    Vec2f *const film_out = pending.film.data() + first;
     float *const w_out = pending.w.data() + first;
     if (ns == m) { // every candidate shares: contiguous copies
         std::copy_n(cand.slot.data(), ns, slot_out);
         std::copy_n(cand.pixel.data(), ns, pixel_out);
+        std::copy_n(cand.film.data(), ns, film_out);
         for (size_t i = 0; i < ns; ++i) w_out[i] = 1.f / sc.d[i];
     } else {
         for (size_t i = 0; i < ns; ++i) {
             const int k = sharing[i];
             slot_out[i] = cand.slot[k];
             pixel_out[i] = cand.pixel[k];
+            film_out[i] = cand.film[k];
             w_out[i] = 1.f / sc.d[k];
         }
     }

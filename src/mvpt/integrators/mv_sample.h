@@ -46,7 +46,8 @@ struct MvContext {
     const PathIntegrator *path = nullptr;
     MvConfig cfg;
     std::vector<MvView> views;                 ///< the rendered views, by slot
-    std::vector<const uint16_t *> native_map;  ///< n_k(i) of the current pass, by slot
+    std::vector<SampleWindow> windows;         ///< where each view takes native samples, by slot
+    std::vector<const uint16_t *> native_map;  ///< n_k(i) of the current pass over the sample window, by slot
     std::vector<uint32_t> seeds;               ///< sampler seed, by slot
     bool scene_moves = false;                  ///< some shape moves: shifts keep time (§3)
     bool all_time_compatible = true;           ///< every pair of views passes `time_compatible`
@@ -55,7 +56,7 @@ struct MvContext {
     /// computed for all views at once from `projections` (by slot) instead of calling each camera.
     bool static_shift = false;
     ProjectionTable projections;
-    FilmTable films; ///< crop windows, by slot
+    FilmTable films; ///< sample windows, by slot
     /// Sampler::dimension_key of each view's selection draw (DimSelectBase + its scene index), by slot.
     std::vector<uint64_t> select_keys;
     /// The direction from the first view's lens centre to the second's (a camera row or a
@@ -64,7 +65,7 @@ struct MvContext {
     /// Cells of the scene proven to see the whole rig unblocked (static scenes and cameras).
     std::shared_ptr<const RigVisibility> rig;
 
-    /// Sets the derived members above from `views` and `scene_moves`.
+    /// Sets the derived members above from `views` and `scene_moves` (`windows` included).
     void prepare();
 };
 
@@ -133,7 +134,8 @@ struct MvPendingSamples {
     /// Per sharing view of each sample: slot, pixel, W = 1/D, and the BSDF values f_k |cos|
     /// towards the light sample and the bounce direction.
     std::vector<int> slot;
-    std::vector<uint32_t> pixel;
+    std::vector<uint32_t> pixel; ///< sample-window pixel index
+    std::vector<Vec2f> film;     ///< film position (full-film pixels)
     std::vector<float> w;
     std::vector<Spectrum> f_nee, f_bounce; ///< with one more element than the others
     size_t entries = 0; ///< entries in use (the arrays above keep their size between tiles)
@@ -179,13 +181,13 @@ struct MvSplatTerms {
 /// zero when the sample is not valid.
 Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w);
 
-/// Adds entries [begin, end) of one sample to `cache`: W·L (mv_entry_value) and W into pixel
-/// pixels[i] of view slots[i], the same bits as SplatCache::add; entries that do not fit are
+/// Adds entries [begin, end) of one sample to `cache`: W·L (mv_entry_value) and W at film
+/// position films[i] (window pixel pixels[i]) of view slots[i], the same bits as SplatCache::add; entries that do not fit are
 /// counted in dropped[slot]. f_nee and f_bounce are read 16 bytes per entry: one Spectrum past
 /// `end` must be readable.
 void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
-                      const float *w, const int *slots, const uint32_t *pixels, size_t begin, size_t end,
-                      uint64_t *dropped);
+                      const float *w, const int *slots, const uint32_t *pixels, const Vec2f *films, size_t begin,
+                      size_t end, uint64_t *dropped);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
 /// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).

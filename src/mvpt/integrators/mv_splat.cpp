@@ -26,11 +26,13 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
 // channel.
 MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
                                      const Spectrum *__restrict f_bounce, const float *__restrict w,
-                                     const int *__restrict slots, const uint32_t *__restrict pixels, size_t begin,
-                                     size_t end, uint64_t *__restrict dropped) {
+                                     const int *__restrict slots, const uint32_t *__restrict pixels,
+                                     const Vec2f *__restrict films, size_t begin, size_t end,
+                                     uint64_t *__restrict dropped) {
 #if !defined(__SSE2__) // not x86-64: entry by entry
     for (size_t i = begin; i < end; ++i)
-        if (!cache.add(slots[i], pixels[i], mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i])) ++dropped[slots[i]];
+        if (!cache.add(slots[i], pixels[i], films[i], mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i]))
+            ++dropped[slots[i]];
 #else
     typedef double D4 __attribute__((vector_size(32)));
     typedef int64_t I4 __attribute__((vector_size(32)));
@@ -56,6 +58,10 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, c
         const __m128 mag = _mm_and_ps(v, abs_mask);
         float f[4];
         _mm_storeu_ps(f, v);
+        if (!cache.is_box(slots[i])) { // spread over the pixels the view's filter covers
+            if (!cache.add(slots[i], pixels[i], films[i], Spectrum(f[0], f[1], f[2]), f[3])) ++dropped[slots[i]];
+            continue;
+        }
         if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) != 0xf) {
             ++dropped[slots[i]];
             continue;
@@ -102,6 +108,7 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
         const float *w = pending.w.data() + first;
         const int *slots = pending.slot.data() + first;
         const uint32_t *pixels = pending.pixel.data() + first;
+        const Vec2f *films = pending.film.data() + first;
         // Two entries on their own: a delta lobe's direction serves its view only, and the
         // native view's entry (i = 0) also carries E.
         const int delta = bounce ? rec.delta_view : -1;
@@ -111,13 +118,14 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
             L += rec.delta_bounce * suffix;
             return t.valid ? L * w[i] : Spectrum(0.f);
         };
-        sink.native(slots[0], pixels[0], value(0), w[0], rec.e);
+        sink.native(slots[0], pixels[0], films[0], value(0), w[0], rec.e);
         if (delta > 0) {
-            sink.shared(slots[delta], pixels[delta], value(delta), w[delta]);
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, 1, size_t(delta), sink.dropped);
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, size_t(delta) + 1, n, sink.dropped);
+            sink.shared(slots[delta], pixels[delta], films[delta], value(delta), w[delta]);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, 1, size_t(delta), sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, size_t(delta) + 1, n,
+                             sink.dropped);
         } else
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, 1, n, sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, 1, n, sink.dropped);
     }
     pending.clear();
 }

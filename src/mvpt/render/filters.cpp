@@ -21,6 +21,8 @@ public:
     Vec2f sample(Vec2f u) const override { return {u.x - 0.5f, u.y - 0.5f}; }
     float radius() const override { return 0.5f; }
     bool is_box() const override { return true; }
+    float eval_1d(float d) const override { return d >= -0.5f && d < 0.5f ? 1.f : 0.f; }
+    float peak_1d() const override { return 1.f; }
 };
 
 class TentFilter final : public TabulatedFilter {
