@@ -173,6 +173,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "settings": settings,
         "wall_time": seconds, "seconds": seconds, "max_pass_seconds": raw["max_pass_seconds"],
         "max_chunk_seconds": raw["max_chunk_seconds"],
+        "estimated_bytes": raw["estimated_bytes"],
         "passes": raw["passes"], "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
         "samples": raw["samples"], "samples_per_second": rate(raw["samples"]),
         "rays": {"camera": raw["camera_rays"], "intersect": raw["rays"], "shadow": raw["shadow_rays"],

@@ -1,6 +1,6 @@
 // Accumulators of multi-view path tracing over passes (docs/multiview-path-tracing.md §5,
-// §8), per view: what the estimators and the adaptive maps need of the passes so far, and
-// the fold that adds one pass (its fixed-point sums, splat_film.h) to them.
+// §8), per view: the pixel estimates, what the estimators and the adaptive maps need of the
+// passes so far, and the fold that adds one pass (its fixed-point sums, splat_film.h).
 #pragma once
 
 #include "integrators/mvpath.h"
@@ -11,26 +11,21 @@
 
 namespace mvpt {
 
-/// What a pass adds to the pixel estimates of path tracing's film: sums over passes of the
-/// pass estimate v (3 per pixel), of v^2, and the passes per pixel.
-struct PassSums {
-    double *sum, *sum_sq;
-    uint32_t *count;
-};
-
-/// The accumulators of one view over all passes.
+/// The accumulators of one view over all passes. Per pixel, each pass gives one estimate v
+/// (balance: W*L + E + beta (1 - sum W), beta from the earlier passes; weighted: W*L + E); the
+/// image is their mean and its variance comes from their spread, as for path tracing.
 struct MvFilm {
     MvEstimator estimator = MvEstimator::Balance;
     bool control_variate = true;
-    /// Balance: per pixel, sums over passes of W*L + E (RGB) and of W, in single precision:
-    /// they only give the ratio estimate beta of the control variate (any value independent of
-    /// the pass keeps the estimate unbiased) and the mean sum of W.
-    std::vector<float> ratio;
-    /// Weighted: sums of W*L and of E (3 per pixel) and of W, the estimator's own terms.
+    uint32_t passes = 0;            ///< passes folded so far (every pixel takes part in each)
+    std::vector<double> sum;        ///< sum of v, 3 per pixel
+    std::vector<float> m2;          ///< sum of squared deviations of v from the running mean (Welford), 3 per pixel
+    std::vector<float> w_sum;       ///< sum of W (1 per pass in expectation for the balance estimator)
+    /// Weighted estimator: sums of W*L and of E (3 per pixel) and of W, its own terms.
     std::vector<double> lw, e, w;
-    /// For the adaptive maps, per pixel: the sum and the sum of squares of the passes'
-    /// native-only part E (mean over channels), and the sum of squares of the shared part
-    /// S = v - E (its sum is that of v minus that of E).
+    /// For the adaptive maps (empty when they never run), per pixel: the sum and the sum of
+    /// squares of the passes' native-only part E (mean over channels), and the sum of squares
+    /// of the shared part S = v - E (its sum is that of v minus that of E).
     std::vector<float> e_sum, e_sq, s_sq;
     std::vector<uint32_t> native;   ///< native samples taken so far (the next sample index)
     std::vector<uint32_t> received; ///< contributions received (saturating)
@@ -39,9 +34,13 @@ struct MvFilm {
     std::vector<uint16_t> map;
     int width = 0, height = 0, margin = 0; ///< the crop window's size; the margin of the map
     double level = 0.0;             ///< the level c the adaptive map was last solved for
+    uint64_t nonfinite = 0;         ///< contributions dropped as not finite (or too large)
 
     MvFilm() = default;
-    MvFilm(int width, int height, int margin, MvEstimator estimator, bool control_variate);
+    /// `adaptive`: keep the statistics of the adaptive maps.
+    MvFilm(int width, int height, int margin, MvEstimator estimator, bool control_variate, bool adaptive);
+    /// Bytes per pixel of a film (for memory estimates).
+    static size_t bytes_per_pixel(MvEstimator estimator, bool adaptive);
     size_t pixels() const { return native.size(); }
     /// n of crop-window pixel p this pass.
     uint16_t n(size_t p) const {
@@ -50,15 +49,14 @@ struct MvFilm {
     }
     /// Sets n of the crop window's pixels (row-major, as many as pixels()).
     void set_map(const std::vector<uint16_t> &crop);
-    /// Bytes per pixel of a film (for memory estimates).
-    static size_t bytes_per_pixel(MvEstimator estimator);
 
-    /// Pixels [begin, end) of the pass whose sums `pass` holds from index `offset` on (read and
-    /// cleared): the pass estimate v into `out` (balance with the control variate: v = W*L + E
-    /// + beta (1 - W), beta from the earlier passes; else W*L + E) and the accumulators above.
-    void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, PassSums out);
+    /// Pixels [begin, end) of a pass whose sums `pass` holds from index `offset` on (read and
+    /// cleared) into the accumulators; `passes` counts it once every pixel is folded.
+    void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end);
+    /// Pixel p's estimate (RGB) and the variance of that mean (RGB).
+    void develop(size_t p, float rgb[3], float variance[3]) const;
     /// Mean over passes of the sum of W of pixel p (1 in expectation for the balance estimator).
-    float weight_sum(size_t p, uint32_t passes) const;
+    float weight_sum(size_t p) const { return passes ? float(double(w_sum[p]) / passes) : 0.f; }
 };
 
 } // namespace mvpt

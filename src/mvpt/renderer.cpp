@@ -1,5 +1,6 @@
 #include "renderer.h"
 
+#include "core/memory.h"
 #include "core/sampler_batch.h"
 
 #include "core/warp.h"
@@ -50,28 +51,18 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
                                         std::to_string(cams.size()) + " views)");
     if (m_opts.spp < 0) throw std::invalid_argument("spp must be >= 0");
     if (!(m_opts.time_budget >= 0.0)) throw std::invalid_argument("time budget must be >= 0");
-    // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM killer) fail
-    // mid-render: per pixel, the sums (2 x 3 doubles) and count here plus the developed images.
-    double bytes = 0.0;
-    // Multi-view path tracing adds its accumulators (MvFilm) and the sums of a pass.
-    bool mv = m_opts.method == RenderMethod::MultiView ||
-              (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));
-    double per_pixel = 6 * sizeof(double) + sizeof(uint32_t) + 7 * sizeof(float);
-    if (mv) {
-        MvEstimator est = MvEstimator::Balance;
-        if (auto *mvi = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) est = mvi->config().estimator;
-        per_pixel += double(MvFilm::bytes_per_pixel(est) + MvPassFilm::bytes_per_pixel(est == MvEstimator::Weighted)) +
-                     2 * sizeof(float);
-    }
-    for (int v : m_views) {
-        const FilmDesc &f = cams[v]->film;
-        bytes += double(f.crop_width) * f.crop_height * per_pixel;
-    }
-    double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
-    if (physical > 0 && bytes > 0.8 * physical)
-        throw std::runtime_error("the films of the " + std::to_string(m_views.size()) + " views need " +
-                                 std::to_string(int64_t(bytes / (1 << 20))) + " MiB but the machine has " +
-                                 std::to_string(int64_t(physical / (1 << 20))) + " MiB of memory");
+    m_multiview = m_opts.method == RenderMethod::MultiView ||
+                  (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));
+    // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM
+    // killer) fail mid-render.
+    m_stats.estimated_bytes = estimate_peak_bytes();
+    const double resident = resident_bytes(), available = available_bytes();
+    if (available > 0.0 && m_stats.estimated_bytes - resident > available)
+        throw std::runtime_error("the films of the " + std::to_string(m_views.size()) + " views need about " +
+                                 std::to_string(int64_t((m_stats.estimated_bytes - resident) / (1 << 20))) +
+                                 " MiB but the machine has " + std::to_string(int64_t(available / (1 << 20))) +
+                                 " MiB of memory available");
+    if (m_multiview) return; // multi-view path tracing keeps its own accumulators (MvFilm)
     m_films.resize(m_views.size());
     for (size_t i = 0; i < m_views.size(); ++i) {
         const FilmDesc &f = cams[m_views[i]]->film;
@@ -82,9 +73,36 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     }
 }
 
+double Renderer::estimate_peak_bytes() const {
+    // Per view-pixel, the largest set of arrays alive at once, plus per thread its buffers, on
+    // top of what the process holds now (scene, libraries). Path tracing: the sums (2 x 3
+    // doubles) and count, then the developed image, variance and sample count beside them.
+    // Multi-view path tracing: the pass's fixed-point sums and the accumulators during the
+    // passes; the accumulators and the developed images (two more AOVs) after them.
+    double view_pixels = 0.0;
+    for (int v : m_views) view_pixels += double(m_scene.cameras()[v]->film.crop_width) * m_scene.cameras()[v]->film.crop_height;
+    const double developed = 6 * sizeof(float) + sizeof(uint32_t);
+    double per_pixel = 6 * sizeof(double) + sizeof(uint32_t) + developed, per_thread = 1 << 19;
+    if (m_multiview) {
+        const MvConfig cfg = multiview_config(m_scene.integrator());
+        const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > cfg.adaptive_warmup);
+        const double film = double(MvFilm::bytes_per_pixel(cfg.estimator, adaptive));
+        per_pixel = film + std::max(double(MvPassFilm::bytes_per_pixel(cfg.estimator == MvEstimator::Weighted)),
+                                    developed + 2 * sizeof(float));
+        per_thread = double(SplatCache::DefaultEntries * sizeof(SplatEntry)) + (1 << 20);
+    }
+    const int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
+    return resident_bytes() + view_pixels * per_pixel + threads * per_thread;
+}
+
+int Renderer::spp_target() const {
+    int spp = 0;
+    for (int v : m_views) spp = std::max(spp, m_opts.spp > 0 ? m_opts.spp : m_scene.cameras()[v]->sample_count);
+    return spp;
+}
+
 void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress) {
-    bool scene_mv = dynamic_cast<const MultiViewPathIntegrator *>(&m_scene.integrator()) != nullptr;
-    if (m_opts.method == RenderMethod::MultiView || (m_opts.method == RenderMethod::Scene && scene_mv)) {
+    if (m_multiview) {
         render_multiview(cancel, progress);
         return;
     }

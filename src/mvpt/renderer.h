@@ -60,6 +60,9 @@ struct RenderStats {
     double max_pass_seconds = 0.0;
     /// Multi-view path tracing: the longest stretch of a pass between two progress reports.
     double max_chunk_seconds = 0.0;
+    /// The process's peak memory the render was expected to reach (bytes): what it held when
+    /// the renderer was made plus the films, images and per-thread buffers.
+    double estimated_bytes = 0.0;
     int passes = 0;
     bool cancelled = false;
     uint64_t samples = 0;
@@ -89,6 +92,8 @@ public:
     void render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress = {});
 
     const std::vector<ViewResult> &results() const { return m_results; }
+    /// The results, moved out (the renderer keeps none).
+    std::vector<ViewResult> take_results() { return std::move(m_results); }
     const RenderStats &stats() const { return m_stats; }
     const std::vector<int> &views() const { return m_views; }
 
@@ -104,6 +109,10 @@ private:
         int x0, y0, x1, y1; // crop-window pixel range
     };
     std::vector<Tile> make_tiles() const;
+    /// The largest sample target of the rendered views (option or sensors).
+    int spp_target() const;
+    /// RenderStats::estimated_bytes.
+    double estimate_peak_bytes() const;
     /// Book-keeping after a pass: timings, sample count, and the progress callback with
     /// `fraction` (of the sample target) raised to the share of the time budget used.
     void finish_pass(int pass, uint64_t pass_samples, double pass_seconds, double elapsed, double fraction,
@@ -118,6 +127,7 @@ private:
 
     const Scene &m_scene;
     RenderOptions m_opts;
+    bool m_multiview = false; ///< multi-view path tracing (else independent path tracing)
     std::vector<int> m_views;
     std::vector<FilmBuffer> m_films;
     std::vector<MvFilm> m_mv_films;

@@ -70,11 +70,13 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     m_mv.prepare(); // the sample windows: crop windows grown by the filters' reach
     // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
     const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
+    // The adaptive maps' statistics are kept only if a map will be made (after the warm-up).
+    const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > std::max(2, cfg.adaptive_warmup));
     std::vector<SplatFootprint> footprints;
     for (size_t slot = 0; slot < m_views.size(); ++slot) {
         const FilmDesc &f = m_mv.views[slot].camera->film;
         footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter));
-        m_mv_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv);
+        m_mv_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
         m_mv.native_map.push_back(m_mv_films.back().map.data());
     }
     m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
@@ -92,8 +94,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
     // native sample per pixel until the adaptive maps start, then `adaptive_budget` per pixel.
-    int spp_target = 0;
-    for (int v : m_views) spp_target = std::max(spp_target, m_opts.spp > 0 ? m_opts.spp : cams[v]->sample_count);
+    const int spp_target = this->spp_target();
     const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
     double native_done = 0.0; // mean native samples per pixel so far
     uint64_t pixels_total = 0;
@@ -116,7 +117,8 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     std::stable_sort(tiles.begin(), tiles.end(),
                      [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
 
-    MvPassFilm pass_film(footprints, cfg.estimator == MvEstimator::Weighted);
+    auto pass_film_ptr = std::make_unique<MvPassFilm>(footprints, cfg.estimator == MvEstimator::Weighted);
+    MvPassFilm &pass_film = *pass_film_ptr;
     tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pass_film); });
     int pass = 0;
     auto render_tile = [&](MvThreadState &ts, const Tile &tile) {
@@ -216,7 +218,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         });
         native_done += double(pass_samples) / double(pixels_total);
         // Native-sample maps of the next pass (§8), frozen during it.
-        if (cfg.adaptive && pass + 1 >= std::max(2, cfg.adaptive_warmup)) {
+        if (adaptive && pass + 1 >= std::max(2, cfg.adaptive_warmup)) {
             double per_pixel = cfg.adaptive_budget;
             if (!unbounded) per_pixel = std::min(per_pixel, double(spp_target) - double(native_done));
             arena.execute([&] { update_native_maps(pass + 1, std::max(per_pixel, 1.0)); });
@@ -231,16 +233,20 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         m_stats.counters += ts.counters;
         for (size_t s = 0; s < m_views.size(); ++s) {
             per_view[s] += ts.stats[s];
-            *m_films[s].nonfinite += ts.dropped[s];
+            m_mv_films[s].nonfinite += ts.dropped[s];
             m_stats.counters.nonfinite += ts.dropped[s];
         }
     }
+    // Contributions received: those in the film plus those dropped as not finite (counted from
+    // the films rather than per splat).
+    for (size_t s = 0; s < m_views.size(); ++s) {
+        per_view[s].received += m_mv_films[s].nonfinite;
+        for (uint32_t r : m_mv_films[s].received) per_view[s].received += r;
+    }
+    state.clear(); // the threads' caches
+    pass_film_ptr.reset();
     develop_multiview();
     for (size_t s = 0; s < m_views.size(); ++s) {
-        // Contributions received: those in the film plus those dropped as not finite (counted
-        // from the films rather than per splat).
-        for (uint32_t r : m_mv_films[s].received) per_view[s].received += r;
-        for (MvThreadState &ts : state) per_view[s].received += ts.dropped[s];
         m_results[s].mv = per_view[s];
         m_stats.mv += per_view[s];
     }
@@ -254,11 +260,10 @@ void Renderer::fold_pass(MvPassFilm &pass_film) {
         for (size_t p = 0; p < m_mv_films[slot].pixels(); p += Block) blocks.emplace_back(slot, p);
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
         const auto [slot, begin] = blocks[b];
-        FilmBuffer &fb = m_films[slot];
         MvFilm &mf = m_mv_films[slot];
-        const size_t end = std::min(mf.pixels(), begin + Block);
-        mf.fold(pass_film, pass_film.offset(int(slot)), begin, end, {fb.sum.data(), fb.sum_sq.data(), fb.count.data()});
+        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block));
     });
+    for (MvFilm &mf : m_mv_films) ++mf.passes;
 }
 
 void Renderer::update_native_maps(int passes, double per_pixel) {
@@ -277,7 +282,7 @@ void Renderer::update_native_maps(int passes, double per_pixel) {
             in.width = f.crop_width;
             in.height = f.crop_height;
             in.passes = passes;
-            in.v_sum = m_films[slot].sum.data();
+            in.v_sum = mf.sum.data();
             in.e_sum = mf.e_sum.data();
             in.e_sq = mf.e_sq.data();
             in.s_sq = mf.s_sq.data();
@@ -294,28 +299,32 @@ void Renderer::update_native_maps(int passes, double per_pixel) {
 }
 
 void Renderer::develop_multiview() {
-    // The balance estimate and its variance are the mean and spread of the per-pass estimates
-    // in the FilmBuffers, as for path tracing; then the multi-view AOVs and, for the weighted
-    // estimator, its ratio of sums over all passes plus the plain mean of native-only radiance.
-    develop();
-    const bool weighted = m_mv.cfg.estimator == MvEstimator::Weighted;
+    // The estimate and its variance are the mean and spread of the per-pass estimates, as for
+    // path tracing (the weighted estimator: its ratio of sums over all passes plus the plain mean
+    // of native-only radiance); then the multi-view AOVs. Each view's accumulators are freed as
+    // soon as its images are made.
+    m_results.clear();
     for (size_t slot = 0; slot < m_views.size(); ++slot) {
-        const FilmBuffer &fb = m_films[slot];
-        const MvFilm &mf = m_mv_films[slot];
-        ViewResult &r = m_results[slot];
+        const Camera &cam = *m_mv.views[slot].camera;
+        MvFilm &mf = m_mv_films[slot];
+        ViewResult r;
+        r.id = cam.id;
+        r.width = mf.width;
+        r.height = mf.height;
         const size_t n = mf.pixels();
-        r.sample_count = mf.native;
-        r.contributions.assign(mf.received.begin(), mf.received.end());
+        r.rgb.resize(3 * n);
+        r.variance.resize(3 * n);
         r.weight_sum.resize(n);
-        r.samples = 0;
         for (size_t p = 0; p < n; ++p) {
-            const uint32_t k = fb.count[p]; // passes
+            mf.develop(p, &r.rgb[3 * p], &r.variance[3 * p]);
             r.samples += mf.native[p];
-            r.weight_sum[p] = mf.weight_sum(p, k);
-            if (weighted && k > 0)
-                for (int c = 0; c < 3; ++c)
-                    r.rgb[3 * p + c] = float(mf.e[3 * p + c] / k + (mf.w[p] > 0.0 ? mf.lw[3 * p + c] / mf.w[p] : 0.0));
+            r.weight_sum[p] = mf.weight_sum(p);
         }
+        r.contributions.assign(mf.received.begin(), mf.received.end());
+        r.sample_count = std::move(mf.native);
+        r.nonfinite = mf.nonfinite;
+        mf = MvFilm{};
+        m_results.push_back(std::move(r));
     }
 }
 

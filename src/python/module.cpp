@@ -105,22 +105,28 @@ public:
         return d;
     }
 
+    /// The images as NumPy arrays that take over the renderer's buffers (no copies: a render of
+    /// many large views needs its memory once); callable once.
     nb::list results() {
         check_finished();
+        if (m_taken) throw std::runtime_error("the results of this render job were already taken");
+        m_taken = true;
         nb::list out;
-        for (const ViewResult &r : m_renderer.results()) {
+        std::vector<ViewResult> results = m_renderer.take_results();
+        for (ViewResult &r : results) {
             nb::dict d;
             d["id"] = r.id;
             size_t h = r.height, w = r.width;
-            d["image"] = make_array(r.rgb, {h, w, 3});
-            d["variance"] = make_array(r.variance, {h, w, 3});
+            d["image"] = make_array(std::move(r.rgb), {h, w, 3});
+            d["variance"] = make_array(std::move(r.variance), {h, w, 3});
             std::vector<float> count(r.sample_count.begin(), r.sample_count.end());
+            r.sample_count = {};
             d["sample_count"] = make_array(std::move(count), {h, w});
             d["samples"] = r.samples;
             d["nonfinite"] = r.nonfinite;
             if (!r.contributions.empty()) {
-                d["contributions"] = make_array(std::vector<float>(r.contributions), {h, w});
-                d["weight_sum"] = make_array(std::vector<float>(r.weight_sum), {h, w});
+                d["contributions"] = make_array(std::move(r.contributions), {h, w});
+                d["weight_sum"] = make_array(std::move(r.weight_sum), {h, w});
                 d["multiview"] = mv_stats_dict(r.mv);
             }
             d["width"] = r.width;
@@ -137,6 +143,7 @@ public:
         d["seconds"] = s.seconds;
         d["max_pass_seconds"] = s.max_pass_seconds;
         d["max_chunk_seconds"] = s.max_chunk_seconds;
+        d["estimated_bytes"] = s.estimated_bytes;
         d["passes"] = s.passes;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;
@@ -171,6 +178,7 @@ private:
     std::shared_ptr<Scene> m_scene;
     Renderer m_renderer;
     std::atomic<bool> m_cancel{false};
+    bool m_taken = false;
     std::thread m_thread;
     std::mutex m_mutex;
     std::condition_variable m_cv;

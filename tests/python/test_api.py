@@ -226,8 +226,10 @@ def test_scene_info():
 def test_film_too_large_for_memory(tmp_path, capsys):
     """A 65536^2 film would need hundreds of GiB: a clear error before anything is allocated."""
     s = mvpt.load_string(scene(sensor(res=65536)))
-    with pytest.raises(RuntimeError, match=r"the films of the 1 views need \d+ MiB but the machine has \d+ MiB"):
-        mvpt.render(s, spp=1)
+    for method in ("pt", "mvpt"):
+        with pytest.raises(RuntimeError, match=r"the films of the 1 views need about \d+ MiB but the machine has "
+                                               r"\d+ MiB of memory available"):
+            mvpt.render(s, spp=1, method=method)
     from mvpt import cli
     path = tmp_path / "huge.xml"
     path.write_text(scene(sensor(res=65536)))

@@ -78,4 +78,10 @@ private:
     MvConfig m_cfg;
 };
 
+/// The multi-view settings that `integrator` asks for: an mvpath's own, else the defaults.
+inline MvConfig multiview_config(const Integrator &integrator) {
+    auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&integrator);
+    return mv ? mv->config() : MvConfig{};
+}
+
 } // namespace mvpt
