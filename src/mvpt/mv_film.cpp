@@ -14,6 +14,7 @@ MvFilm::MvFilm(int width_, int height_, int margin_, MvEstimator est, bool cv, b
     if (adaptive) e_sum.assign(pixels, 0.f), e_sq.assign(pixels, 0.f), s_sq.assign(pixels, 0.f);
     native.assign(pixels, 0), received.assign(pixels, 0);
     map.assign(size_t(width + 2 * margin) * size_t(height + 2 * margin), 1);
+    map_total = pixels;
 }
 
 size_t MvFilm::bytes_per_pixel(MvEstimator estimator, bool adaptive) {
@@ -85,6 +86,8 @@ void MvFilm::set_map(const std::vector<uint16_t> &crop) {
     const size_t w = size_t(width + 2 * margin);
     for (size_t y = 0; y < size_t(height); ++y)
         std::copy_n(crop.begin() + long(y * size_t(width)), width, map.begin() + long((y + size_t(margin)) * w + size_t(margin)));
+    map_total = 0;
+    for (uint16_t v : crop) map_total += v;
 }
 
 } // namespace mvpt

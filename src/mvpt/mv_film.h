@@ -49,6 +49,8 @@ struct MvFilm {
     }
     /// Sets n of the crop window's pixels (row-major, as many as pixels()).
     void set_map(const std::vector<uint16_t> &crop);
+    /// The sum of n over the crop window this pass (its native samples).
+    uint64_t map_total = 0;
 
     /// Pixels [begin, end) of a pass whose sums `pass` holds from index `offset` on (read and
     /// cleared) into the accumulators; `passes` counts it once every pixel is folded.

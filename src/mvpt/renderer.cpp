@@ -76,19 +76,22 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
 double Renderer::estimate_peak_bytes() const {
     // Per view-pixel, the largest set of arrays alive at once, plus per thread its buffers, on
     // top of what the process holds now (scene, libraries). Path tracing: the sums (2 x 3
-    // doubles) and count, then the developed image, variance and sample count beside them.
-    // Multi-view path tracing: the pass's fixed-point sums and the accumulators during the
-    // passes; the accumulators and the developed images (two more AOVs) after them.
+    // doubles) and count, or the developed image, variance and sample count. Multi-view path
+    // tracing: the pass's fixed-point sums and the accumulators during the passes, or the
+    // developed images with two more AOVs.
     double view_pixels = 0.0;
     for (int v : m_views) view_pixels += double(m_scene.cameras()[v]->film.crop_width) * m_scene.cameras()[v]->film.crop_height;
-    const double developed = 6 * sizeof(float) + sizeof(uint32_t);
-    double per_pixel = 6 * sizeof(double) + sizeof(uint32_t) + developed, per_thread = 1 << 19;
+    // (Views are developed one by one, each freeing its sums, so the images never coexist with
+    // all the sums; then Python takes the images over without copies, converting the sample
+    // counts to floats.)
+    const double developed = 6 * sizeof(float) + sizeof(uint32_t) + sizeof(float);
+    double per_pixel = std::max(double(6 * sizeof(double) + sizeof(uint32_t)), developed), per_thread = 1 << 19;
     if (m_multiview) {
         const MvConfig cfg = multiview_config(m_scene.integrator());
         const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > cfg.adaptive_warmup);
         const double film = double(MvFilm::bytes_per_pixel(cfg.estimator, adaptive));
-        per_pixel = film + std::max(double(MvPassFilm::bytes_per_pixel(cfg.estimator == MvEstimator::Weighted)),
-                                    developed + 2 * sizeof(float));
+        per_pixel = std::max(film + double(MvPassFilm::bytes_per_pixel(cfg.estimator == MvEstimator::Weighted)),
+                             developed + 2 * sizeof(float));
         per_thread = double(SplatCache::DefaultEntries * sizeof(SplatEntry)) + (1 << 20);
     }
     const int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
@@ -349,11 +352,12 @@ void Renderer::finish_pass(int pass, uint64_t pass_samples, double pass_seconds,
 }
 
 void Renderer::develop() {
+    // View by view, each view's sums freed once its images are made.
     const auto &cams = m_scene.cameras();
     m_results.clear();
     for (size_t i = 0; i < m_views.size(); ++i) {
         const Camera &cam = *cams[m_views[i]];
-        const FilmBuffer &fb = m_films[i];
+        FilmBuffer &fb = m_films[i];
         ViewResult r;
         r.id = cam.id;
         r.width = cam.film.crop_width;
@@ -373,6 +377,7 @@ void Renderer::develop() {
                 r.variance[3 * p + c] = float(std::min(var, double(FLT_MAX))); // finite even for huge samples
             }
         }
+        fb.sum = std::vector<double>(), fb.sum_sq = std::vector<double>(), fb.count = std::vector<uint32_t>();
         m_results.push_back(std::move(r));
     }
 }

@@ -161,8 +161,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         if (pass > 0 && budget > 0.0 && seconds() + last_pass > budget) break;
         const double t_pass = seconds();
         uint64_t pass_samples = 0; // of the crop windows
-        for (const MvFilm &mf : m_mv_films)
-            for (size_t p = 0; p < mf.pixels(); ++p) pass_samples += mf.n(p);
+        for (const MvFilm &mf : m_mv_films) pass_samples += mf.map_total;
 
         // ---------------- Native samples, tile by tile, in chunks ----------------
         std::atomic<bool> abandoned{false};
@@ -245,7 +244,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     }
     state.clear(); // the threads' caches
     pass_film_ptr.reset();
-    develop_multiview();
+    arena.execute([&] { develop_multiview(); });
     for (size_t s = 0; s < m_views.size(); ++s) {
         m_results[s].mv = per_view[s];
         m_stats.mv += per_view[s];
@@ -303,8 +302,8 @@ void Renderer::develop_multiview() {
     // path tracing (the weighted estimator: its ratio of sums over all passes plus the plain mean
     // of native-only radiance); then the multi-view AOVs. Each view's accumulators are freed as
     // soon as its images are made.
-    m_results.clear();
-    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+    m_results.assign(m_views.size(), ViewResult{});
+    tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) {
         const Camera &cam = *m_mv.views[slot].camera;
         MvFilm &mf = m_mv_films[slot];
         ViewResult r;
@@ -324,8 +323,8 @@ void Renderer::develop_multiview() {
         r.sample_count = std::move(mf.native);
         r.nonfinite = mf.nonfinite;
         mf = MvFilm{};
-        m_results.push_back(std::move(r));
-    }
+        m_results[slot] = std::move(r);
+    });
 }
 
 } // namespace mvpt

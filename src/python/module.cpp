@@ -120,7 +120,7 @@ public:
             d["image"] = make_array(std::move(r.rgb), {h, w, 3});
             d["variance"] = make_array(std::move(r.variance), {h, w, 3});
             std::vector<float> count(r.sample_count.begin(), r.sample_count.end());
-            r.sample_count = {};
+            r.sample_count = std::vector<uint32_t>();
             d["sample_count"] = make_array(std::move(count), {h, w});
             d["samples"] = r.samples;
             d["nonfinite"] = r.nonfinite;
