@@ -7,7 +7,9 @@
 Cases (each rendered by `pt` and `mvpt` at every thread count, one render per process):
 - `cbox`: the 9-view glossy Cornell box (scenes/cornell-glossy-9.xml), 256², 16 spp;
 - `lf9x9`: a 9x9 light field of the still life (scenes/stereo.xml with --rig grid:9x9), 128², 4 spp;
-- `mem45`: 45 views of the still life in a row (linear rig), 256², 1 spp: the memory case.
+- `mem45`: 45 views of the still life in a row (linear rig), 256², 1 spp: the memory case;
+- `display100` (only when asked for with --cases): 100 views of 1920x1080 in a row, 1 spp, a
+  display's light field at full resolution (mvpt: about 20 GB and a quarter of an hour on 2 cores).
 
 Per case, method and thread count the script prints the median over --repeat runs (thread
 counts interleaved, so that load changes of a shared machine hit them alike) of: native
@@ -34,8 +36,11 @@ CASES = {
     "cbox": (ROOT / "scenes" / "cornell-glossy-9.xml", "", {"res": "256"}, 16),
     "lf9x9": (ROOT / "scenes" / "stereo.xml", "grid:9x9,spacing=0.05", {"res": "128"}, 4),
     "mem45": (ROOT / "scenes" / "stereo.xml", "linear:n=45,baseline=0.5", {"res": "256"}, 1),
+    "display100": (ROOT / "scenes" / "stereo.xml", "linear:n=100,baseline=0.5", {"width": "1920", "height": "1080"}, 1),
 }
-QUICK_RES = {"cbox": "64", "lf9x9": "48", "mem45": "96"}
+DEFAULT_CASES = ["cbox", "lf9x9", "mem45"]
+QUICK = {"cbox": {"res": "64"}, "lf9x9": {"res": "48"}, "mem45": {"res": "96"},
+         "display100": {"width": "192", "height": "108"}}
 
 CHILD = r"""
 import json, resource, sys, time
@@ -56,7 +61,7 @@ print(json.dumps({"seconds": r.stats["seconds"], "samples": r.stats["samples"], 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--threads", default="1,2", help="comma-separated thread counts (default 1,2)")
-    ap.add_argument("--cases", default=",".join(CASES), help=f"comma-separated cases of {', '.join(CASES)}")
+    ap.add_argument("--cases", default=",".join(DEFAULT_CASES), help=f"comma-separated cases of {', '.join(CASES)}")
     ap.add_argument("--methods", default="pt,mvpt")
     ap.add_argument("--repeat", type=int, default=3, help="runs per configuration (median)")
     ap.add_argument("--quick", action="store_true", help="small films, one repeat")
@@ -93,7 +98,7 @@ def measure(case: str, method: str, threads: int, quick: bool) -> dict:
     native sample (the child's rusage around the render), the child's peak RSS."""
     scene, rig, defines, spp = CASES[case]
     if quick:
-        defines = dict(defines, res=QUICK_RES[case])
+        defines = dict(defines, **QUICK[case])
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
     out = subprocess.run([sys.executable, "-c", CHILD, str(scene), rig, json.dumps(defines), str(spp), method,
                           str(threads)], capture_output=True, text=True, env=env)

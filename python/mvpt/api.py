@@ -93,12 +93,15 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     the mean number of native samples per pixel.
 
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
-    seconds (0: none; the render stops within about one pass of it). The render runs
-    natively with the GIL released; `progress(dict)` is called every `poll` seconds and
-    once at the end, with the pass count, fraction done, elapsed seconds and samples so far.
-    Ctrl-C (or KeyboardInterrupt raised by `progress`) cancels at the next pass boundary
-    and the images of the finished passes are returned with stats["cancelled"] set; any
-    other exception from `progress` cancels the render and is re-raised."""
+    seconds (0: none; passes stop when the next would end past it, and after the first pass
+    it is not overrun by more than about half a second). The render runs natively with the
+    GIL released; `progress(dict)` is called every `poll` seconds and once at the end, with
+    the passes finished, fraction done, elapsed seconds and samples so far. Ctrl-C (or
+    KeyboardInterrupt raised by `progress`) cancels within about a quarter of a second
+    (path tracing: at the end of the current group of passes; multi-view path tracing:
+    between tiles, dropping the unfinished pass) and the images of the finished passes are
+    returned with stats["cancelled"] set (stats["passes"] == 0: none finished); any other
+    exception from `progress` cancels the render and is re-raised."""
     if int(spp) < 0:
         raise ValueError(f"spp must be >= 0, got {spp}")
     if not float(time) >= 0.0:

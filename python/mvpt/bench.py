@@ -67,9 +67,12 @@ class MethodRun:
     method: str
     run: Run
     errors: metrics.Errors
-    curve: list = field(default_factory=list)  # [{"budget", "seconds", "samples", "relmse", "views": {id: relmse}}]
+    # [{"budget", "seconds", "samples", "relmse", "relmse_corrected", "views": {id: relmse}}]
+    curve: list = field(default_factory=list)
     directory: str = ""
     command: list = field(default_factory=list)
+    #: relMSE with the reference's own noise subtracted, per view and "overall" (empty: unknown)
+    corrected: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -81,6 +84,10 @@ class BenchResult:
     reference_command: list
     methods: dict = field(default_factory=dict)  # method name -> MethodRun
     environment: dict = field(default_factory=dict)
+    #: the relMSE the reference's own noise adds, per view and "overall" (metrics.reference_noise)
+    reference_noise: dict = field(default_factory=dict)
+    #: what a reader must know before trusting the numbers (a reference too noisy to judge, ...)
+    warnings: list = field(default_factory=list)
 
     def as_json(self) -> dict:
         c = self.config
@@ -90,10 +97,13 @@ class BenchResult:
                        "reference": str(c.reference) if c.reference else None, "reference_spp": c.reference_spp,
                        "defines": c.defines, "seed": c.seed, "threads": c.threads, "views": c.views,
                        "curve": list(c.curve)},
-            "reference": {"source": self.reference.source, "command": self.reference_command},
+            "reference": {"source": self.reference.source, "command": self.reference_command,
+                          "noise_relmse": self.reference_noise},
             "environment": self.environment,
+            "warnings": self.warnings,
             "methods": {m: {"directory": r.directory, "command": r.command, "errors": r.errors.as_dict(),
-                            "curve": r.curve, "stats": r.run.stats} for m, r in self.methods.items()},
+                            "relmse_corrected": r.corrected, "curve": r.curve, "stats": r.run.stats}
+                        for m, r in self.methods.items()},
         }
 
 
@@ -134,7 +144,7 @@ def _render_command(cfg: BenchConfig, out: Path, method: str | None, spp: int = 
 
 def _reference_settings(cfg: BenchConfig) -> dict:
     return {"scene": str(Path(cfg.scene).resolve()), "defines": {str(k): str(v) for k, v in cfg.defines.items()},
-            "reference_spp": int(cfg.reference_spp), "seed": cfg.seed, "views": cfg.views}
+            "reference_spp": int(cfg.reference_spp), "seed": cfg.seed, "views": cfg.views, "variance": True}
 
 
 def _reuse_reference(ref_dir: Path, stem: str, settings: dict) -> Run | None:
@@ -166,8 +176,8 @@ def reference_run(cfg: BenchConfig, scene, stem: str, log=print) -> tuple:
     result = render_method(scene, "pt", spp=cfg.reference_spp, seed=cfg.seed, threads=cfg.threads, views=cfg.views)
     if result.stats.get("cancelled"):
         raise KeyboardInterrupt
-    write_outputs(result, ref_dir, stem, settings={"scene": str(cfg.scene), "defines": cfg.defines,
-                                                   "bench_reference": settings})
+    write_outputs(result, ref_dir, stem, aovs=True,  # the variance: the reference's own noise
+                  settings={"scene": str(cfg.scene), "defines": cfg.defines, "bench_reference": settings})
     return load_run(ref_dir / f"{stem}.json"), command
 
 
@@ -198,6 +208,7 @@ def run_bench(cfg: BenchConfig, log=print) -> BenchResult:
     out.mkdir(parents=True, exist_ok=True)
     reference, ref_command = reference_run(cfg, scene, stem, log)
     result = BenchResult(config=cfg, reference=reference, reference_command=ref_command, environment=environment())
+    noise = {}
     for method in cfg.methods:
         points, final = [], None
         for f in curve:
@@ -208,18 +219,57 @@ def run_bench(cfg: BenchConfig, log=print) -> BenchResult:
                 raise KeyboardInterrupt
             test, ref = match_views(r.images, reference.images)
             errs = metrics.errors(test, ref, with_flip=False)
+            if not noise:
+                noise = metrics.reference_noise(ref, {k: reference.variance.get(rk) for k, rk in
+                                                      zip(test, _reference_ids(test, reference.images))
+                                                      if rk in reference.variance})
             points.append({"budget": budget, "seconds": r.stats["wall_time"], "samples": r.stats["samples"],
-                           "relmse": errs.overall.relmse, "views": {k: v.relmse for k, v in errs.views.items()}})
+                           "relmse": errs.overall.relmse,
+                           "relmse_corrected": errs.overall.relmse - noise["overall"] if noise else None,
+                           "views": {k: v.relmse for k, v in errs.views.items()}})
             final = r
         mdir = out / method
         write_outputs(final, mdir, stem, settings={"scene": str(cfg.scene), "defines": cfg.defines, "method": method})
         run = load_run(mdir / f"{stem}.json")
         run.name = method
         test, ref = match_views(run.images, reference.images)
-        result.methods[method] = MethodRun(method=method, run=run, errors=metrics.errors(test, ref), curve=points,
-                                           directory=str(mdir),
-                                           command=_render_command(cfg, mdir, method, time=cfg.time))
+        errs = metrics.errors(test, ref)
+        corrected = {k: errs.views[k].relmse - noise[k] for k in errs.views} if noise else {}
+        if noise:
+            corrected["overall"] = errs.overall.relmse - noise["overall"]
+        result.methods[method] = MethodRun(method=method, run=run, errors=errs, curve=points, directory=str(mdir),
+                                           command=_render_command(cfg, mdir, method, time=cfg.time),
+                                           corrected=corrected)
+    result.reference_noise = noise
+    result.warnings = reference_warnings(result)
     return result
+
+
+def _reference_ids(test: dict, ref: dict) -> list:
+    """The reference's view id that each of `test`'s views is compared with (match_views' rule)."""
+    if len(test) == 1 and len(ref) == 1:
+        return [next(iter(ref))]
+    return list(test)
+
+
+#: The reference's noise may be at most this share of a method's own error for a fair judgement.
+NOISE_SHARE_LIMIT = 0.1
+
+
+def reference_warnings(result: BenchResult) -> list:
+    """Warnings about the reference: noise unknown, or too large to judge the methods by."""
+    if not result.reference_noise:
+        return ["the reference has no variance channels (render it with --aovs): its own noise cannot be "
+                "measured or subtracted, and every relMSE here includes it"]
+    out = []
+    n = result.reference_noise["overall"]
+    for m, r in result.methods.items():
+        own = r.corrected.get("overall", float("nan"))
+        if not own > 0 or n > NOISE_SHARE_LIMIT * own:
+            share = f"{n / own:.0%} of" if own > 0 else "more than"
+            out.append(f"the reference's own noise (relMSE {n:.3g}) is {share} {m}'s error: too noisy to judge "
+                       f"the methods; render it with more samples (--reference-spp)")
+    return out
 
 
 def shell(cmd: list) -> str:

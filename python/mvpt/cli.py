@@ -1,8 +1,9 @@
 """The `mvpt` command line: `mvpt render scene.xml -D spp=64 -o out/`, `mvpt demo`.
 
 Exit codes: 0 done, 1 bad scene or unwritable output, 2 bad command line, 130 interrupted
-by Ctrl-C (143 by SIGTERM); an interrupted render stops after the current pass and still
-writes the passes finished so far, with "cancelled" in the JSON."""
+by Ctrl-C (143 by SIGTERM); an interrupted render stops within about a quarter of a second
+and writes the passes finished so far, with "cancelled" in the JSON (nothing when no pass
+had finished)."""
 from __future__ import annotations
 
 import argparse
@@ -26,7 +27,7 @@ _stopped_by = signal.SIGINT
 
 
 def _on_sigterm(signum, frame):
-    """SIGTERM (batch schedulers, `kill`) stops like Ctrl-C: after the current pass, with outputs."""
+    """SIGTERM (batch schedulers, `kill`) stops like Ctrl-C: with the outputs of the passes finished."""
     global _stopped_by
     _stopped_by = signal.SIGTERM
     raise KeyboardInterrupt
@@ -207,7 +208,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
         n = len(views) if views else len(scene.views)
         budget = [f"{args.spp} spp" if args.spp else "each sensor's spp"] + ([f"{args.time:g} s"] if args.time else [])
         print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
-              f"after the current pass and writes the images)", flush=True)
+              f"and writes the passes finished so far)", flush=True)
     bar = ProgressBar(enabled=False if args.quiet else None)
     try:
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
@@ -218,6 +219,9 @@ def _render(scene_path: Path, args, stem: str) -> int:
         return EXIT_ERROR
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
+    if cancelled and result.stats["passes"] == 0:
+        print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
+        return 128 + int(_stopped_by)
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
     if args.rig:
         settings["rig"] = args.rig
@@ -242,7 +246,8 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="override a <default> of the scene (repeatable)")
     p.add_argument("--spp", type=_count, default=0, help="samples per pixel (default: each sensor's sample_count)")
     p.add_argument("--time", type=_seconds, default=0.0,
-                   help="wall-clock budget in seconds (the render ends within about one pass of it)")
+                   help="wall-clock budget in seconds (passes stop when the next would end past it; "
+                        "after the first pass the budget is never overrun by more than about half a second)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
     p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
     p.add_argument("--method", choices=("pt", "mvpt"), default="scene",

@@ -128,6 +128,25 @@ def pool(views: dict) -> ViewErrors:
                       pixels=int(n.sum()))
 
 
+def reference_noise(ref: dict, variance: dict, eps: float = RELMSE_EPS) -> dict:
+    """The relMSE that a reference's own noise adds to any estimate measured against it, per view
+    and pooled ("overall"): mean of Var(r) / (r^2 + eps) over pixels and channels, with Var(r) the
+    variance of the reference's pixel means. An estimate x independent of the reference has
+    E[(x - r)^2] = E[(x - I)^2] + Var(r), so subtracting it leaves the estimate's own error.
+    Empty when a view's variance is unknown."""
+    if not ref or any(k not in variance for k in ref):
+        return {}
+    out, weights = {}, {}
+    for k, r in ref.items():
+        r = as_rgb(r).astype(np.float64)
+        v = as_rgb(variance[k]).astype(np.float64)
+        out[k] = float(np.mean(v / (r * r + eps)))
+        weights[k] = r.shape[0] * r.shape[1]
+    total = sum(weights.values())
+    out["overall"] = sum(out[k] * weights[k] for k in ref) / total
+    return out
+
+
 def errors(test: dict, ref: dict, with_flip: bool = True) -> Errors:
     """Metrics of every view of `test` ({view id: image}) against the same view of `ref`.
 

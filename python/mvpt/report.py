@@ -28,6 +28,7 @@ h1 { font-size: 1.5em; } h2 { border-bottom: 1px solid #ccc; margin-top: 2em; }
 table { border-collapse: collapse; margin: .5em 0; }
 td, th { border: 1px solid #ddd; padding: 3px 8px; text-align: right; vertical-align: top; }
 th { background: #f4f4f4; } td.l, th.l { text-align: left; }
+p.warning { background: #fff3cd; border: 1px solid #e0c060; padding: 6px 10px; }
 figure { margin: 0 8px 8px 0; text-align: center; }
 div.grid { display: grid; }
 figcaption { font-size: 12px; color: #444; }
@@ -115,6 +116,18 @@ def _num(x, fmt="{:.4g}") -> str:
     return "n/a" if x is None or not np.isfinite(x) else fmt.format(x)
 
 
+def _subtracts_noise(result: BenchResult) -> bool:
+    """Whether the plots show errors with the reference's noise subtracted: when it is known
+    and leaves some error positive (else the raw errors, and the warnings say why)."""
+    return bool(result.reference_noise) and any(
+        v > 0 for r in result.methods.values() for v in r.corrected.values())
+
+
+def _positive(x: float) -> float:
+    """x, or NaN (not plotted on a log scale) where the reference's noise exceeds the error."""
+    return x if x > 0 else float("nan")
+
+
 def _relmse_plot(result: BenchResult) -> str:
     plt = _pyplot()
     methods = list(result.methods)
@@ -122,13 +135,16 @@ def _relmse_plot(result: BenchResult) -> str:
     fig, ax = plt.subplots(figsize=(max(5.0, 0.6 * len(views) * max(1, len(methods)) + 2), 3.2))
     width = 0.8 / max(1, len(methods))
     x = np.arange(len(views))
+    corrected = _subtracts_noise(result)
     for i, m in enumerate(methods):
-        vals = [result.methods[m].errors.views[v].relmse for v in views]
+        r = result.methods[m]
+        vals = [_positive(r.corrected[v]) if corrected else r.errors.views[v].relmse for v in views]
         ax.bar(x + (i - (len(methods) - 1) / 2) * width, vals, width, label=m)
     ax.set_xticks(x, views, rotation=45 if len(views) > 6 else 0, ha="right" if len(views) > 6 else "center")
     ax.set_yscale("log")
-    ax.set_ylabel("relMSE")
-    ax.set_title(f"relMSE per view at {result.config.time:g} s")
+    ax.set_ylabel("relMSE" + (" - reference noise" if corrected else ""))
+    ax.set_title(f"relMSE per view at {result.config.time:g} s" +
+                 (" (the reference's noise subtracted)" if corrected else ""))
     ax.legend()
     ax.grid(axis="y", which="both", alpha=0.3)
     return _figure_uri(fig)
@@ -137,12 +153,13 @@ def _relmse_plot(result: BenchResult) -> str:
 def _convergence_plot(result: BenchResult) -> str:
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    corrected = _subtracts_noise(result)
     for m, r in result.methods.items():
         t = [p["seconds"] for p in r.curve]
-        e = [p["relmse"] for p in r.curve]
+        e = [_positive(p["relmse_corrected"]) if corrected else p["relmse"] for p in r.curve]
         ax.loglog(t, e, "o-", label=m)
     ax.set_xlabel("render time (s)")
-    ax.set_ylabel("relMSE (all views)")
+    ax.set_ylabel("relMSE (all views)" + (" - reference noise" if corrected else ""))
     ax.set_title("Convergence")
     ax.grid(which="both", alpha=0.3)
     ax.legend()
@@ -159,9 +176,18 @@ def _summary_table(result: BenchResult) -> str:
         rows.append(f"<tr><td class=l>{_e(m)}</td><td>{_num(s.get('wall_time'), '{:.2f}')}</td>"
                     f"<td>{_e(s.get('passes', ''))}</td><td>{_num(spp, '{:.1f}')}</td>"
                     f"<td>{_num(s.get('samples_per_second'), '{:.3g}')}</td><td>{_num(o.rmse)}</td>"
-                    f"<td>{_num(o.relmse)}</td><td>{_num(o.flip)}</td></tr>")
+                    f"<td>{_num(o.relmse)}</td><td>{_num(r.corrected.get('overall'))}</td>"
+                    f"<td>{_num(o.flip)}</td></tr>")
+    noise = result.reference_noise.get("overall")
+    rows.append(f"<tr><td class=l>reference's own noise</td><td></td><td></td><td></td><td></td><td></td>"
+                f"<td>{_num(noise)}</td><td></td><td></td></tr>")
     return ("<table><tr><th class=l>method</th><th>time (s)</th><th>passes</th><th>spp (mean)</th>"
-            "<th>samples/s</th><th>RMSE</th><th>relMSE</th><th>FLIP</th></tr>" + "".join(rows) + "</table>")
+            "<th>samples/s</th><th>RMSE</th><th>relMSE</th><th>relMSE &minus; reference noise</th><th>FLIP</th></tr>"
+            + "".join(rows) + "</table>")
+
+
+def _warnings(result: BenchResult) -> str:
+    return "".join(f"<p class=warning><b>Warning:</b> {_e(w)}</p>" for w in result.warnings)
 
 
 def _outline(rgb8: np.ndarray, y: int, x: int, h: int, w: int) -> np.ndarray:
@@ -246,7 +272,12 @@ def render_html(result: BenchResult) -> str:
 mvpt {_e(env.get('mvpt'))}, Python {_e(env.get('python'))}, {_e(env.get('platform'))}, {_e(env.get('cpus'))} CPUs,
 {_e(env.get('date'))}.</p>
 <p>RMSE = sqrt(mean (x-r)&sup2;); relMSE = mean (x-r)&sup2;/(r&sup2;+{metrics.RELMSE_EPS:g}) over pixels and channels;
-FLIP = mean HDR-FLIP error (flip-evaluator). "All views" pools every pixel.</p>
+FLIP = mean HDR-FLIP error (flip-evaluator). "All views" pools every pixel. The reference has noise of its own,
+which adds mean Var(r)/(r&sup2;+{metrics.RELMSE_EPS:g}) to every relMSE (Var(r): the variance of its pixel means);
+{"it is subtracted in the last relMSE column" + (" and in the plots" if _subtracts_noise(result) else
+ " (not in the plots: it exceeds every error)") if result.reference_noise else
+ "its variance is unknown, so it is not subtracted"}.</p>
+{_warnings(result)}
 <h2>Summary</h2>
 {_summary_table(result)}
 <h2>relMSE per view</h2>

@@ -111,10 +111,16 @@ def _bench(args) -> int:
         _error(str(e))
         return EXIT_ERROR
     if not args.quiet:
+        noise = result.reference_noise.get("overall")
+        if noise is not None:
+            print(f"reference's own noise: relMSE {noise:.4g} (subtracted below)")
         for m, r in result.methods.items():
             o = r.errors.overall
-            print(f"{m}: relMSE {o.relmse:.4g}, FLIP {o.flip:.4g}, RMSE {o.rmse:.4g}")
+            corrected = f" ({r.corrected['overall']:.4g} without the reference's noise)" if r.corrected else ""
+            print(f"{m}: relMSE {o.relmse:.4g}{corrected}, FLIP {o.flip:.4g}, RMSE {o.rmse:.4g}")
         print(f"wrote {path}")
+    for w in result.warnings:
+        print(f"mvpt: warning: {w}", file=sys.stderr)
     return EXIT_OK
 
 

@@ -27,6 +27,8 @@ class Run:
     images: dict = field(default_factory=dict)
     stats: dict | None = None
     source: str = ""
+    #: per view, the variance of each pixel's mean (RGB) where the run saved it (`--aovs`)
+    variance: dict = field(default_factory=dict)
 
 
 def _rgb(channels: dict, what: str) -> np.ndarray:
@@ -49,7 +51,10 @@ def _from_json(path: Path, name: str) -> Run:
         exr = per_view[vid][0]
         if not exr.is_file():
             raise ValueError(f"'{path}' names view '{vid}' but its image '{exr}' is missing")
-        run.images[vid] = _core.read_image(str(exr))
+        channels = dict(_core.read_multiview_exr(str(exr))[0][1])
+        run.images[vid] = _rgb(channels, f"'{exr}'")
+        if all(f"variance.{c}" in channels for c in "RGB"):
+            run.variance[vid] = np.stack([channels[f"variance.{c}"] for c in "RGB"], axis=-1).astype(np.float32)
     return run
 
 

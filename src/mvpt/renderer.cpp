@@ -92,7 +92,8 @@ double Renderer::estimate_peak_bytes() const {
         const double film = double(MvFilm::bytes_per_pixel(cfg.estimator, adaptive));
         per_pixel = std::max(film + double(MvPassFilm::bytes_per_pixel(cfg.estimator == MvEstimator::Weighted)),
                              developed + 2 * sizeof(float));
-        per_thread = double(SplatCache::DefaultEntries * sizeof(SplatEntry)) + (1 << 20);
+        // The splat cache, and the queues of a tile's native samples (up to 16 per pixel).
+        per_thread = double(SplatCache::DefaultEntries * sizeof(SplatEntry)) + (6 << 20);
     }
     const int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     return resident_bytes() + view_pixels * per_pixel + threads * per_thread;

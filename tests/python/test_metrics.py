@@ -78,3 +78,21 @@ def test_flip_matches_flip_evaluator_and_grows_with_the_error():
     error_map, mean = metrics.flip_map(large, ref)
     assert error_map.shape == (32, 32)
     assert float(error_map.mean()) == pytest.approx(mean, rel=1e-4)
+
+
+def test_reference_noise_is_what_a_noisy_reference_adds():
+    """relMSE against a noisy reference = the estimate's own relMSE + the reference's noise term,
+    in expectation: subtracting metrics.reference_noise recovers the former."""
+    rng = np.random.default_rng(4)
+    shape = (96, 128, 3)
+    truth = np.full(shape, 0.5) + 0.3 * rng.random(shape)
+    var_r = (0.08 * truth) ** 2
+    ref = truth + rng.normal(size=shape) * np.sqrt(var_r)
+    x = truth + rng.normal(size=shape) * 0.1
+    raw = metrics.relmse(x, ref)
+    noise = metrics.reference_noise({"v": ref}, {"v": var_r})
+    assert set(noise) == {"v", "overall"} and noise["v"] == noise["overall"] > 0
+    own = metrics.relmse(x, truth)
+    assert abs((raw - noise["overall"]) - own) < 0.05 * own, (raw, noise, own)
+    assert raw - own > 0.5 * noise["overall"]  # the noise term is real and large here
+    assert metrics.reference_noise({"v": ref}, {}) == {}  # variance unknown

@@ -163,3 +163,19 @@ def test_best_crop_finds_the_largest_error_window():
     assert (h, w) == (8, 8)
     assert y <= 25 and y + h >= 29 and x <= 3 and x + w >= 6
     assert best_crop(err, 100) == (0, 0, 40, 30)  # views smaller than the crop are shown whole
+
+
+def test_reference_noise_is_subtracted_and_judged(report):
+    """The reference's own noise (from its variance) is reported and subtracted; a 32-spp
+    reference against renders of 0.4 s is too noisy to judge them, and the page says so."""
+    data = json.loads((report["out"] / "bench.json").read_text())
+    noise = data["reference"]["noise_relmse"]
+    assert noise["overall"] > 0 and set(noise) == {"left", "right", "overall"}
+    for m in METHODS:
+        raw = data["methods"][m]["errors"]["overall"]["relmse"]
+        assert data["methods"][m]["relmse_corrected"]["overall"] == pytest.approx(raw - noise["overall"])
+        assert all(p["relmse_corrected"] == pytest.approx(p["relmse"] - noise["overall"])
+                   for p in data["methods"][m]["curve"])
+    assert any("too noisy to judge" in w for w in data["warnings"])
+    html = (report["out"] / "index.html").read_text()
+    assert "class=warning" in html and "too noisy to judge" in html

@@ -121,7 +121,7 @@ def test_cli_rig(tmp_path, capsys):
     assert len(err) == 1 and err[0].startswith("mvpt: error: --rig grid:2x2,spacing=nan: grid rig 'spacing'")
 
 
-EXPECTED_VIEWS = {"cornell-glossy-9": 9, "lightfield-5x5": 25, "stereo": 2, "shot-100": 100}
+EXPECTED_VIEWS = {"cornell-glossy-9": 9, "lightfield-5x5": 25, "stereo": 2, "shot-100": 100, "glossy-ggx-9": 9}
 
 
 def test_example_scene_list():
@@ -143,3 +143,22 @@ def test_example_scene_renders(path):
         shutters = [v["shutter"] for v in scene.views]
         assert shutters[1][0] == pytest.approx(1 / 24) and shutters[0][1] == pytest.approx(1.5 / 24)
         assert all(shutters[i][1] > shutters[i + 1][0] for i in range(99))
+
+
+def test_rig_of_a_sensor_with_named_film_and_sampler():
+    """A base camera that declares its film and sampler with ids (as Mitsuba's own scenes do):
+    the first view keeps the ids (references to them still work), the others do not declare
+    them again. Both the --rig option and the rig element."""
+    named = BASE.replace('<sampler type="independent">', '<sampler type="independent" id="sampler">').replace(
+        '<film type="hdrfilm">', '<film type="hdrfilm" id="film">')
+    scene = mvpt.load_string(named, rig="grid:3x3,spacing=0.05")
+    assert len(scene.views) == 9 and all((v["width"], v["height"], v["spp"]) == (16, 12, 2) for v in scene.views)
+    # A rig element, and one more sensor after it that refers to the base camera's film and sampler.
+    sensor = named[named.index("<sensor"):named.index("</sensor>") + len("</sensor>")]
+    extra = ('<sensor type="perspective" id="extra"><ref id="sampler"/><ref id="film"/>'
+             '<transform name="to_world"><lookat origin="1, 1, 5" target="0, 0.5, 0" up="0, 1, 0"/></transform>'
+             '</sensor>')
+    xml = named.replace(sensor, f'<mvpt:rig type="linear" n="3" baseline="0.2">{sensor}</mvpt:rig>{extra}')
+    scene = mvpt.load_string(xml.replace('<scene version="3.0.0">', '<scene version="3.0.0" xmlns:mvpt="urn:mvpt">'))
+    assert ids(scene) == ["view000", "view001", "view002", "extra"]
+    assert (scene.views[3]["width"], scene.views[3]["spp"]) == (16, 2)

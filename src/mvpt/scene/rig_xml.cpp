@@ -13,6 +13,8 @@
 // principal_point_offset_x/_y when sheared, and shutter_open/_close for path rigs.
 #include "rig.h"
 
+#include <algorithm>
+
 #include "../render/cameras/field_of_view.h"
 #include "parse_values.h"
 
@@ -96,9 +98,23 @@ RigBase rig_base(const XmlNode &sensor, const std::string &where, const XmlNode 
     return base;
 }
 
-/// A copy of the base sensor posed as `view`; new elements carry the location `at`.
-XmlNode view_sensor(const XmlNode &base, const RigView &view, const XmlNode &at) {
+/// Removes the `id` of every element declared inside `node` (not of a <ref>, whose id names what
+/// it refers to).
+void drop_nested_ids(XmlNode &node) {
+    for (XmlNode &c : node.children) {
+        if (c.tag != "ref")
+            c.attrs.erase(std::remove_if(c.attrs.begin(), c.attrs.end(), [](const XmlAttr &a) { return a.first == "id"; }),
+                          c.attrs.end());
+        drop_nested_ids(c);
+    }
+}
+
+/// A copy of the base sensor posed as `view`; new elements carry the location `at`. Only the
+/// first copy (`first`) keeps the ids of the film, sampler or filter declared inside the base
+/// sensor: the others would declare them again (the same objects, for references to them).
+XmlNode view_sensor(const XmlNode &base, const RigView &view, const XmlNode &at, bool first) {
     XmlNode s = base;
+    if (!first) drop_nested_ids(s);
     s.attrs.clear();
     for (const XmlAttr &a : base.attrs)
         if (a.first != "id") s.attrs.push_back(a);
@@ -109,9 +125,10 @@ XmlNode view_sensor(const XmlNode &base, const RigView &view, const XmlNode &at)
         if (*name == "to_world" || *name == "principal_point_offset_x" || *name == "principal_point_offset_y") return true;
         return view.has_shutter && (*name == "shutter_open" || *name == "shutter_close");
     };
+    std::vector<XmlNode> children = std::move(s.children);
     s.children.clear();
-    for (const XmlNode &c : base.children)
-        if (!replaced(c)) s.children.push_back(c);
+    for (XmlNode &c : children)
+        if (!replaced(c)) s.children.push_back(std::move(c));
     if (view.motion.empty()) {
         XmlNode t = element("transform", {XmlAttr("name", "to_world", at.loc)}, at);
         t.children.push_back(matrix_node(view.to_world, at));
@@ -156,7 +173,7 @@ std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene
     if (!base) throw SceneError(rig.loc, spec.where + " needs a <sensor> inside it: the base camera of the rig");
     std::vector<XmlNode> out;
     for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where, scene), search_dirs))
-        out.push_back(view_sensor(*base, v, rig));
+        out.push_back(view_sensor(*base, v, rig, out.empty()));
     return out;
 }
 
@@ -171,7 +188,8 @@ void apply_rig_option(XmlNode &root, const std::string &text) {
     for (auto &d : root.search_dirs) dirs.push_back(d);
     const XmlNode base = root.children[first];
     std::vector<XmlNode> views;
-    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs)) views.push_back(view_sensor(base, v, base));
+    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs))
+        views.push_back(view_sensor(base, v, base, views.empty()));
     std::vector<XmlNode> children;
     for (size_t i = 0; i < root.children.size(); ++i) {
         if (i == first)
