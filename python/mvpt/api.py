@@ -176,6 +176,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "settings": settings,
         "wall_time": seconds, "seconds": seconds, "max_pass_seconds": raw["max_pass_seconds"],
         "max_chunk_seconds": raw["max_chunk_seconds"],
+        "between_passes_seconds": raw["between_passes_seconds"],
         "estimated_bytes": raw["estimated_bytes"],
         "passes": raw["passes"], "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
         "samples": raw["samples"], "samples_per_second": rate(raw["samples"]),

@@ -60,6 +60,9 @@ struct RenderStats {
     double max_pass_seconds = 0.0;
     /// Multi-view path tracing: the longest stretch of a pass between two progress reports.
     double max_chunk_seconds = 0.0;
+    /// Multi-view path tracing: the time spent between passes (caches flushed, the pass folded
+    /// into the accumulators, the next native-sample maps), in all.
+    double between_passes_seconds = 0.0;
     /// The process's peak memory the render was expected to reach (bytes): what it held when
     /// the renderer was made plus the films, images and per-thread buffers.
     double estimated_bytes = 0.0;

@@ -208,6 +208,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         }
 
         // ---------------- The pass into the accumulators ----------------
+        const double t_between = seconds();
         arena.execute([&] {
             // What the caches still hold goes to the pass sums (exact integer sums).
             tbb::parallel_for(state.range(1), [](auto &r) {
@@ -222,6 +223,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
             if (!unbounded) per_pixel = std::min(per_pixel, double(spp_target) - double(native_done));
             arena.execute([&] { update_native_maps(pass + 1, std::max(per_pixel, 1.0)); });
         }
+        m_stats.between_passes_seconds += seconds() - t_between;
         last_pass = seconds() - t_pass;
         finish_pass(pass, pass_samples, last_pass, seconds(),
                     unbounded ? 0.0 : std::min(1.0, native_done / double(spp_target)), progress);

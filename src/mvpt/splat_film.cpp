@@ -103,20 +103,22 @@ void SplatCache::add_footprint(int slot, Vec2f film, const float v[4], const flo
 
 void SplatCache::replace(SplatEntry &e, uint32_t key) {
     if (e.key != UINT32_MAX) m_film->add(e);
+    else m_used.push_back(uint32_t(&e - m_entries.data()));
     e = SplatEntry{};
     e.key = key;
 }
 
 void SplatCache::flush() {
-    for (SplatEntry &e : m_entries)
-        if (e.key != UINT32_MAX) {
-            m_film->add(e);
-            e = SplatEntry{};
-        }
+    for (uint32_t i : m_used) {
+        m_film->add(m_entries[i]);
+        m_entries[i] = SplatEntry{};
+    }
+    m_used.clear();
 }
 
 void SplatCache::discard() {
-    for (SplatEntry &e : m_entries) e = SplatEntry{};
+    for (uint32_t i : m_used) m_entries[i] = SplatEntry{};
+    m_used.clear();
 }
 
 } // namespace mvpt

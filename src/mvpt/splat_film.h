@@ -173,6 +173,7 @@ private:
     void replace(SplatEntry &e, uint32_t key);
 
     MvPassFilm *m_film;
+    std::vector<uint32_t> m_used; ///< the entries that hold a view-pixel (flush visits only them)
     bool m_e_rgb;
     std::vector<uint32_t> m_offset; ///< the film's offset of each view
     std::vector<uint8_t> m_box;     ///< each view's filter is a box

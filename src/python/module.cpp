@@ -143,6 +143,7 @@ public:
         d["seconds"] = s.seconds;
         d["max_pass_seconds"] = s.max_pass_seconds;
         d["max_chunk_seconds"] = s.max_chunk_seconds;
+        d["between_passes_seconds"] = s.between_passes_seconds;
         d["estimated_bytes"] = s.estimated_bytes;
         d["passes"] = s.passes;
         d["cancelled"] = s.cancelled;

@@ -15,11 +15,11 @@ namespace {
 /// blocks in order, so that they do not depend on how the blocks meet the threads.
 constexpr size_t BlockPixels = 8192;
 
-/// f(begin, end) for every block of [0, n), in parallel.
+/// f(begin, end) for every block of [0, n), in parallel (a single block inline).
 template <typename F> void for_blocks(size_t n, F &&f) {
-    tbb::parallel_for(size_t(0), (n + BlockPixels - 1) / BlockPixels, [&](size_t b) {
-        f(b * BlockPixels, std::min(n, (b + 1) * BlockPixels));
-    });
+    const size_t blocks = (n + BlockPixels - 1) / BlockPixels;
+    if (blocks <= 1) return f(size_t(0), n);
+    tbb::parallel_for(size_t(0), blocks, [&](size_t b) { f(b * BlockPixels, std::min(n, (b + 1) * BlockPixels)); });
 }
 
 /// The sum over [0, n) of f(begin, end) per block, added in block order.
@@ -31,10 +31,10 @@ template <typename F> double sum_blocks(size_t n, F &&f) {
     return s;
 }
 
-/// 3x3 box blur with clamped borders, in parallel over rows.
+/// 3x3 box blur with clamped borders, in parallel over rows (a small image inline).
 std::vector<double> blur3(const std::vector<double> &v, int w, int h) {
     std::vector<double> out(v.size());
-    tbb::parallel_for(0, h, [&](int y) {
+    auto row = [&](int y) {
         for (int x = 0; x < w; ++x) {
             double s = 0.0;
             int n = 0;
@@ -47,7 +47,11 @@ std::vector<double> blur3(const std::vector<double> &v, int w, int h) {
                 }
             out[size_t(y) * w + x] = s / n;
         }
-    });
+    };
+    if (v.size() <= BlockPixels)
+        for (int y = 0; y < h; ++y) row(y);
+    else
+        tbb::parallel_for(0, h, row);
     return out;
 }
 
@@ -122,6 +126,7 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
 
     const double top = double(max_n);
     auto total = [&](double c) {
+        if (n <= BlockPixels) return double(native_total(c, top, a.data(), unit.data(), others.data(), n));
         return double(tbb::parallel_reduce(
             tbb::blocked_range<size_t>(0, n, BlockPixels), int64_t(0),
             [&](const tbb::blocked_range<size_t> &r, int64_t s) {
