@@ -217,11 +217,17 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
             fold_pass(pass_film);
         });
         native_done += double(pass_samples) / double(pixels_total);
-        // Native-sample maps of the next pass (§8), frozen during it.
-        if (adaptive && pass + 1 >= std::max(2, cfg.adaptive_warmup)) {
+        // Native-sample maps of the next pass (§8), frozen during it. Their statistics change by
+        // about 1/passes per pass, so after 16 passes a map serves passes/8 passes (a map costs
+        // about as much as folding a pass), except that the last pass's map spends only what is
+        // left of the sample target. The schedule depends on the pass index alone.
+        const int done = pass + 1;
+        if (adaptive && done >= std::max(2, cfg.adaptive_warmup)) {
             double per_pixel = cfg.adaptive_budget;
+            const bool last = !unbounded && double(spp_target) - native_done < 2.0 * per_pixel;
             if (!unbounded) per_pixel = std::min(per_pixel, double(spp_target) - double(native_done));
-            arena.execute([&] { update_native_maps(pass + 1, std::max(per_pixel, 1.0)); });
+            if (done <= 16 || done % (done / 8) == 0 || last)
+                arena.execute([&] { update_native_maps(done, std::max(per_pixel, 1.0)); });
         }
         m_stats.between_passes_seconds += seconds() - t_between;
         last_pass = seconds() - t_pass;
