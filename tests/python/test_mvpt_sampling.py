@@ -28,6 +28,11 @@ BSDFS = {
     "phong-60": '<bsdf type="phong"><float name="exponent" value="60"/>'
                 '<rgb name="diffuse_reflectance" value="0.1"/></bsdf>',
     "roughconductor": '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>',
+    "roughconductor-beckmann-all-normals": '<bsdf type="roughconductor"><string name="distribution" value="beckmann"/>'
+                                           '<float name="alpha" value="0.3"/>'
+                                           '<boolean name="sample_visible" value="false"/></bsdf>',
+    "roughplastic": '<bsdf type="roughplastic"><string name="distribution" value="ggx"/>'
+                    '<float name="alpha" value="0.15"/></bsdf>',
     "plastic": '<bsdf type="plastic"/>',  # a delta coating over a diffuse base
 }
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]

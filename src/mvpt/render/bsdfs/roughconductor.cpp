@@ -7,6 +7,8 @@
 #include "conductor_ior.h"
 #include "microfacet_params.h"
 
+#include <tuple>
+
 namespace mvpt {
 
 class RoughConductor final : public Bsdf {
@@ -60,32 +62,65 @@ public:
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return {};
-        Vec3f h = normalize(wi + wo);
-        MicrofacetDistribution distr = m_distr.at(si);
-        float D = distr.eval(h);
-        if (D == 0.f) return {};
-        // f cos(theta_o) = F D G / (4 cos(theta_i)) [Walter et al. 2007, eq. 20].
-        float value = D * distr.G(wi, wo, h) / (4.f * cos_theta_i);
-        Spectrum F = fresnel_conductor(dot(wi, h), m_ior.eta->eval(si.uv), m_ior.k->eval(si.uv));
-        Spectrum r = F * value;
-        if (m_specular_reflectance) r *= m_specular_reflectance->eval(si.uv);
-        return r;
+        return lobe<true, false>(at(si), wi, wo).first;
     }
 
     float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        Vec3f m = normalize(wi + wo);
-        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f || dot(wi, m) <= 0.f || dot(wo, m) <= 0.f) return 0.f;
-        MicrofacetDistribution distr = m_distr.at(si);
-        if (distr.sample_visible()) return distr.eval(m) * distr.smith_g1(wi, m) / (4.f * cos_theta_i);
-        return distr.pdf(wi, m) / (4.f * dot(wo, m));
+        return lobe<false, true>(Local{m_distr.at(si), {}, {}, {}}, wi, wo).second; // no textures but alpha
+    }
+
+    std::pair<Spectrum, float> eval_pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi,
+                                        Vec3f wo) const override {
+        return lobe<true, true>(at(si), wi, wo);
+    }
+
+    /// The textures and the distribution once for all the views.
+    void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        const Local local = at(si);
+        for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = lobe<true, true>(local, wi[c], wo);
     }
 
     float roughness(const SurfaceInteraction &si) const override { return m_distr.mean_alpha(si); }
 
 private:
+    /// What the lobe needs of the textures at a hit.
+    struct Local {
+        MicrofacetDistribution distr;
+        Spectrum eta, k, specular;
+    };
+    Local at(const SurfaceInteraction &si) const {
+        return {m_distr.at(si), m_ior.eta->eval(si.uv), m_ior.k->eval(si.uv),
+                m_specular_reflectance ? m_specular_reflectance->eval(si.uv) : Spectrum(1.f)};
+    }
+
+    /// f cos(theta_o) (if `F`) and the density of `sample` (if `P`) at (wi, wo), sharing the half
+    /// vector, D and G1(wi).
+    template <bool F, bool P> std::pair<Spectrum, float> lobe(const Local &l, Vec3f wi, Vec3f wo) const {
+        std::pair<Spectrum, float> out{Spectrum(0.f), 0.f};
+        const float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return out;
+        const Vec3f h = normalize(wi + wo);
+        const MicrofacetDistribution &distr = l.distr;
+        const float D = distr.eval(h);
+        const bool visible = distr.sample_visible();
+        const float g1_i = F || visible ? distr.smith_g1(wi, h) : 0.f;
+        if constexpr (F) {
+            if (D != 0.f) {
+                // f cos(theta_o) = F D G / (4 cos(theta_i)) [Walter et al. 2007, eq. 20].
+                const float value = D * (g1_i * distr.smith_g1(wo, h)) / (4.f * cos_theta_i);
+                Spectrum r = fresnel_conductor(dot(wi, h), l.eta, l.k) * value;
+                if (m_specular_reflectance) r *= l.specular;
+                out.first = r;
+            }
+        }
+        if constexpr (P) {
+            if (dot(wi, h) > 0.f && dot(wo, h) > 0.f)
+                out.second = visible ? D * g1_i / (4.f * cos_theta_i) : distr.pdf(wi, h) / (4.f * dot(wo, h));
+        }
+        return out;
+    }
+
     ConductorIor m_ior;
     MicrofacetParams m_distr;
     std::shared_ptr<Texture> m_specular_reflectance;

@@ -17,6 +17,7 @@
 #include <map>
 #include <mutex>
 #include <tuple>
+#include <utility>
 
 namespace mvpt {
 
@@ -132,41 +133,73 @@ public:
             bs.wo = warp::square_to_cosine_hemisphere(u2);
             bs.sampled_type = BsdfDiffuseReflection;
         }
-        bs.pdf = pdf(ctx, si, wi, bs.wo);
+        const auto [f, pdf] = lobe<true, true>(at(si), wi, bs.wo);
+        bs.pdf = pdf;
         if (!(bs.pdf > 0.f)) return {bs, {}};
-        return {bs, eval(ctx, si, wi, bs.wo) / bs.pdf};
+        return {bs, f / bs.pdf};
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return {};
-        MicrofacetDistribution distr = distribution();
-        Vec3f h = normalize(wo + wi);
-        float F = fresnel_dielectric(dot(wi, h), m_eta).F;
-        Spectrum value(F * distr.eval(h) * distr.G(wi, wo, h) / (4.f * cos_theta_i));
-        if (m_specular_reflectance) value *= m_specular_reflectance->eval(si.uv);
-
-        float t_i = transmittance(cos_theta_i), t_o = transmittance(cos_theta_o);
-        Spectrum diff = m_diffuse_reflectance->eval(si.uv);
-        Spectrum denom = m_nonlinear ? Spectrum(1.f) - diff * m_coating->internal_reflectance
-                                     : Spectrum(1.f - m_coating->internal_reflectance);
-        return value + diff / denom * (InvPi * m_inv_eta_2 * cos_theta_o * t_i * t_o);
+        return lobe<true, false>(at(si), wi, wo).first;
     }
 
     float pdf(const BsdfContext &, const SurfaceInteraction &, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return 0.f;
-        float prob_specular = specular_probability(cos_theta_i);
-        MicrofacetDistribution distr = distribution();
-        Vec3f h = normalize(wo + wi);
-        float p_spec = distr.sample_visible() ? distr.eval(h) * distr.smith_g1(wi, h) / (4.f * cos_theta_i)
-                                              : distr.pdf(wi, h) / (4.f * dot(wo, h));
-        return prob_specular * p_spec + (1.f - prob_specular) * warp::square_to_cosine_hemisphere_pdf(wo);
+        return lobe<false, true>(Local{}, wi, wo).second;
+    }
+
+    std::pair<Spectrum, float> eval_pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi,
+                                        Vec3f wo) const override {
+        return lobe<true, true>(at(si), wi, wo);
+    }
+
+    /// The textures once for all the views.
+    void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        const Local local = at(si);
+        for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = lobe<true, true>(local, wi[c], wo);
     }
 
     float roughness(const SurfaceInteraction &) const override { return m_alpha; }
 
 private:
+    /// What the lobe needs of the textures at a hit.
+    struct Local {
+        Spectrum diffuse{0.f}, specular{1.f};
+    };
+    Local at(const SurfaceInteraction &si) const {
+        return {m_diffuse_reflectance->eval(si.uv),
+                m_specular_reflectance ? m_specular_reflectance->eval(si.uv) : Spectrum(1.f)};
+    }
+
+    /// f cos(theta_o) (if `F`) and the density of `sample` (if `P`) at (wi, wo), sharing the half
+    /// vector, D, G1(wi) and the coating's transmittance towards wi.
+    template <bool F, bool P> std::pair<Spectrum, float> lobe(const Local &l, Vec3f wi, Vec3f wo) const {
+        std::pair<Spectrum, float> out{Spectrum(0.f), 0.f};
+        const float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return out;
+        const MicrofacetDistribution distr = distribution();
+        const Vec3f h = normalize(wo + wi);
+        const float D = distr.eval(h), t_i = transmittance(cos_theta_i);
+        const bool visible = distr.sample_visible();
+        const float g1_i = F || visible ? distr.smith_g1(wi, h) : 0.f;
+        if constexpr (F) {
+            // The coating's microfacet reflection, then the diffuse base seen through it.
+            const float fr = fresnel_dielectric(dot(wi, h), m_eta).F;
+            Spectrum value(fr * D * (g1_i * distr.smith_g1(wo, h)) / (4.f * cos_theta_i));
+            if (m_specular_reflectance) value *= l.specular;
+            const float t_o = transmittance(cos_theta_o);
+            const Spectrum denom = m_nonlinear ? Spectrum(1.f) - l.diffuse * m_coating->internal_reflectance
+                                               : Spectrum(1.f - m_coating->internal_reflectance);
+            out.first = value + l.diffuse / denom * (InvPi * m_inv_eta_2 * cos_theta_o * t_i * t_o);
+        }
+        if constexpr (P) {
+            const float prob_specular = specular_probability_from(t_i);
+            const float p_spec = visible ? D * g1_i / (4.f * cos_theta_i) : distr.pdf(wi, h) / (4.f * dot(wo, h));
+            out.second = prob_specular * p_spec + (1.f - prob_specular) * warp::square_to_cosine_hemisphere_pdf(wo);
+        }
+        return out;
+    }
+
     /// `alpha` (float, default 0.1), or equal `alpha_u`/`alpha_v`; anisotropy is rejected as by Mitsuba.
     void read_roughness(const Properties &props) {
         m_type = MicrofacetType::Beckmann;
@@ -191,8 +224,9 @@ private:
     MicrofacetDistribution distribution() const {
         return MicrofacetDistribution(m_type, m_alpha, m_alpha, m_sample_visible);
     }
-    float specular_probability(float cos_theta_i) const {
-        float t_i = transmittance(cos_theta_i);
+    float specular_probability(float cos_theta_i) const { return specular_probability_from(transmittance(cos_theta_i)); }
+    /// The probability of sampling the coating's lobe given its transmittance t_i towards wi.
+    float specular_probability_from(float t_i) const {
         float ps = (1.f - t_i) * m_specular_sampling_weight, pd = t_i * (1.f - m_specular_sampling_weight);
         return ps / (ps + pd);
     }
