@@ -31,6 +31,50 @@ struct MvThreadState {
     explicit MvThreadState(MvPassFilm &film) : cache(film), stats(film.views()), dropped(film.views(), 0) {}
 };
 
+/// What the chunks of a render have measured: CPU seconds per native sample, the longest chunk.
+struct ChunkTiming {
+    double seconds_per_sample = 0.0, longest = 0.0;
+};
+
+/// Renders tiles [0, tiles) with render(tile) (which returns its native samples) in chunks of
+/// about a quarter of a second, so that `report(native samples so far)` is called that often
+/// whatever the number of views and pixels; between tiles every task asks `stop()`, and a true
+/// answer abandons the rest (false is returned).
+template <typename Render, typename Stop, typename Report>
+bool run_in_chunks(tbb::task_arena &arena, size_t tiles, int threads, double samples, ChunkTiming &timing,
+                   Render &&render, Stop &&stop, Report &&report) {
+    using clock = std::chrono::steady_clock;
+    constexpr double ChunkSeconds = 0.25;
+    std::atomic<bool> abandoned{false};
+    uint64_t done = 0;
+    for (size_t first = 0; first < tiles && !abandoned.load();) {
+        const auto t0 = clock::now();
+        const double per_tile = timing.seconds_per_sample * samples / double(tiles); // CPU seconds
+        const size_t count = per_tile > 0.0 ? size_t(std::clamp(ChunkSeconds * threads / per_tile, 1.0, 1e9))
+                                            : size_t(2 * threads);
+        const size_t last = std::min(tiles, first + count);
+        std::atomic<uint64_t> chunk{0};
+        arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<size_t>(first, last, 1), [&](const tbb::blocked_range<size_t> &r) {
+                uint64_t n = 0;
+                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
+                    if (stop()) abandoned = true;
+                    if (abandoned.load(std::memory_order_relaxed)) break;
+                    n += render(ti);
+                }
+                chunk += n;
+            });
+        });
+        const double took = std::chrono::duration<double>(clock::now() - t0).count();
+        done += chunk.load();
+        if (chunk.load() > 0) timing.seconds_per_sample = took * threads / double(chunk.load());
+        timing.longest = std::max(timing.longest, took);
+        first = last;
+        if (!abandoned.load() && first < tiles) report(done);
+    }
+    return !abandoned.load();
+}
+
 /// The path tracer and method settings for a multi-view render of `scene`.
 std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scene) {
     if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) return {&mv->path(), mv->config()};
@@ -43,7 +87,6 @@ std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scen
 void Renderer::render_multiview(const std::atomic<bool> &cancel,
                                 const std::function<void(const RenderProgress &)> &progress) {
     using clock = std::chrono::steady_clock;
-    const auto &cams = m_scene.cameras();
     auto [path, cfg] = multiview_settings(m_scene);
     m_stats.method = "mvpt";
     m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
@@ -52,44 +95,9 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     m_stats.threads = threads;
     tbb::task_arena arena(threads);
 
-    // The method's context: views by slot, their seeds, the maps of the current pass.
-    m_mv = MvContext{};
-    m_mv.scene = &m_scene;
-    m_mv.path = path;
-    m_mv.cfg = cfg;
-    m_mv.scene_moves = m_scene.is_animated();
-    m_mv_films.clear();
-    for (int v : m_views) {
-        const Camera &cam = *cams[v];
-        m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
-        m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
-        if (!cam.film.filter->is_box() && cam.film.filter->radius() > float(SplatFootprint::MaxRadius))
-            throw std::runtime_error("view '" + cam.id + "': multi-view path tracing splats with filters of radius up to " +
-                                     std::to_string(SplatFootprint::MaxRadius) + " pixels");
-    }
-    m_mv.prepare(); // the sample windows: crop windows grown by the filters' reach
-    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
-    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
     // The adaptive maps' statistics are kept only if a map will be made (after the warm-up).
     const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > std::max(2, cfg.adaptive_warmup));
-    std::vector<SplatFootprint> footprints;
-    for (size_t slot = 0; slot < m_views.size(); ++slot) {
-        const FilmDesc &f = m_mv.views[slot].camera->film;
-        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter));
-        m_mv_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
-        m_mv.native_map.push_back(m_mv_films.back().map.data());
-    }
-    m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
-    m_mv.rig.reset();
-    if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2) {
-        // Lens points of every view: the corners of the square around each lens disk.
-        std::vector<Point3f> lens;
-        for (const MvView &v : m_mv.views)
-            for (Vec2f xi : {Vec2f(-1.f, -1.f), Vec2f(1.f, -1.f), Vec2f(-1.f, 1.f), Vec2f(1.f, 1.f)})
-                lens.push_back(v.camera->lens_point(v.t0, xi));
-        if (cfg.rig_cells > 0)
-            m_mv.rig = std::make_shared<RigVisibility>(*m_scene.occluder_bvh(), lens, m_mv.across, cfg.rig_cells);
-    }
+    const std::vector<SplatFootprint> footprints = prepare_multiview(path, cfg, adaptive);
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
@@ -100,23 +108,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     uint64_t pixels_total = 0;
     for (const MvFilm &mf : m_mv_films) pixels_total += mf.pixels();
 
-    // Tiles by image region, then view: consecutive tiles render the same region of every
-    // view, whose native samples splat into overlapping neighbourhoods of the other views, so
-    // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
-    // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
-    // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
-    // (Tiles cover the sample windows, in window coordinates.)
-    std::vector<Tile> tiles;
-    for (size_t slot = 0; slot < m_views.size(); ++slot) {
-        constexpr int TileSize = 16;
-        const SampleWindow &w = m_mv.windows[slot];
-        for (int y = 0; y < w.height(); y += TileSize)
-            for (int x = 0; x < w.width(); x += TileSize)
-                tiles.push_back({int(slot), x, y, std::min(x + TileSize, w.width()), std::min(y + TileSize, w.height())});
-    }
-    std::stable_sort(tiles.begin(), tiles.end(),
-                     [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
-
+    const std::vector<Tile> tiles = multiview_tiles();
     auto pass_film_ptr = std::make_unique<MvPassFilm>(footprints, cfg.estimator == MvEstimator::Weighted);
     MvPassFilm &pass_film = *pass_film_ptr;
     tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pass_film); });
@@ -146,13 +138,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         return prim.size();
     };
 
-    // A pass runs in chunks of tiles of about ChunkSeconds each, so that progress is reported
-    // that often whatever the number of views and pixels; between tiles, every task checks for
-    // cancellation and for the end of the time budget, which abandon the pass (every view takes
-    // part in every pass: an unfinished pass cannot enter the estimates).
-    constexpr double ChunkSeconds = 0.25;
+    // Cancellation and the end of the time budget abandon a pass (every view takes part in every
+    // pass: an unfinished pass cannot enter the estimates); the first pass always completes.
     const double budget = m_opts.time_budget;
-    double seconds_per_sample = 0.0; // measured on the chunks so far
+    ChunkTiming chunk_timing;
     auto t_start = clock::now();
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
     double last_pass = 0.0;
@@ -164,44 +153,21 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         for (const MvFilm &mf : m_mv_films) pass_samples += mf.map_total;
 
         // ---------------- Native samples, tile by tile, in chunks ----------------
-        std::atomic<bool> abandoned{false};
-        uint64_t samples_done = 0;
-        for (size_t first = 0; first < tiles.size() && !abandoned.load();) {
-            const double t_chunk = seconds();
-            const double expected = seconds_per_sample * double(pass_samples) / double(tiles.size()); // per tile
-            const size_t count = expected > 0.0 ? size_t(std::clamp(ChunkSeconds * threads / expected, 1.0, 1e9))
-                                                : size_t(2 * threads);
-            const size_t last = std::min(tiles.size(), first + count);
-            std::atomic<uint64_t> chunk_samples{0};
-            arena.execute([&] {
-                tbb::parallel_for(tbb::blocked_range<size_t>(first, last, 1), [&](const tbb::blocked_range<size_t> &r) {
-                    MvThreadState &ts = state.local();
-                    uint64_t done = 0;
-                    for (size_t ti = r.begin(); ti != r.end(); ++ti) {
-                        // Pass 0 always completes: without it there is no image.
-                        if (cancel.load() || (pass > 0 && budget > 0.0 && seconds() > budget)) abandoned = true;
-                        if (abandoned.load(std::memory_order_relaxed)) break;
-                        done += render_tile(ts, tiles[ti]);
-                    }
-                    chunk_samples += done;
-                });
-            });
-            const double took = seconds() - t_chunk;
-            samples_done += chunk_samples.load();
-            if (chunk_samples.load() > 0) seconds_per_sample = took * threads / double(chunk_samples.load());
-            m_stats.max_chunk_seconds = std::max(m_stats.max_chunk_seconds, took);
-            first = last;
-            if (progress && !abandoned.load() && first < tiles.size()) {
-                RenderProgress p;
-                p.pass = pass;
-                p.elapsed = seconds();
-                p.samples = m_stats.samples + samples_done;
-                p.fraction = unbounded ? 0.0 : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) / spp_target);
-                if (budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / budget));
-                progress(p);
-            }
-        }
-        if (abandoned.load()) {
+        auto stop = [&] { return cancel.load() || (pass > 0 && budget > 0.0 && seconds() > budget); };
+        auto report = [&](uint64_t samples_done) {
+            if (!progress) return;
+            RenderProgress p;
+            p.pass = pass;
+            p.elapsed = seconds();
+            p.samples = m_stats.samples + samples_done;
+            p.fraction = unbounded ? 0.0 : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) / spp_target);
+            if (budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / budget));
+            progress(p);
+        };
+        const bool finished = run_in_chunks(arena, tiles.size(), threads, double(pass_samples), chunk_timing,
+                                            [&](size_t ti) { return render_tile(state.local(), tiles[ti]); }, stop,
+                                            report);
+        if (!finished) {
             for (MvThreadState &ts : state) ts.cache.discard();
             m_stats.cancelled = cancel.load();
             break;
@@ -235,6 +201,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                     unbounded ? 0.0 : std::min(1.0, native_done / double(spp_target)), progress);
     }
     m_stats.seconds = seconds();
+    m_stats.max_chunk_seconds = chunk_timing.longest;
     std::vector<MvViewStats> per_view(m_views.size());
     for (MvThreadState &ts : state) {
         m_stats.counters += ts.counters;
@@ -257,6 +224,69 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         m_results[s].mv = per_view[s];
         m_stats.mv += per_view[s];
     }
+}
+
+std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *path, const MvConfig &cfg,
+                                                        bool adaptive) {
+    const auto &cams = m_scene.cameras();
+    // The method's context: views by slot, their seeds, the maps of the current pass.
+    m_mv = MvContext{};
+    m_mv.scene = &m_scene;
+    m_mv.path = path;
+    m_mv.cfg = cfg;
+    m_mv.scene_moves = m_scene.is_animated();
+    m_mv_films.clear();
+    for (int v : m_views) {
+        const Camera &cam = *cams[v];
+        m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
+        m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
+        if (!cam.film.filter->is_box() && cam.film.filter->radius() > float(SplatFootprint::MaxRadius))
+            throw std::runtime_error("view '" + cam.id + "': multi-view path tracing splats with filters of radius up to " +
+                                     std::to_string(SplatFootprint::MaxRadius) + " pixels");
+    }
+    m_mv.prepare(); // the sample windows: crop windows grown by the filters' reach
+    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
+    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
+    std::vector<SplatFootprint> footprints;
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        const FilmDesc &f = m_mv.views[slot].camera->film;
+        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter));
+        m_mv_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
+        m_mv.native_map.push_back(m_mv_films.back().map.data());
+    }
+    m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
+    m_mv.rig.reset();
+    if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2) {
+        // Lens points of every view: the corners of the square around each lens disk.
+        std::vector<Point3f> lens;
+        for (const MvView &v : m_mv.views)
+            for (Vec2f xi : {Vec2f(-1.f, -1.f), Vec2f(1.f, -1.f), Vec2f(-1.f, 1.f), Vec2f(1.f, 1.f)})
+                lens.push_back(v.camera->lens_point(v.t0, xi));
+        if (cfg.rig_cells > 0)
+            m_mv.rig = std::make_shared<RigVisibility>(*m_scene.occluder_bvh(), lens, m_mv.across, cfg.rig_cells);
+    }
+
+    return footprints;
+}
+
+std::vector<Renderer::Tile> Renderer::multiview_tiles() const {
+    // Tiles by image region, then view: consecutive tiles render the same region of every
+    // view, whose native samples splat into overlapping neighbourhoods of the other views, so
+    // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
+    // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
+    // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
+    // (Tiles cover the sample windows, in window coordinates.)
+    std::vector<Tile> tiles;
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        constexpr int TileSize = 16;
+        const SampleWindow &w = m_mv.windows[slot];
+        for (int y = 0; y < w.height(); y += TileSize)
+            for (int x = 0; x < w.width(); x += TileSize)
+                tiles.push_back({int(slot), x, y, std::min(x + TileSize, w.width()), std::min(y + TileSize, w.height())});
+    }
+    std::stable_sort(tiles.begin(), tiles.end(),
+                     [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
+    return tiles;
 }
 
 void Renderer::fold_pass(MvPassFilm &pass_film) {
