@@ -250,7 +250,8 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     std::vector<SplatFootprint> footprints;
     for (size_t slot = 0; slot < m_views.size(); ++slot) {
         const FilmDesc &f = m_mv.views[slot].camera->film;
-        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter));
+        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
+                                                Sampler::dimension_key(DimSplatBase + m_mv.views[slot].scene_index)));
         m_mv_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
         m_mv.native_map.push_back(m_mv_films.back().map.data());
     }

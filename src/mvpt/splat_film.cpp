@@ -1,17 +1,26 @@
 #include "splat_film.h"
 
+#include "core/sampler.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace mvpt {
 
-SplatFootprint SplatFootprint::of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter) {
-    SplatFootprint f{crop_x, crop_y, width, height, nullptr, 0.5f, 1.f};
+SplatFootprint SplatFootprint::of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter,
+                                  uint64_t tap_key) {
+    SplatFootprint f = box(width, height);
+    f.crop_x = crop_x, f.crop_y = crop_y, f.tap_key = tap_key;
     if (!filter.is_box()) {
+        const auto *tabulated = dynamic_cast<const TabulatedFilter *>(&filter);
+        if (!tabulated) throw std::runtime_error("multi-view path tracing splats with box and tabulated filters only");
         f.filter = &filter;
         f.radius = filter.radius();
         f.peak = filter.peak_1d() * filter.peak_1d();
+        f.table = tabulated->pdf_table().data();
+        f.table_size = tabulated->pdf_table().size();
+        f.table_scale = float(f.table_size) / (2.f * f.radius);
     }
     return f;
 }
@@ -62,6 +71,7 @@ SplatCache::SplatCache(MvPassFilm &film, size_t entries)
     for (size_t s = 0; s < film.views(); ++s) {
         m_offset.push_back(film.offset(int(s)));
         m_box.push_back(film.footprint(int(s)).is_box());
+        m_tap_key.push_back(film.footprint(int(s)).tap_key);
         m_peak.push_back(film.footprint(int(s)).peak);
         // Views start at multiples of the golden ratio of the cache: the same pixel of
         // different views falls on different entries.
@@ -69,36 +79,61 @@ SplatCache::SplatCache(MvPassFilm &film, size_t entries)
     }
 }
 
-void SplatCache::add_footprint(int slot, Vec2f film, const float v[4], const float *e) {
-    // Pixels i of the crop window whose centre i + 1/2 lies within the radius of x, per axis.
+namespace {
+/// floor(v) as an int for |v| < 2^31 (std::floor is a library call on baseline x86-64).
+inline int floor_int(float v) {
+    const int i = int(v);
+    return i - (float(i) > v);
+}
+} // namespace
+
+void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e) {
+    // Pixels i of the crop window whose centre i + 1/2 lies within the radius of x, per axis,
+    // weighted by the tabulated density (the same operations as ReconstructionFilter::eval_1d).
     const SplatFootprint &f = m_film->footprint(slot);
     constexpr int MaxTaps = 2 * SplatFootprint::MaxRadius;
     float wx[MaxTaps], wy[MaxTaps];
     auto taps = [&](float x, int lo, int hi, float *w, int *first) {
-        int i0 = std::max(lo, int(std::floor(x - 0.5f - f.radius)) + 1);
-        int i1 = std::min(hi - 1, int(std::ceil(x - 0.5f + f.radius)) - 1);
+        const int i0 = std::max(lo, floor_int(x - 0.5f - f.radius) + 1);
+        const int i1 = std::min(hi - 1, -floor_int(-(x - 0.5f + f.radius)) - 1); // ceil - 1
         int n = 0;
-        for (int i = i0; i <= i1 && n < MaxTaps; ++i) w[n++] = f.filter->eval_1d(x - (float(i) + 0.5f));
+        for (int i = i0; i <= i1 && n < MaxTaps; ++i) {
+            const float t = (x - (float(i) + 0.5f) + f.radius) * f.table_scale;
+            w[n++] = t >= 0.f && t < float(f.table_size) ? f.table[size_t(t)] : 0.f;
+        }
         *first = i0;
         return n;
     };
     int x0, y0;
     const int nx = taps(film.x, f.crop_x, f.crop_x + f.width, wx, &x0);
     const int ny = taps(film.y, f.crop_y, f.crop_y + f.height, wy, &y0);
-    const int hx = int(std::floor(film.x)), hy = int(std::floor(film.y)); // the pixel that holds x
+    const int hx = floor_int(film.x) - x0, hy = floor_int(film.y) - y0; // the tap that holds x
     const int e_channels = m_e_rgb ? 3 : 1;
-    for (int j = 0; j < ny; ++j)
+    // Small taps by systematic sampling: the running sum of h / TapThreshold over them, shifted by
+    // one uniform number u, keeps a tap when it crosses an integer (probability h / TapThreshold).
+    const float u = float(mix_bits(sample + m_tap_key[size_t(slot)]) >> 40) * 0x1p-24f;
+    float run = u;
+    for (int j = 0; j < ny; ++j) {
+        const uint32_t row = uint32_t(y0 + j - f.crop_y) * uint32_t(f.width) + uint32_t(x0 - f.crop_x);
         for (int i = 0; i < nx; ++i) {
-            const float h = wx[i] * wy[j];
-            if (h == 0.f) continue;
-            const int px = x0 + i, py = y0 + j;
-            SplatEntry &entry = at(slot, uint32_t(py - f.crop_y) * uint32_t(f.width) + uint32_t(px - f.crop_x));
+            float h = wx[i] * wy[j];
+            if (h < TapThreshold) {
+                const float before = run;
+                run += h * (1.f / TapThreshold);
+                if (floor_int(run) == floor_int(before)) { // not kept (h == 0 never is)
+                    if ((i == hx) & (j == hy)) at(slot, row + uint32_t(i)).count += 1;
+                    continue;
+                }
+                h = TapThreshold;
+            }
+            SplatEntry &entry = at(slot, row + uint32_t(i));
             for (int c = 0; c < 3; ++c) entry.lw[c] += to_fixed(v[c] * h);
             entry.w += to_fixed(v[3] * h);
             if (e)
                 for (int c = 0; c < e_channels; ++c) entry.e[c] += to_fixed(e[c] * h);
-            entry.count += (px == hx) & (py == hy);
+            entry.count += (i == hx) & (j == hy);
         }
+    }
 }
 
 void SplatCache::replace(SplatEntry &e, uint32_t key) {

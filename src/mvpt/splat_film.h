@@ -50,10 +50,20 @@ struct SplatFootprint {
     int crop_x = 0, crop_y = 0, width = 0, height = 0;
     const ReconstructionFilter *filter = nullptr; ///< nullptr or a box: one pixel, weight 1
     float radius = 0.5f, peak = 1.f;              ///< the filter's radius and the largest h(x, y)
+    /// The filter's tabulated density per axis (TabulatedFilter::pdf_table) and bins per pixel.
+    const float *table = nullptr;
+    size_t table_size = 0;
+    float table_scale = 0.f;
+    /// Sampler::dimension_key of the view's splat dimension: the number that decides which of a
+    /// contribution's small taps are kept (SplatCache::add_footprint).
+    uint64_t tap_key = 0;
     /// A box-filtered window of width x height pixels at the film's origin.
-    static SplatFootprint box(int width, int height) { return {0, 0, width, height, nullptr, 0.5f, 1.f}; }
-    /// The crop window and filter of `film`.
-    static SplatFootprint of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter);
+    static SplatFootprint box(int width, int height) {
+        return {0, 0, width, height, nullptr, 0.5f, 1.f, nullptr, 0, 0.f, 0};
+    }
+    /// The crop window and filter of a film, for the view whose splat dimension has `tap_key`.
+    static SplatFootprint of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter,
+                             uint64_t tap_key);
     bool is_box() const { return filter == nullptr; }
     size_t pixels() const { return size_t(width) * size_t(height); }
 };
@@ -118,17 +128,18 @@ public:
         return e;
     }
     /// Add one shared contribution W*L, W at film position `film` (of the pixel with window
-    /// index `pixel`, which the box filter uses); false (nothing added) when a value does not fit.
-    bool add(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w) {
+    /// index `pixel`, which the box filter uses) of the native sample whose Sampler::sample_hash
+    /// is `sample`; false (nothing added) when a value does not fit.
+    bool add(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w) {
         const float v[4] = {lw[0], lw[1], lw[2], w};
         if (!fits(v, m_peak[size_t(slot)])) return false;
         if (m_box[size_t(slot)]) add_fitting(at(slot, pixel), v[0], v[1], v[2], v[3]);
-        else add_footprint(slot, film, v, nullptr);
+        else add_footprint(slot, film, sample, v, nullptr);
         return true;
     }
     /// The same for the native view's own pixel, with the radiance E only it estimates (added to
     /// W*L, and on its own as the mean of its channels or in RGB, as the film keeps it).
-    bool add(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w, const Spectrum &e) {
+    bool add(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w, const Spectrum &e) {
         const Spectrum sum = lw + e;
         const float v[4] = {sum[0], sum[1], sum[2], w};
         if (!(fits(lw) & fits(e) & fits(v, m_peak[size_t(slot)]))) return false;
@@ -139,7 +150,7 @@ public:
             add_fitting(entry, v[0], v[1], v[2], v[3]);
             for (int c = 0; c < (m_e_rgb ? 3 : 1); ++c) entry.e[c] += to_fixed(e_kept[c]);
         } else {
-            add_footprint(slot, film, v, e_kept);
+            add_footprint(slot, film, sample, v, e_kept);
         }
         return true;
     }
@@ -162,8 +173,13 @@ public:
     }
     /// Add `v` (W*L, W) and `e` (E as the film keeps it, or none) that fit, spread over the
     /// pixels of view `slot` that the filter at film position `film` covers; counted in the
-    /// pixel that holds `film`.
-    void add_footprint(int slot, Vec2f film, const float v[4], const float *e);
+    /// pixel that holds `film`. Taps of weight h >= TapThreshold get h v; a smaller one is kept
+    /// with probability h / TapThreshold and then gets TapThreshold v (Russian roulette, unbiased),
+    /// the choices made by one number of the native sample `sample` (systematic sampling over the
+    /// small taps: each kept with exactly its probability).
+    void add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e);
+    /// The weight below which a footprint's taps are played by Russian roulette.
+    static constexpr float TapThreshold = 0.0625f;
     /// Adds every entry to the film and empties the cache (the end of a pass).
     void flush();
     /// Empties the cache without adding anything (a pass that is abandoned).
@@ -177,6 +193,7 @@ private:
     bool m_e_rgb;
     std::vector<uint32_t> m_offset; ///< the film's offset of each view
     std::vector<uint8_t> m_box;     ///< each view's filter is a box
+    std::vector<uint64_t> m_tap_key; ///< each view's SplatFootprint::tap_key
     std::vector<float> m_peak;      ///< each view's largest filter weight
     std::vector<uint32_t> m_base;   ///< where each view's pixels start in the cache (spread apart)
     std::vector<SplatEntry> m_entries;
@@ -189,14 +206,14 @@ struct MvSplatSink {
     SplatCache &cache;
     uint64_t *dropped;
     /// A contribution W*L, W at film position `film` (window pixel `pixel`) of a view that
-    /// shares the sample.
-    void shared(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w) {
-        if (!cache.add(slot, pixel, film, lw, w)) ++dropped[slot];
+    /// shares the native sample with Sampler::sample_hash `sample`.
+    void shared(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w) {
+        if (!cache.add(slot, pixel, film, sample, lw, w)) ++dropped[slot];
     }
     /// The contribution to the native view, with its native-only radiance E (emission seen
     /// directly, paths through purely specular first vertices) divided by n_l.
-    void native(int slot, uint32_t pixel, Vec2f film, const Spectrum &lw, float w, const Spectrum &e) {
-        if (!cache.add(slot, pixel, film, lw, w, e)) ++dropped[slot];
+    void native(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w, const Spectrum &e) {
+        if (!cache.add(slot, pixel, film, sample, lw, w, e)) ++dropped[slot];
     }
 };
 

@@ -54,13 +54,13 @@ TEST(MvSplat, EntryKernelEqualsScalarAdds) {
         std::vector<uint64_t> ref_dropped(pixels_per_view.size()), got_dropped(pixels_per_view.size());
         for (size_t i = begin; i < end; ++i) {
             const Spectrum v = mv_entry_value(t, f_nee[i], f_bounce[i], w[i]);
-            const bool added = ref.add(slots[i], pixels[i], films[i], v, w[i]);
+            const bool added = ref.add(slots[i], pixels[i], films[i], 7, v, w[i]);
             ref_dropped[size_t(slots[i])] += !added;
             const bool exact = std::abs(v[0]) < 0x1p21f && std::abs(v[1]) < 0x1p21f && std::abs(v[2]) < 0x1p21f &&
                                std::abs(w[i]) < 0x1p21f;
             ++paths[!added ? 2 : exact ? 0 : 1];
         }
-        mv_splat_entries(got, t, f_nee.data(), f_bounce.data(), w.data(), slots.data(), pixels.data(), films.data(),
+        mv_splat_entries(got, t, f_nee.data(), f_bounce.data(), w.data(), slots.data(), pixels.data(), films.data(), 7,
                          begin, end, got_dropped.data());
         ref.flush(), got.flush();
         for (size_t s = 0; s < pixels_per_view.size(); ++s)

@@ -2,6 +2,7 @@
 // the order, the cache size or the number of threads; contributions that are not finite or too
 // large rejected whole, whichever channel holds the bad value.
 #include "mvpt/scene/plugin.h"
+#include "mvpt/core/sampler.h"
 #include "mvpt/splat_film.h"
 
 #include <gtest/gtest.h>
@@ -68,7 +69,7 @@ std::vector<Contribution> random_contributions(const std::vector<size_t> &pixels
 
 void add_to(SplatCache &cache, const Contribution &c) {
     const Vec2f film(0.f, 0.f);
-    bool ok = c.native ? cache.add(c.slot, c.pixel, film, c.lw, c.w, c.e) : cache.add(c.slot, c.pixel, film, c.lw, c.w);
+    bool ok = c.native ? cache.add(c.slot, c.pixel, film, 0, c.lw, c.w, c.e) : cache.add(c.slot, c.pixel, film, 0, c.lw, c.w);
     ASSERT_TRUE(ok);
 }
 } // namespace
@@ -78,13 +79,13 @@ TEST(SplatFilm, SumsAreExactAndOrderFree) {
         MvPassFilm a(boxes({4}), e_rgb), b(boxes({4}), e_rgb);
         SplatCache ca(a), cb(b, 1); // b's cache holds one entry: every other pixel displaces it
         const float v[3] = {0.1f, 1e-7f, 3.5f};
-        for (int i = 0; i < 3; ++i) ca.add(0, 2, Vec2f(0.f, 0.f), Spectrum(v[i], 2 * v[i], 0.f), v[i]);
+        for (int i = 0; i < 3; ++i) ca.add(0, 2, Vec2f(0.f, 0.f), 0, Spectrum(v[i], 2 * v[i], 0.f), v[i]);
         for (int i = 2; i >= 0; --i) {
-            cb.add(0, 2, Vec2f(0.f, 0.f), Spectrum(v[i], 2 * v[i], 0.f), v[i]);
-            cb.add(0, 1, Vec2f(0.f, 0.f), Spectrum(0.f), 0.f); // displaces pixel 2
+            cb.add(0, 2, Vec2f(0.f, 0.f), 0, Spectrum(v[i], 2 * v[i], 0.f), v[i]);
+            cb.add(0, 1, Vec2f(0.f, 0.f), 0, Spectrum(0.f), 0.f); // displaces pixel 2
         }
-        ca.add(0, 2, Vec2f(0.f, 0.f), Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
-        cb.add(0, 2, Vec2f(0.f, 0.f), Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
+        ca.add(0, 2, Vec2f(0.f, 0.f), 0, Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
+        cb.add(0, 2, Vec2f(0.f, 0.f), 0, Spectrum(1.f), 0.5f, Spectrum(0.25f, 0.5f, 0.75f));
         ca.flush(), cb.flush();
         const SplatEntry x = a.take(2), y = b.take(2);
         for (int c = 0; c < 3; ++c) EXPECT_EQ(x.lw[c], y.lw[c]);
@@ -128,7 +129,7 @@ TEST(SplatFilm, IndependentOfCacheSizeAndThreads) {
 TEST(SplatFilm, DiscardAddsNothing) {
     MvPassFilm film(boxes({8}), false);
     SplatCache cache(film, 4);
-    cache.add(0, 3, Vec2f(0.f, 0.f), Spectrum(1.f), 1.f);
+    cache.add(0, 3, Vec2f(0.f, 0.f), 0, Spectrum(1.f), 1.f);
     cache.discard();
     cache.flush();
     EXPECT_EQ(film.take(3).w, 0);
@@ -142,12 +143,12 @@ TEST(SplatFilm, RejectsWholeContributionsThatDoNotFit) {
             SplatCache cache(film);
             float x[4] = {1.f, 1.f, 1.f, 1.f};
             x[channel] = bad;
-            EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(x[0], x[1], x[2]), x[3])) << "channel " << channel << " value " << bad;
+            EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), 0, Spectrum(x[0], x[1], x[2]), x[3])) << "channel " << channel << " value " << bad;
             // The native view's radiance E is checked too, before anything is added.
             Spectrum e(1.f);
             if (channel < 3) {
                 e[channel] = bad;
-                EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(1.f), 1.f, e));
+                EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), 0, Spectrum(1.f), 1.f, e));
             }
             cache.flush();
             const SplatEntry t = film.take(0);
@@ -158,8 +159,8 @@ TEST(SplatFilm, RejectsWholeContributionsThatDoNotFit) {
     // W*L and E that fit but whose sum does not.
     MvPassFilm film(boxes({1}), false);
     SplatCache cache(film);
-    EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(0.75f * big), 1.f, Spectrum(0.75f * big)));
-    EXPECT_TRUE(cache.add(0, 0, Vec2f(0.f, 0.f), Spectrum(std::nextafter(big, 0.f)), 1.f, Spectrum(-1.f)));
+    EXPECT_FALSE(cache.add(0, 0, Vec2f(0.f, 0.f), 0, Spectrum(0.75f * big), 1.f, Spectrum(0.75f * big)));
+    EXPECT_TRUE(cache.add(0, 0, Vec2f(0.f, 0.f), 0, Spectrum(std::nextafter(big, 0.f)), 1.f, Spectrum(-1.f)));
     cache.flush();
     EXPECT_EQ(film.take(0).e[0], to_fixed(-1.f));
 }
@@ -174,34 +175,62 @@ std::shared_ptr<ReconstructionFilter> make_filter(const std::string &type) {
 TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
     // A contribution at film position x adds h(x - c_i) v to every pixel i of the crop window
     // whose centre c_i is within the radius (h: the density path tracing samples offsets from),
-    // and counts in the pixel that holds x; pixels outside the crop window get nothing.
+    // and counts in the pixel that holds x; pixels outside the crop window get nothing. Taps
+    // below SplatCache::TapThreshold are kept with probability h / threshold and then add
+    // threshold v: over many native samples each such tap is kept that often, and every
+    // contribution keeps floor or ceil of the sum of h / threshold of its small taps.
+    constexpr float Tau = SplatCache::TapThreshold;
+    constexpr int Samples = 4000;
     for (const char *type : {"tent", "gaussian"}) {
         auto filter = make_filter(type);
         const float r = filter->radius();
         // A 10 x 8 crop window at (20, 30) of the full film.
-        MvPassFilm film({SplatFootprint::of(20, 30, 10, 8, *filter)}, false);
+        MvPassFilm film({SplatFootprint::of(20, 30, 10, 8, *filter, Sampler::dimension_key(5))}, false);
         SplatCache cache(film, 8); // small: entries are displaced while the footprint is added
         for (Vec2f x : {Vec2f(25.3f, 33.8f), Vec2f(20.2f, 30.9f), Vec2f(19.7f, 37.7f), Vec2f(29.99f, 36.01f)}) {
-            ASSERT_TRUE(cache.add(0, 0, x, Spectrum(2.f, 1.f, 0.5f), 0.25f, Spectrum(0.f, 3.f, 0.f)));
-            cache.flush();
-            double total = 0.0;
-            uint32_t counted = 0;
-            for (int py = 30; py < 38; ++py)
-                for (int px = 20; px < 30; ++px) {
-                    const SplatEntry e = film.take(uint32_t((py - 30) * 10 + (px - 20)));
-                    const float dx = x.x - (float(px) + 0.5f), dy = x.y - (float(py) + 0.5f);
-                    const float h = std::abs(dx) < r && std::abs(dy) < r ? filter->eval_1d(dx) * filter->eval_1d(dy) : 0.f;
-                    EXPECT_EQ(e.w, to_fixed(0.25f * h)) << type << " pixel " << px << "," << py;
-                    EXPECT_EQ(e.lw[1], to_fixed(4.f * h)) << type; // W*L + E
-                    EXPECT_EQ(e.e[0], to_fixed(1.f * h)) << type;  // E's mean
+            std::vector<int> kept(80, 0);
+            std::vector<float> h(80, 0.f);
+            double small_sum = 0.0;
+            for (int p = 0; p < 80; ++p) {
+                const float dx = x.x - (float(20 + p % 10) + 0.5f), dy = x.y - (float(30 + p / 10) + 0.5f);
+                h[size_t(p)] = std::abs(dx) < r && std::abs(dy) < r ? filter->eval_1d(dx) * filter->eval_1d(dy) : 0.f;
+                if (h[size_t(p)] < Tau) small_sum += h[size_t(p)] / Tau;
+            }
+            for (uint64_t sample = 0; sample < Samples; ++sample) {
+                ASSERT_TRUE(cache.add(0, 0, x, mix_bits(sample), Spectrum(2.f, 1.f, 0.5f), 0.25f, Spectrum(0.f, 3.f, 0.f)));
+                cache.flush();
+                uint32_t counted = 0;
+                int kept_small = 0;
+                for (int p = 0; p < 80; ++p) {
+                    const SplatEntry e = film.take(uint32_t(p));
+                    const int px = 20 + p % 10, py = 30 + p / 10;
+                    const float hp = h[size_t(p)];
                     const bool holds = px == int(std::floor(x.x)) && py == int(std::floor(x.y));
-                    EXPECT_EQ(e.count, holds ? 1u : 0u) << type;
-                    total += h, counted += e.count;
+                    ASSERT_EQ(e.count, holds ? 1u : 0u) << type;
+                    counted += e.count;
+                    if (hp >= Tau) {
+                        ASSERT_EQ(e.w, to_fixed(0.25f * hp)) << type << " pixel " << px << "," << py;
+                        ASSERT_EQ(e.lw[1], to_fixed(4.f * hp)) << type; // W*L + E
+                        ASSERT_EQ(e.e[0], to_fixed(1.f * hp)) << type;  // E's mean
+                    } else if (e.w != 0) {
+                        ASSERT_GT(hp, 0.f) << type;
+                        ASSERT_EQ(e.w, to_fixed(0.25f * Tau)) << type;
+                        ASSERT_EQ(e.lw[1], to_fixed(4.f * Tau)) << type;
+                        ++kept[size_t(p)], ++kept_small;
+                    }
                 }
-            EXPECT_EQ(counted, x.x >= 20.f && x.y >= 30.f ? 1u : 0u);
-            // Inside the window the weights sum to about 1 (a partition of unity for the tent).
-            if (x.x > 20.f + r && x.x < 30.f - r && x.y > 30.f + r && x.y < 38.f - r) EXPECT_NEAR(total, 1.0, 0.02) << type;
-            if (x.x < 20.f) EXPECT_GT(total, 0.0) << type; // the margin reaches the window
+                ASSERT_EQ(counted, x.x >= 20.f && x.y >= 30.f ? 1u : 0u);
+                ASSERT_TRUE(kept_small == int(std::floor(small_sum)) || kept_small == int(std::ceil(small_sum)))
+                    << type << " kept " << kept_small << " of sum " << small_sum;
+            }
+            // Each small tap is kept with probability h / threshold (binomial, 5 standard deviations).
+            for (int p = 0; p < 80; ++p)
+                if (h[size_t(p)] < Tau) {
+                    const double q = h[size_t(p)] / Tau;
+                    EXPECT_NEAR(kept[size_t(p)] / double(Samples), q, 5.0 * std::sqrt(q * (1.0 - q) / Samples) + 1e-9)
+                        << type << " pixel " << p;
+                }
+            if (x.x < 20.f) EXPECT_GT(*std::max_element(h.begin(), h.end()), 0.f) << type; // the margin reaches the window
         }
     }
 }

@@ -377,7 +377,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
     // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
     auto native_only = [&](const Spectrum &L) {
-        sink.native(slot_l, pixel_l, film_l, Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
+        sink.native(slot_l, pixel_l, film_l, sampler.sample_hash(), Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
         ++st_l.sharing;
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
     };
@@ -532,6 +532,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     rec.b_scale = b_scale;
     if (mix.delta) rec.delta_bounce = mix.weight * b_scale;
     rec.e = le_y * (1.f / n_l);
+    rec.hash = sampler.sample_hash();
     int *const slot_out = pending.slot.data() + first;
     uint32_t *const pixel_out = pending.pixel.data() + first;
     Vec2f *const film_out = pending.film.data() + first;

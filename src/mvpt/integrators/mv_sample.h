@@ -27,6 +27,9 @@ class Scene;
 /// the numbers of the others).
 inline constexpr uint32_t DimBounceView = 1u << 20;
 inline constexpr uint32_t DimSelectBase = DimBounceView + 1;
+/// The dimension (plus the target view's scene index) whose number plays the Russian roulette
+/// of a contribution's small filter taps (SplatCache::add_footprint).
+inline constexpr uint32_t DimSplatBase = 1u << 21;
 
 /// Per-view statistics of a render (§9): as the native view (`native`, `tried`, `rejected`,
 /// `sharing`, `rays`) and as a target (`received`).
@@ -126,6 +129,7 @@ struct MvPendingSamples {
         int32_t shadow = -1;
         bool valid = false;
         bool nee = false; ///< nee_weight is not black
+        uint64_t hash = 0; ///< the native sample's Sampler::sample_hash (for the splats' taps)
         float b_scale = 0.f;
         Spectrum nee_weight{0.f}, delta_bounce{0.f};
         Spectrum e{0.f}; ///< the native view's own radiance E
@@ -182,12 +186,13 @@ struct MvSplatTerms {
 Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w);
 
 /// Adds entries [begin, end) of one sample to `cache`: W·L (mv_entry_value) and W at film
-/// position films[i] (window pixel pixels[i]) of view slots[i], the same bits as SplatCache::add; entries that do not fit are
+/// position films[i] (window pixel pixels[i]) of view slots[i], of the native sample with
+/// Sampler::sample_hash `sample`, the same bits as SplatCache::add; entries that do not fit are
 /// counted in dropped[slot]. f_nee and f_bounce are read 16 bytes per entry: one Spectrum past
 /// `end` must be readable.
 void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
-                      const float *w, const int *slots, const uint32_t *pixels, const Vec2f *films, size_t begin,
-                      size_t end, uint64_t *dropped);
+                      const float *w, const int *slots, const uint32_t *pixels, const Vec2f *films, uint64_t sample,
+                      size_t begin, size_t end, uint64_t *dropped);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
 /// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).

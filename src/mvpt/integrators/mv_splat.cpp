@@ -27,11 +27,11 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
 MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
                                      const Spectrum *__restrict f_bounce, const float *__restrict w,
                                      const int *__restrict slots, const uint32_t *__restrict pixels,
-                                     const Vec2f *__restrict films, size_t begin, size_t end,
+                                     const Vec2f *__restrict films, uint64_t sample, size_t begin, size_t end,
                                      uint64_t *__restrict dropped) {
 #if !defined(__SSE2__) // not x86-64: entry by entry
     for (size_t i = begin; i < end; ++i)
-        if (!cache.add(slots[i], pixels[i], films[i], mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i]))
+        if (!cache.add(slots[i], pixels[i], films[i], sample, mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i]))
             ++dropped[slots[i]];
 #else
     typedef double D4 __attribute__((vector_size(32)));
@@ -59,7 +59,7 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, c
         float f[4];
         _mm_storeu_ps(f, v);
         if (!cache.is_box(slots[i])) { // spread over the pixels the view's filter covers
-            if (!cache.add(slots[i], pixels[i], films[i], Spectrum(f[0], f[1], f[2]), f[3])) ++dropped[slots[i]];
+            if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(f[0], f[1], f[2]), f[3])) ++dropped[slots[i]];
             continue;
         }
         if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) != 0xf) {
@@ -118,14 +118,15 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
             L += rec.delta_bounce * suffix;
             return t.valid ? L * w[i] : Spectrum(0.f);
         };
-        sink.native(slots[0], pixels[0], films[0], value(0), w[0], rec.e);
+        sink.native(slots[0], pixels[0], films[0], rec.hash, value(0), w[0], rec.e);
         if (delta > 0) {
-            sink.shared(slots[delta], pixels[delta], films[delta], value(delta), w[delta]);
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, 1, size_t(delta), sink.dropped);
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, size_t(delta) + 1, n,
+            sink.shared(slots[delta], pixels[delta], films[delta], rec.hash, value(delta), w[delta]);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, size_t(delta),
+                             sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, size_t(delta) + 1, n,
                              sink.dropped);
         } else
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, 1, n, sink.dropped);
+            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, n, sink.dropped);
     }
     pending.clear();
 }

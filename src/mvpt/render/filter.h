@@ -37,6 +37,8 @@ public:
         return x >= 0.f && x < float(m_pdf.size()) ? m_pdf[size_t(x)] : 0.f;
     }
     float peak_1d() const override { return m_peak; }
+    /// The density per bin over [-radius, radius] (eval_1d's table).
+    const std::vector<float> &pdf_table() const { return m_pdf; }
 
 protected:
     /// Tabulate f on [-radius, radius]; f must be non-negative.
