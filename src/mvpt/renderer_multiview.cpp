@@ -234,7 +234,9 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     m_mv.scene = &m_scene;
     m_mv.path = path;
     m_mv.cfg = cfg;
+    // Moving shapes or lights: a shared sample keeps its time (§3 test 1).
     m_mv.scene_moves = m_scene.is_animated();
+    for (const auto &light : m_scene.lights()) m_mv.scene_moves |= light->moves();
     m_mv_films.clear();
     for (int v : m_views) {
         const Camera &cam = *cams[v];

@@ -159,3 +159,18 @@ def test_balance_is_unbiased_per_filter(name, rfilter):
     res = _compare(f"{name} mvpt balance, {rfilter} filter, vs pt", ids, _estimates(runs, ids), pt, mean_tol=0.0)
     print(res.summary())
     assert res.passed, res.summary()
+
+
+def test_moving_light_keeps_time():
+    """A moving light makes the scene move even when no shape does: a shared sample keeps its
+    time, and views share only where their shutters overlap (an affine map of the time between
+    shutters, right when only cameras move, would light the other views as at the wrong time)."""
+    scene = _load("moving_light")
+    ids = [v["id"] for v in scene.views]
+    pt = _estimates(_seeds(scene, 32, "pt", 8000), ids)
+    runs = _seeds(scene, 16, "mvpt", 9000)
+    assert all(runs[0].stats["views"][v]["multiview"]["mean_sharing"] > 1.1 for v in ids)
+    assert runs[0].stats["multiview"]["rejected"]["time"] > 0
+    res = _compare("moving_light mvpt balance vs pt", ids, _estimates(runs, ids), pt, mean_tol=0.0)
+    print(res.summary())
+    assert res.passed, res.summary()

@@ -80,6 +80,8 @@ public:
         const SurfaceInteraction si_none;
         for (size_t i = 0; i < n; ++i) le[i] = eval_environment_pdf(ref[i], si_none, d[i], pdf ? pdf + i : nullptr);
     }
+    /// Whether the light moves during the scene's time (an animated transform).
+    virtual bool moves() const { return false; }
     /// Scene extent, for lights placed at infinity.
     virtual void set_scene_bounds(Point3f center, float radius) { (void)center; (void)radius; }
     /// Attach an area light to its shape.

@@ -34,6 +34,7 @@ public:
     }
 
     float pdf_li(Point3f, const SurfaceInteraction &, Vec3f) const override { return 0.f; }
+    bool moves() const override { return m_position.is_animated(); }
 
 private:
     AnimatedTransform m_position;

@@ -53,6 +53,7 @@ public:
     }
 
     float pdf_li(Point3f, const SurfaceInteraction &, Vec3f) const override { return 0.f; }
+    bool moves() const override { return m_to_world.is_animated(); }
 
 private:
     /// Angular profile in [0, 1] for a local direction with z = cos_theta.
