@@ -5,9 +5,10 @@
     result.images["0"]      # float32 (H, W, 3) linear RGB of the view with id "0"
     result.stats            # timing, ray counts, per-view statistics
 """
-from ._core import SceneError, Scene
+__version__ = "0.1.0"
+
+from ._core import SceneError, Scene, StateError
 from .api import load_file, load_string, render, RenderResult
 from .output import write_outputs
 
-__all__ = ["SceneError", "Scene", "load_file", "load_string", "render", "RenderResult", "write_outputs"]
-__version__ = "0.1.0"
+__all__ = ["SceneError", "StateError", "Scene", "load_file", "load_string", "render", "RenderResult", "write_outputs"]

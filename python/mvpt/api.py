@@ -1,6 +1,7 @@
 """Python API: load scenes, render them (cancellable, GIL released), get NumPy images."""
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
@@ -8,6 +9,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from . import _core
+from . import state as state_file
 
 
 def _defines(kwargs: dict) -> dict:
@@ -83,7 +85,9 @@ def resolve_views(scene: _core.Scene, views: Optional[Sequence]) -> list:
 def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[int] = None,
            threads: int = 0, views: Optional[Sequence] = None,
            progress: Optional[Callable[[dict], None]] = None, poll: float = 0.1,
-           method: str = "scene") -> RenderResult:
+           method: str = "scene", state: Optional[str | os.PathLike] = None, checkpoint: float = 0.0,
+           resume: Optional[str | os.PathLike] = None, state_at_end: bool = True,
+           state_extra: Optional[dict] = None) -> RenderResult:
     """Render all views (or `views`: ids or indices) of `scene`.
 
     method: "pt" (independent path tracing of every view), "mvpt" (multi-view path tracing,
@@ -101,7 +105,15 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     (path tracing: at the end of the current group of passes; multi-view path tracing:
     between tiles, dropping the unfinished pass) and the images of the finished passes are
     returned with stats["cancelled"] set (stats["passes"] == 0: none finished); any other
-    exception from `progress` cancels the render and is re-raised."""
+    exception from `progress` cancels the render and is re-raised.
+
+    state: a file for the render's state (docs/checkpoints.md), written at a pass boundary
+    every `checkpoint` seconds (0: not periodically), when the render is interrupted and, with
+    `state_at_end`, when it ends; `state_extra` (JSON-able) is stored in its header. resume: a
+    state file of the same scene and settings to continue from: the images are bit-identical
+    to those of a render that was never stopped (with `time`, the budget is the total of all
+    runs). A state of another scene, setting or mvpt version raises mvpt.StateError naming
+    what differs, as does a file that is truncated or corrupt."""
     if int(spp) < 0:
         raise ValueError(f"spp must be >= 0, got {spp}")
     if not float(time) >= 0.0:
@@ -114,9 +126,23 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"seed must lie in [0, 2^32), got {seed}")
     if method not in ("scene", "pt", "mvpt"):
         raise ValueError(f"method must be 'pt', 'mvpt' or 'scene', got {method!r}")
+    if not (float(checkpoint) >= 0.0):
+        raise ValueError(f"checkpoint must be >= 0 seconds, got {checkpoint}")
     index = resolve_views(scene, views)
+    header = None
+    if state is not None or resume is not None:
+        ids = [v["id"] for v in scene.views]
+        settings = dict(method=method, spp=int(spp), time=float(time), seed=None if seed is None else int(seed),
+                        views=[ids[i] for i in index] or ids)
+        header = state_file.make_header(scene, settings, state_extra)
+    if resume is not None:
+        state_file.check_resumable(resume, header)
     job = _core.RenderJob(scene, spp=int(spp), time=float(time), seed=None if seed is None else int(seed),
-                          threads=int(threads), views=index, method=method)
+                          threads=int(threads), views=index, method=method,
+                          state_path=os.fspath(state) if state is not None else "",
+                          state_header=json.dumps(header) if state is not None else "",
+                          checkpoint_interval=float(checkpoint), state_at_end=bool(state_at_end),
+                          resume_path=os.fspath(resume) if resume is not None else "")
     job.start()
     interrupted = None
     try:
@@ -178,7 +204,8 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "max_chunk_seconds": raw["max_chunk_seconds"],
         "between_passes_seconds": raw["between_passes_seconds"],
         "estimated_bytes": raw["estimated_bytes"],
-        "passes": raw["passes"], "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
+        "passes": raw["passes"], "resumed_from_pass": raw["first_pass"],
+        "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
         "samples": raw["samples"], "samples_per_second": rate(raw["samples"]),
         "rays": {"camera": raw["camera_rays"], "intersect": raw["rays"], "shadow": raw["shadow_rays"],
                  "total": total_rays},

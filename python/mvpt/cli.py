@@ -1,13 +1,16 @@
 """The `mvpt` command line: `mvpt render scene.xml -D spp=64 -o out/`, `mvpt demo`.
 
 Exit codes: 0 done, 1 bad scene or unwritable output, 2 bad command line, 130 interrupted
-by Ctrl-C (143 by SIGTERM); an interrupted render stops within about a quarter of a second
-and writes the passes finished so far, with "cancelled" in the JSON (nothing when no pass
+by Ctrl-C (143 by SIGTERM, 129 by SIGHUP); an interrupted render stops within about a quarter
+of a second and writes the passes finished so far, with "cancelled" in the JSON, and its state
+(<stem>.mvpt-state), from which `mvpt render --resume OUT` continues it (nothing when no pass
 had finished)."""
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import os
 import signal
 import sys
 import threading
@@ -16,7 +19,8 @@ from importlib import resources
 from pathlib import Path
 
 from . import __version__, api
-from ._core import SceneError
+from . import state as state_file
+from ._core import SceneError, StateError
 from . import displays, reports_cli
 from .output import write_outputs
 
@@ -26,10 +30,11 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 _stopped_by = signal.SIGINT
 
 
-def _on_sigterm(signum, frame):
-    """SIGTERM (batch schedulers, `kill`) stops like Ctrl-C: with the outputs of the passes finished."""
+def _on_signal(signum, frame):
+    """SIGTERM (batch schedulers, `kill`) and SIGHUP (a closed terminal) stop like Ctrl-C: with
+    the outputs of the passes finished and a state to resume from."""
     global _stopped_by
-    _stopped_by = signal.SIGTERM
+    _stopped_by = signal.Signals(signum)
     raise KeyboardInterrupt
 
 
@@ -210,18 +215,28 @@ def _render(scene_path: Path, args, stem: str) -> int:
         print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
               f"and writes the passes finished so far)", flush=True)
     bar = ProgressBar(enabled=False if args.quiet else None)
+    state = state_file.state_file(args.output, stem)
+    resume = getattr(args, "resume_state", None)
     try:
+        if not resume:
+            args.output.mkdir(parents=True, exist_ok=True)
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
-                            views=views, progress=bar, method=args.method)
-    except (RuntimeError, MemoryError, ValueError) as e:
+                            views=views, progress=bar, method=args.method, state=state,
+                            checkpoint=args.checkpoint, resume=resume, state_at_end=args.checkpoint > 0,
+                            state_extra={"command": _command_record(scene_path, args, stem)})
+    except (RuntimeError, MemoryError, ValueError, OSError) as e:
         bar.finish(done=False)
         _error(str(e) or type(e).__name__)
         return EXIT_ERROR
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     if cancelled and result.stats["passes"] == 0:
+        if not resume:
+            state.unlink(missing_ok=True)
         print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
         return 128 + int(_stopped_by)
+    if not cancelled and args.checkpoint == 0:
+        state.unlink(missing_ok=True)  # the render is complete: a state was not asked for
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
     if args.rig:
         settings["rig"] = args.rig
@@ -236,9 +251,58 @@ def _render(scene_path: Path, args, stem: str) -> int:
         print_summary(result)
         print(f"wrote {len(paths)} files to {args.output}{'/' if not str(args.output).endswith('/') else ''}")
     if cancelled:
-        print("mvpt: interrupted; wrote the passes finished so far", file=sys.stderr)
+        print(f"mvpt: interrupted; wrote the passes finished so far and their state; continue with: "
+              f"mvpt render --resume {args.output}", file=sys.stderr)
         return 128 + int(_stopped_by)
     return EXIT_OK
+
+
+# The options that make a render's image: `--resume` takes them from the state file.
+_IMAGE_OPTIONS = ("define", "spp", "time", "seed", "method", "rig", "views")
+# What a resume reuses of the first run's command line (outputs included).
+_RECORDED_OPTIONS = _IMAGE_OPTIONS + ("aovs", "multiview_exr", "stereo", "quilt", "contact_sheet", "gif", "mp4",
+                                      "fps", "exposure")
+
+
+def _command_record(scene_path: Path, args, stem: str) -> dict:
+    """The command line of a render as its state file keeps it, for `--resume`."""
+    record = {k: getattr(args, k, None) for k in _RECORDED_OPTIONS}
+    record["define"] = [list(d) for d in (args.define or [])]
+    return dict(record, scene=str(Path(scene_path).resolve()), stem=stem, checkpoint=args.checkpoint)
+
+
+def _resume(args) -> int:
+    """`mvpt render --resume OUT`: continue the render whose state is in OUT (or is the file OUT)."""
+    given = [f"--{k.replace('_', '-')}" for k in _IMAGE_OPTIONS if getattr(args, k) not in (None, 0, 0.0, "scene", [])]
+    if args.scene is not None:
+        given.insert(0, "a scene")
+    if given:
+        _error(f"--resume continues a render with its own scene and settings; drop {', '.join(given)}")
+        return EXIT_USAGE
+    path = Path(args.resume)
+    if path.is_dir():
+        found = sorted(path.glob(f"*{state_file.SUFFIX}"))
+        if len(found) != 1:
+            _error(f"{path} holds {'no' if not found else len(found)} render states ({state_file.SUFFIX})"
+                   + (": name one" if found else ""))
+            return EXIT_ERROR
+        path = found[0]
+    try:
+        record = state_file.read_header(path).get("extra", {}).get("command")
+    except StateError as e:
+        _error(str(e))
+        return EXIT_ERROR
+    if not isinstance(record, dict) or "scene" not in record:
+        _error(f"the state file '{path}' was not written by `mvpt render`; resume it with mvpt.render(resume=...)")
+        return EXIT_ERROR
+    for k in _RECORDED_OPTIONS:
+        setattr(args, k, record.get(k))
+    args.define = [tuple(d) for d in record.get("define") or []]
+    args.output = path.parent
+    args.resume_state = path
+    if args.checkpoint == 0:  # periodic checkpoints go on unless changed
+        args.checkpoint = float(record.get("checkpoint") or 0.0)
+    return _render(Path(record["scene"]), args, record["stem"])
 
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
@@ -264,6 +328,9 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="add variance and sample-count channels (mvpt: native samples and contributions "
                         "received) to the EXRs")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    p.add_argument("--checkpoint", type=_seconds, default=0.0, metavar="SECONDS",
+                   help="write the render's state (<stem>.mvpt-state in the output directory) every SECONDS "
+                        "and keep it at the end (an interrupted render always writes it)")
     displays.add_display_options(p)
 
 
@@ -272,7 +339,11 @@ def main(argv=None) -> int:
     parser.add_argument("--version", action="version", version=f"mvpt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p_render = sub.add_parser("render", help="render every view of a scene")
-    p_render.add_argument("scene", type=Path)
+    p_render.add_argument("scene", type=Path, nargs="?", help="the scene (Mitsuba 3 XML)")
+    p_render.add_argument("--resume", metavar="OUT", default=None,
+                          help="continue the interrupted render whose state is in the output directory OUT "
+                               "(or the state file OUT), with its scene and settings; the images equal those of "
+                               "a render that was never stopped")
     _add_render_options(p_render)
     p_demo = sub.add_parser("demo", help="render the built-in demo scene")
     _add_render_options(p_demo)
@@ -284,9 +355,15 @@ def main(argv=None) -> int:
     global _stopped_by
     _stopped_by = signal.SIGINT
     in_main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _on_sigterm) if in_main_thread else None
+    stops = (signal.SIGTERM, signal.SIGHUP)
+    previous = {s: signal.signal(s, _on_signal) for s in stops} if in_main_thread else {}
     try:
         if args.command == "render":
+            if args.resume is not None:
+                return _resume(args)
+            if args.scene is None:
+                _error("render: the scene is required (or --resume OUT)")
+                return EXIT_USAGE
             return _render(args.scene, args, args.scene.stem)
         if args.command in reports_cli.COMMANDS:
             return reports_cli.run(args)
@@ -296,8 +373,8 @@ def main(argv=None) -> int:
         print("\nmvpt: interrupted", file=sys.stderr)
         return 128 + int(_stopped_by)
     finally:
-        if in_main_thread:
-            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+        for s, handler in previous.items():
+            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":

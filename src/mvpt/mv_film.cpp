@@ -1,5 +1,7 @@
 #include "mv_film.h"
 
+#include "render_state.h"
+
 #include <algorithm>
 #include <cfloat>
 #include <climits>
@@ -88,6 +90,31 @@ void MvFilm::set_map(const std::vector<uint16_t> &crop) {
         std::copy_n(crop.begin() + long(y * size_t(width)), width, map.begin() + long((y + size_t(margin)) * w + size_t(margin)));
     map_total = 0;
     for (uint16_t v : crop) map_total += v;
+}
+
+void MvFilm::save(StateWriter &out) const {
+    out.put(uint32_t(estimator)), out.put(uint32_t(control_variate)), out.put(uint32_t(!e_sum.empty()));
+    out.put(int32_t(width)), out.put(int32_t(height)), out.put(int32_t(margin));
+    out.put(passes), out.put(level), out.put(nonfinite), out.put(map_total);
+    out.put(sum), out.put(m2), out.put(w_sum), out.put(lw), out.put(e), out.put(w);
+    out.put(e_sum), out.put(e_sq), out.put(s_sq), out.put(native), out.put(received), out.put(map);
+}
+
+void MvFilm::load(StateReader &in) {
+    // The film was made for this render: the file's must have its kind and size.
+    const uint32_t est = in.get<uint32_t>(), cv = in.get<uint32_t>(), adaptive = in.get<uint32_t>();
+    const int32_t w_ = in.get<int32_t>(), h_ = in.get<int32_t>(), m_ = in.get<int32_t>();
+    if (est != uint32_t(estimator) || cv != uint32_t(control_variate) || adaptive != uint32_t(!e_sum.empty()))
+        throw StateError("the state was rendered with another multi-view estimator or adaptive setting");
+    if (w_ != width || h_ != height || m_ != margin)
+        throw StateError("the state has a view of " + std::to_string(w_) + "x" + std::to_string(h_) + " pixels (margin " +
+                         std::to_string(m_) + ") where this render has " + std::to_string(width) + "x" +
+                         std::to_string(height) + " (margin " + std::to_string(margin) + ")");
+    passes = in.get<uint32_t>(), level = in.get<double>(), nonfinite = in.get<uint64_t>(), map_total = in.get<uint64_t>();
+    const size_t n = pixels();
+    in.get(sum, sum.size()), in.get(m2, m2.size()), in.get(w_sum, n), in.get(lw, lw.size()), in.get(e, e.size());
+    in.get(w, w.size()), in.get(e_sum, e_sum.size()), in.get(e_sq, e_sq.size()), in.get(s_sq, s_sq.size());
+    in.get(native, n), in.get(received, n), in.get(map, map.size());
 }
 
 } // namespace mvpt

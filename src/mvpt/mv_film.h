@@ -11,6 +11,9 @@
 
 namespace mvpt {
 
+class StateReader;
+class StateWriter;
+
 /// The accumulators of one view over all passes. Per pixel, each pass gives one estimate v
 /// (balance: W*L + E + beta (1 - sum W), beta from the earlier passes; weighted: W*L + E); the
 /// image is their mean and its variance comes from their spread, as for path tracing.
@@ -57,6 +60,9 @@ struct MvFilm {
     void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end);
     /// Pixel p's estimate (RGB) and the variance of that mean (RGB).
     void develop(size_t p, float rgb[3], float variance[3]) const;
+    /// Every accumulator into a state file, and back (a StateError if the file's do not fit).
+    void save(StateWriter &out) const;
+    void load(StateReader &in);
     /// Mean over passes of the sum of W of pixel p (1 in expectation for the balance estimator).
     float weight_sum(size_t p) const { return passes ? float(double(w_sum[p]) / passes) : 0.f; }
 };

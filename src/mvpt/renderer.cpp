@@ -131,8 +131,16 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
 
     tbb::enumerable_thread_specific<RayCounters> counters;
     std::mutex nonfinite_mutex;
-    auto t_start = clock::now();
-    double last_pass = 0.0;
+    if (!m_opts.resume_path.empty()) read_state();
+    // A resumed render's clock goes on from the seconds of the runs before (for --time).
+    const auto t_start = clock::now() - std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(m_elapsed_before));
+    auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
+    auto counters_now = [&] {
+        RayCounters sum = m_stats.counters;
+        for (const RayCounters &c : counters) sum += c;
+        return sum;
+    };
+    double last_pass = m_last_pass_before, last_checkpoint = m_elapsed_before;
 
     // The samples of a pass group [pass0, pass1) of a tile, as batches of up to BatchPaths
     // paths. One pass: the tile's pixels row by row. Several: pixel by pixel in 4x4 blocks,
@@ -279,10 +287,10 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         for (const Tile &t : all_tiles) pixels += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
         group = longest_group([&](int g) { return uint64_t(g) * pixels > GroupPaths; });
     }
-    int chunk = group;
-    for (int pass = 0; pass < max_target;) {
+    int chunk = group, pass = m_first_pass;
+    while (pass < max_target) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
-        double elapsed = std::chrono::duration<double>(clock::now() - t_start).count();
+        double elapsed = seconds();
         if (pass > 0 && m_opts.time_budget > 0.0) {
             // Passes that still fit (checked as a double: the quotient may be infinite or NaN).
             const double fit = std::min((m_opts.time_budget - elapsed) / last_pass, double(MaxChunk));
@@ -311,17 +319,19 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             uint64_t pass_samples = 0;
             for (const Tile &t : all_tiles)
                 if (q < target[t.view_slot]) pass_samples += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
-            finish_pass(q, pass_samples, last_pass, std::chrono::duration<double>(clock::now() - t_start).count(),
-                        double(q + 1) / double(max_target), progress);
+            finish_pass(q, pass_samples, last_pass, seconds(), double(q + 1) / double(max_target), progress);
         }
         pass = pass_end;
+        if (checkpoint_due(seconds(), last_checkpoint)) write_state(pass, seconds(), last_pass, counters_now());
         if (m_opts.time_budget == 0.0 && last_pass > 0.0)
             chunk = std::max(group, int(std::clamp(ChunkSeconds / last_pass, 1.0, double(MaxChunk))) / group * group);
-        else if (m_opts.time_budget > 0.0 && pass == 1)
+        else if (m_opts.time_budget > 0.0 && pass == m_first_pass + 1)
             group = longest_group([&](int g) { return double(g) * last_pass > ChunkSeconds; });
     }
-    m_stats.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
-    for (const RayCounters &c : counters) m_stats.counters += c;
+    m_stats.seconds = seconds();
+    m_stats.counters = counters_now();
+    if (!m_opts.state_path.empty() && (m_stats.cancelled || m_opts.state_at_end))
+        write_state(pass, m_stats.seconds, last_pass, m_stats.counters);
     develop();
 }
 

@@ -35,6 +35,15 @@ struct RenderOptions {
     int threads = 0;
     /// Indices of the views to render; empty renders all.
     std::vector<int> views;
+    /// The render's state file (render_state.h): written at a pass boundary every
+    /// `checkpoint_interval` seconds (0: not periodically), when the render is cancelled, and at
+    /// its end when `state_at_end`; `state_header` is stored in it as given.
+    std::string state_path, state_header;
+    double checkpoint_interval = 0.0;
+    bool state_at_end = false;
+    /// A state file of the same scene and settings to continue from (the caller compares their
+    /// headers; the renderer checks that the accumulators fit).
+    std::string resume_path;
 };
 
 /// Result of one view: crop-window-sized images, row-major, y down.
@@ -67,6 +76,8 @@ struct RenderStats {
     /// the renderer was made plus the films, images and per-thread buffers.
     double estimated_bytes = 0.0;
     int passes = 0;
+    /// The pass a resumed render started from (0: not resumed).
+    int first_pass = 0;
     bool cancelled = false;
     uint64_t samples = 0;
     RayCounters counters;
@@ -132,6 +143,15 @@ private:
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
     void develop_multiview();
+    /// The state file at a pass boundary: the next pass, the elapsed seconds, the last pass's
+    /// seconds (what a time budget expects of the next), the ray counters so far and, for
+    /// multi-view path tracing, its statistics and dropped contributions by slot.
+    void write_state(int next_pass, double elapsed, double last_pass, const RayCounters &counters,
+                     const std::vector<MvViewStats> &mv_stats = {}, const std::vector<uint64_t> &mv_dropped = {}) const;
+    /// Continues from m_opts.resume_path (after the accumulators are made).
+    void read_state();
+    /// Writes the state file when a checkpoint is due (`last`: the time of the previous one).
+    bool checkpoint_due(double elapsed, double &last) const;
 
     const Scene &m_scene;
     RenderOptions m_opts;
@@ -140,6 +160,11 @@ private:
     std::vector<FilmBuffer> m_films;
     std::vector<MvFilm> m_mv_films;
     MvContext m_mv;
+    /// Where a resumed render starts: its first pass, the seconds and (multi-view) the mean
+    /// native samples per pixel and the statistics of the runs before.
+    int m_first_pass = 0;
+    double m_elapsed_before = 0.0, m_last_pass_before = 0.0, m_native_done = 0.0;
+    std::vector<MvViewStats> m_mv_stats_before;
     std::vector<ViewResult> m_results;
     RenderStats m_stats;
 };

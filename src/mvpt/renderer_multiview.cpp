@@ -98,13 +98,15 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     // The adaptive maps' statistics are kept only if a map will be made (after the warm-up).
     const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > std::max(2, cfg.adaptive_warmup));
     const std::vector<SplatFootprint> footprints = prepare_multiview(path, cfg, adaptive);
+    m_mv_stats_before.assign(m_views.size(), MvViewStats{});
+    if (!m_opts.resume_path.empty()) read_state();
 
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
     // native sample per pixel until the adaptive maps start, then `adaptive_budget` per pixel.
     const int spp_target = this->spp_target();
     const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
-    double native_done = 0.0; // mean native samples per pixel so far
+    double &native_done = m_native_done; // mean native samples per pixel so far
     uint64_t pixels_total = 0;
     for (const MvFilm &mf : m_mv_films) pixels_total += mf.pixels();
 
@@ -112,7 +114,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     auto pass_film_ptr = std::make_unique<MvPassFilm>(footprints, cfg.estimator == MvEstimator::Weighted);
     MvPassFilm &pass_film = *pass_film_ptr;
     tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pass_film); });
-    int pass = 0;
+    int pass = m_first_pass;
     auto render_tile = [&](MvThreadState &ts, const Tile &tile) {
         MvSplatSink sink{ts.cache, ts.dropped.data()};
         const SampleWindow &w = m_mv.windows[tile.view_slot];
@@ -142,9 +144,28 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     // pass: an unfinished pass cannot enter the estimates); the first pass always completes.
     const double budget = m_opts.time_budget;
     ChunkTiming chunk_timing;
-    auto t_start = clock::now();
+    // A resumed render's clock goes on from the seconds of the runs before (for --time).
+    const auto t_start = clock::now() - std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(m_elapsed_before));
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
-    double last_pass = 0.0;
+    // The statistics of the threads, summed by slot (the ray counters with the runs' before).
+    auto thread_sums = [&](std::vector<MvViewStats> &stats, std::vector<uint64_t> &dropped) {
+        RayCounters counters = m_stats.counters;
+        stats.assign(m_views.size(), MvViewStats{});
+        dropped.assign(m_views.size(), 0);
+        for (MvThreadState &ts : state) {
+            counters += ts.counters;
+            for (size_t s = 0; s < m_views.size(); ++s) stats[s] += ts.stats[s], dropped[s] += ts.dropped[s];
+        }
+        return counters;
+    };
+    double last_pass = m_last_pass_before, last_checkpoint = m_elapsed_before;
+    auto save_state = [&](int next_pass) {
+        std::vector<MvViewStats> stats;
+        std::vector<uint64_t> dropped;
+        RayCounters counters = thread_sums(stats, dropped);
+        for (uint64_t d : dropped) counters.nonfinite += d;
+        write_state(next_pass, seconds(), last_pass, counters, stats, dropped);
+    };
     for (; unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         if (pass > 0 && budget > 0.0 && seconds() + last_pass > budget) break;
@@ -199,17 +220,18 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         last_pass = seconds() - t_pass;
         finish_pass(pass, pass_samples, last_pass, seconds(),
                     unbounded ? 0.0 : std::min(1.0, native_done / double(spp_target)), progress);
+        if (checkpoint_due(seconds(), last_checkpoint)) save_state(pass + 1);
     }
     m_stats.seconds = seconds();
     m_stats.max_chunk_seconds = chunk_timing.longest;
-    std::vector<MvViewStats> per_view(m_views.size());
-    for (MvThreadState &ts : state) {
-        m_stats.counters += ts.counters;
-        for (size_t s = 0; s < m_views.size(); ++s) {
-            per_view[s] += ts.stats[s];
-            m_mv_films[s].nonfinite += ts.dropped[s];
-            m_stats.counters.nonfinite += ts.dropped[s];
-        }
+    if (!m_opts.state_path.empty() && (m_stats.cancelled || m_opts.state_at_end)) save_state(pass);
+    std::vector<MvViewStats> per_view;
+    std::vector<uint64_t> dropped;
+    m_stats.counters = thread_sums(per_view, dropped);
+    for (size_t s = 0; s < m_views.size(); ++s) {
+        per_view[s] += m_mv_stats_before[s];
+        m_mv_films[s].nonfinite += dropped[s];
+        m_stats.counters.nonfinite += dropped[s];
     }
     // Contributions received: those in the film plus those dropped as not finite (counted from
     // the films rather than per splat).

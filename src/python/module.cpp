@@ -2,6 +2,7 @@
 // Python polls (GIL released while waiting), NumPy images out, image writers.
 #include "mvpt/io/image_io.h"
 #include "mvpt/io/multiview_exr.h"
+#include "mvpt/render_state.h"
 #include "mvpt/renderer.h"
 #include "mvpt/scene/scene.h"
 
@@ -72,6 +73,10 @@ public:
                     std::lock_guard<std::mutex> lock(m_mutex);
                     m_progress = p;
                 });
+            } catch (const StateError &e) {
+                std::lock_guard<std::mutex> lock(m_mutex);
+                m_error = e.what();
+                m_state_error = true;
             } catch (const std::exception &e) {
                 std::lock_guard<std::mutex> lock(m_mutex);
                 m_error = e.what();
@@ -146,6 +151,7 @@ public:
         d["between_passes_seconds"] = s.between_passes_seconds;
         d["estimated_bytes"] = s.estimated_bytes;
         d["passes"] = s.passes;
+        d["first_pass"] = s.first_pass;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;
         d["camera_rays"] = s.counters.camera_rays;
@@ -173,6 +179,7 @@ private:
     void check_finished() {
         std::lock_guard<std::mutex> lock(m_mutex);
         if (!m_done) throw std::runtime_error("render job has not finished");
+        if (m_state_error) throw StateError(m_error);
         if (!m_error.empty()) throw std::runtime_error(m_error);
     }
 
@@ -185,6 +192,7 @@ private:
     std::condition_variable m_cv;
     bool m_done = false;
     std::string m_error;
+    bool m_state_error = false;
     RenderProgress m_progress;
 };
 
@@ -241,6 +249,13 @@ NB_MODULE(_core, m) {
         .def_prop_ro("integrator", [](const Scene &s) { return s.integrator().name(); })
         .def_prop_ro("shape_count", [](const Scene &s) { return s.shapes().size(); })
         .def_prop_ro("light_count", [](const Scene &s) { return s.lights().size(); })
+        .def_prop_ro("source_files", [](const Scene &s) {
+            std::vector<std::string> files;
+            for (const auto &f : s.source_files()) files.push_back(f.string());
+            return files;
+        }, "The files the scene was read from (XML, meshes, textures, ...), absolute.")
+        .def_prop_ro("defines", &Scene::defines, "The <default> overrides the scene was loaded with.")
+        .def_prop_ro("rig", &Scene::rig, "The rig option the scene was loaded with (empty: none).")
         // Camera projection API (design doc §2-§4), for tests and tools: view is a scene index.
         .def("camera_generate_ray", [](const Scene &s, size_t view, Vec2 film, Vec2 lens, float time) {
             Ray r = camera_at(s, view).generate_ray({film[0], film[1]}, {lens[0], lens[1]}, time);
@@ -266,18 +281,27 @@ NB_MODULE(_core, m) {
         return std::shared_ptr<Scene>(load_scene_string(xml, base_dir, defines, rig));
     }, "xml"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{}, "rig"_a = "");
 
+    // A state file that cannot be used (docs/checkpoints.md): a ValueError.
+    nb::exception<StateError>(m, "StateError", PyExc_ValueError);
+    m.def("read_state_header", &read_state_header, "path"_a, "The header of a render's state file.");
+
     nb::class_<RenderJob>(m, "RenderJob")
         .def("__init__", [](RenderJob *self, std::shared_ptr<Scene> scene, int spp, double time, std::optional<uint32_t> seed,
-                            int threads, std::vector<int> views, const std::string &method) {
+                            int threads, std::vector<int> views, const std::string &method, const std::string &state_path,
+                            const std::string &state_header, double checkpoint_interval, bool state_at_end,
+                            const std::string &resume_path) {
             RenderOptions o;
             o.spp = spp; o.time_budget = time; o.seed = seed; o.threads = threads; o.views = std::move(views);
+            o.state_path = state_path; o.state_header = state_header; o.checkpoint_interval = checkpoint_interval;
+            o.state_at_end = state_at_end; o.resume_path = resume_path;
             if (method == "scene") o.method = RenderMethod::Scene;
             else if (method == "pt") o.method = RenderMethod::PathTracing;
             else if (method == "mvpt") o.method = RenderMethod::MultiView;
             else throw nb::value_error(("unknown method '" + method + "': expected 'pt', 'mvpt' or 'scene'").c_str());
             new (self) RenderJob(std::move(scene), std::move(o));
         }, "scene"_a, "spp"_a = 0, "time"_a = 0.0, "seed"_a = nb::none(), "threads"_a = 0, "views"_a = std::vector<int>{},
-           "method"_a = "scene")
+           "method"_a = "scene", "state_path"_a = "", "state_header"_a = "", "checkpoint_interval"_a = 0.0,
+           "state_at_end"_a = false, "resume_path"_a = "")
         .def("start", &RenderJob::start)
         .def("wait", &RenderJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
         .def("cancel", &RenderJob::cancel)

@@ -31,11 +31,15 @@ std::vector<std::string> PluginRegistry::types(const std::string &kind) {
 std::filesystem::path LoadContext::resolve(const std::string &name, const FileLoc &loc) const {
     namespace fs = std::filesystem;
     fs::path p(name);
+    auto found = [&](fs::path f) {
+        if (files) files->push_back(f.lexically_normal());
+        return f;
+    };
     if (p.is_absolute()) {
-        if (fs::is_regular_file(p)) return p;
+        if (fs::is_regular_file(p)) return found(p);
     } else {
         for (auto &dir : search_dirs)
-            if (fs::is_regular_file(dir / p)) return fs::absolute(dir / p);
+            if (fs::is_regular_file(dir / p)) return found(fs::absolute(dir / p));
     }
     std::string where;
     for (auto &dir : search_dirs) where += (where.empty() ? "" : ", ") + dir.string();

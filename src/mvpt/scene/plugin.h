@@ -16,6 +16,8 @@ namespace mvpt {
 struct LoadContext {
     /// Directories searched for relative file names: the including file's, then the scene's.
     std::vector<std::filesystem::path> search_dirs;
+    /// Where resolve() records the files it finds (for a scene's identity), if set.
+    std::vector<std::filesystem::path> *files = nullptr;
     /// Absolute path of an existing file, or a SceneError at `loc`.
     std::filesystem::path resolve(const std::string &name, const FileLoc &loc) const;
 };

@@ -32,6 +32,7 @@ Scene::~Scene() {
 
 void Scene::build(const SceneTree &tree) {
     const Properties &props = tree.props;
+    m_source_files = tree.source_files;
     for (const ChildObject &c : props.children()) {
         c.queried = true;
         bool owned_elsewhere = !c.id.empty() && tree.referenced_ids.count(c.id);
@@ -353,6 +354,7 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const 
     SceneTree tree = instantiate_scene(root, std::filesystem::absolute(path).parent_path());
     auto scene = std::make_unique<Scene>();
     scene->build(tree);
+    scene->set_load_options(defines, rig);
     return scene;
 }
 
@@ -363,6 +365,7 @@ std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::file
     SceneTree tree = instantiate_scene(root, std::filesystem::absolute(base_dir));
     auto scene = std::make_unique<Scene>();
     scene->build(tree);
+    scene->set_load_options(defines, rig);
     return scene;
 }
 

@@ -67,6 +67,14 @@ public:
     const Light *environment() const { return m_environment; }
     const std::vector<std::shared_ptr<Camera>> &cameras() const { return m_cameras; }
     const Integrator &integrator() const { return *m_integrator; }
+    /// The files the scene was read from (XML, meshes, textures, ...), absolute, without repeats.
+    const std::vector<std::filesystem::path> &source_files() const { return m_source_files; }
+    /// How the scene was loaded: the <default> overrides and the rig option.
+    const std::map<std::string, std::string> &defines() const { return m_defines; }
+    const std::string &rig() const { return m_rig; }
+    void set_load_options(std::map<std::string, std::string> defines, std::string rig) {
+        m_defines = std::move(defines), m_rig = std::move(rig);
+    }
     void set_integrator(std::shared_ptr<Integrator> i) { m_integrator = std::move(i); }
     const BoundingBox &bounds() const { return m_bounds; }
     /// True when some shape moves (animated transforms): then time matters to every ray.
@@ -95,6 +103,9 @@ private:
     mutable std::mutex m_occluders_mutex;
     /// Some shape moves (otherwise Embree's ray time is irrelevant and left at 0).
     bool m_animated = false;
+    std::vector<std::filesystem::path> m_source_files;
+    std::map<std::string, std::string> m_defines;
+    std::string m_rig;
 };
 
 /// Load a Mitsuba 3 XML scene; `defines` override its <default> values. A non-empty `rig`

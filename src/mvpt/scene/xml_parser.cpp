@@ -173,7 +173,7 @@ public:
         out.loc = root_loc;
         out.dir = dir;
         expand_children(root, *src, dir, out, depth);
-        if (depth == 0) out.search_dirs = m_path_dirs;
+        if (depth == 0) out.search_dirs = m_path_dirs, out.source_files = m_files;
         return out;
     }
 
@@ -190,6 +190,7 @@ public:
                                  "include cycle: " + chain + key.filename().string());
             }
         m_stack.push_back(key);
+        m_files.push_back(key);
         return key;
     }
     void leave_file(const fs::path &key) {
@@ -297,6 +298,7 @@ private:
     fs::path m_root_dir;
     std::vector<std::shared_ptr<SourceText>> m_sources;
     std::vector<fs::path> m_stack;   ///< files being expanded, outermost first
+    std::vector<fs::path> m_files;   ///< every XML file read, in order
     mutable std::set<std::string> m_used; ///< variables substituted at least once
     int m_nesting = 0;
 };
@@ -389,6 +391,8 @@ public:
     }
 
     bool referenced(const std::string &id) const { return m_referenced.count(id) != 0; }
+    /// The data files the factories resolved, in order.
+    const std::vector<fs::path> &files() const { return m_files; }
 
 private:
     /// Where files named by `node` are looked for: its file's directory, <path> dirs, the scene's.
@@ -397,6 +401,7 @@ private:
         ctx.search_dirs = {node.dir};
         for (auto &d : m_path_dirs) ctx.search_dirs.push_back(d);
         if (node.dir != m_scene_dir) ctx.search_dirs.push_back(m_scene_dir);
+        ctx.files = &m_files;
         return ctx;
     }
 
@@ -411,6 +416,7 @@ private:
     std::map<std::string, const XmlNode *> m_ids;
     std::set<std::string> m_referenced;
     std::map<const XmlNode *, std::shared_ptr<Object>> m_cache;
+    mutable std::vector<fs::path> m_files; ///< data files the factories resolved
 };
 
 } // namespace
@@ -447,6 +453,10 @@ SceneTree instantiate_scene(const XmlNode &root, const fs::path &scene_dir) {
     // the scene itself takes the rest (Mitsuba 3 does the same).
     for (auto &c : tree.props.children())
         if (!c.id.empty() && inst.referenced(c.id)) tree.referenced_ids.insert(c.id);
+    tree.source_files = root.source_files;
+    for (const fs::path &f : inst.files())
+        if (std::find(tree.source_files.begin(), tree.source_files.end(), f) == tree.source_files.end())
+            tree.source_files.push_back(f);
     return tree;
 }
 

@@ -36,6 +36,8 @@ struct XmlNode {
     std::filesystem::path dir;
     /// Root only: directories added by <path value="..."/>, searched after `dir` (latest first, as Mitsuba).
     std::vector<std::filesystem::path> search_dirs;
+    /// Root only: the XML files read (the scene's and its includes'), absolute.
+    std::vector<std::filesystem::path> source_files;
 
     const std::string *attr(const std::string &name) const {
         for (auto &a : attrs)
@@ -61,6 +63,8 @@ struct SceneTree {
     std::filesystem::path scene_dir;
     /// Ids of top-level objects that other objects reference (and so own).
     std::set<std::string> referenced_ids;
+    /// Every file the scene was read from: its XML files, then the files they name, absolute.
+    std::vector<std::filesystem::path> source_files;
 };
 
 /// Instantiate every object below the root node.

@@ -1,0 +1,92 @@
+"""Render state files (docs/checkpoints.md): what a render has done, to resume it.
+
+The native renderer writes the accumulators; this module writes and checks the header that
+names what they belong to: the mvpt version, the scene (every file it was read from, by
+SHA-256, with its <default> overrides and rig) and the settings that determine the image.
+A render resumes only from a state whose header matches its own; anything else is refused
+with the differences named."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+
+from . import __version__, _core
+
+SUFFIX = ".mvpt-state"
+StateError = _core.StateError
+
+# Settings that determine the image (threads do not: images are identical for any count).
+IMAGE_SETTINGS = ("method", "spp", "time", "seed", "views")
+
+
+def state_file(out_dir, stem: str) -> Path:
+    """Where a render of `stem` into `out_dir` keeps its state."""
+    from .output import _safe
+    return Path(out_dir) / f"{_safe(stem)}{SUFFIX}"
+
+
+def _sha256(path: str) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def scene_identity(scene) -> dict:
+    """The scene as a state file names it: its files by content, its overrides and rig."""
+    return {"files": {p: _sha256(p) for p in scene.source_files},
+            "defines": dict(sorted(scene.defines.items())), "rig": scene.rig,
+            "views": [v["id"] for v in scene.views]}
+
+
+def make_header(scene, settings: dict, extra: dict | None = None) -> dict:
+    """The header of a state file: version, scene identity, image settings and `extra` (e.g.
+    the command line's outputs, which a resume reuses but which do not change the image)."""
+    return {"mvpt": __version__, "scene": scene_identity(scene),
+            "settings": {k: settings[k] for k in IMAGE_SETTINGS}, "extra": extra or {}}
+
+
+def read_header(path) -> dict:
+    """The header of the state file at `path`; StateError if it is not a usable state file."""
+    text = _core.read_state_header(os.fspath(path))
+    try:
+        header = json.loads(text)
+    except ValueError:
+        raise StateError(f"the state file '{path}' has a corrupt header") from None
+    if not isinstance(header, dict) or not {"mvpt", "scene", "settings"} <= header.keys():
+        raise StateError(f"the state file '{path}' has a corrupt header")
+    return header
+
+
+def differences(saved: dict, current: dict) -> list:
+    """What differs between two headers, one phrase each (empty: the state can be resumed)."""
+    out = []
+    if saved["mvpt"] != current["mvpt"]:
+        out.append(f"mvpt version {saved['mvpt']} wrote it, this is {current['mvpt']}")
+    a, b = saved["scene"], current["scene"]
+    for path in sorted(set(a.get("files", {})) | set(b.get("files", {}))):
+        if path not in b.get("files", {}):
+            out.append(f"the scene no longer reads {path}")
+        elif path not in a.get("files", {}):
+            out.append(f"the scene now reads {path}")
+        elif a["files"][path] != b["files"][path]:
+            out.append(f"{path} has changed")
+    for key, name in (("defines", "the -D overrides"), ("rig", "the rig"), ("views", "the scene's views")):
+        if a.get(key) != b.get(key):
+            out.append(f"{name}: {a.get(key)!r} then, {b.get(key)!r} now")
+    for key in IMAGE_SETTINGS:
+        if saved["settings"].get(key) != current["settings"].get(key):
+            out.append(f"{key}: {saved['settings'].get(key)!r} then, {current['settings'].get(key)!r} now")
+    return out
+
+
+def check_resumable(path, current: dict) -> dict:
+    """The saved header of `path` if `current` may continue it; StateError naming what differs."""
+    saved = read_header(path)
+    diff = differences(saved, current)
+    if diff:
+        raise StateError(f"cannot resume from '{path}': " + "; ".join(diff))
+    return saved

@@ -1,0 +1,208 @@
+"""Render state files (docs/checkpoints.md): an interrupted render resumes to the bit-identical
+images of one that was never stopped (path tracing, both multi-view estimators, adaptive maps
+on, another thread count), through the API and the command line (SIGINT, SIGTERM, SIGHUP);
+a state of another scene, setting or mvpt version is refused naming what differs; a truncated
+or corrupt file is refused with one line."""
+from __future__ import annotations
+
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mvpt
+from mvpt import cli
+from mvpt import state as state_file
+
+from small_scenes import slow_scene
+
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+CLI = [sys.executable, "-m", "mvpt.cli"]
+SCENES = Path(__file__).resolve().parents[1] / "scenes" / "mv"
+
+
+def _interrupt_at(n_passes: int):
+    """A progress callback that interrupts the render once `n_passes` passes are done."""
+    def progress(p):
+        if p["pass"] >= n_passes:
+            raise KeyboardInterrupt
+    return progress
+
+
+def _assert_same(a, b):
+    for v in a.images:
+        assert np.array_equal(a.images[v], b.images[v]), v
+        assert np.array_equal(a.variance[v], b.variance[v]), v
+        assert np.array_equal(a.sample_count[v], b.sample_count[v]), v
+        if v in a.contributions:
+            assert np.array_equal(a.contributions[v], b.contributions[v]), v
+            assert np.array_equal(a.weight_sum[v], b.weight_sum[v]), v
+
+
+def _mvpath(estimator: str):
+    xml = (SCENES / "cornell_phong9.xml").read_text()
+    src = '<integrator type="$integrator">'
+    assert src in xml
+    xml = xml.replace(src, f'<integrator type="mvpath"><string name="estimator" value="{estimator}"/>', 1)
+    return mvpt.load_string(xml, SCENES, res=24)
+
+
+CASES = {  # name: (scene, method, spp); the multi-view ones make adaptive maps after 4 passes
+    "pt": (lambda: mvpt.load_string(slow_scene(3, res=24)), "pt", 40),
+    "mvpt-balance": (lambda: _mvpath("balance"), "mvpt", 24),
+    "mvpt-weighted": (lambda: _mvpath("weighted"), "mvpt", 24),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_resume_is_bit_identical(tmp_path, name):
+    make, method, spp = CASES[name]
+    scene = make()
+    whole = mvpt.render(scene, spp=spp, seed=7, method=method, threads=2)
+    rng = random.Random(name)
+    for stop in sorted(rng.sample(range(1, 15), 2)):
+        state = tmp_path / f"{stop}.mvpt-state"
+        part = mvpt.render(scene, spp=spp, seed=7, method=method, threads=2, state=state, poll=0.001,
+                           progress=_interrupt_at(stop))
+        assert part.stats["cancelled"] and 1 <= part.stats["passes"] < whole.stats["passes"], part.stats["passes"]
+        assert state.exists()
+        # Resumed on one thread, interrupted once more, then finished.
+        again = mvpt.render(scene, spp=spp, seed=7, method=method, threads=1, state=state, resume=state,
+                            poll=0.001, progress=_interrupt_at(part.stats["passes"] + 2))
+        assert again.stats["resumed_from_pass"] == part.stats["passes"]
+        done = mvpt.render(scene, spp=spp, seed=7, method=method, threads=2, state=state, resume=state)
+        assert done.stats["resumed_from_pass"] == again.stats["passes"] and not done.stats["cancelled"]
+        assert done.stats["passes"] == whole.stats["passes"] and done.stats["samples"] == whole.stats["samples"]
+        _assert_same(whole, done)
+
+
+def test_resume_refuses_other_settings(tmp_path, monkeypatch):
+    scene = mvpt.load_string(slow_scene(2, res=16))
+    state = tmp_path / "s.mvpt-state"
+    mvpt.render(scene, spp=4, seed=1, method="mvpt", state=state)
+    mvpt.render(scene, spp=4, seed=1, method="mvpt", resume=state)  # the same: accepted
+    for change, word in ((dict(spp=8), "spp"), (dict(seed=2), "seed"), (dict(method="pt"), "method"),
+                         (dict(views=[0]), "views"), (dict(time=1.0), "time")):
+        kw = dict(spp=4, seed=1, method="mvpt") | change
+        with pytest.raises(mvpt.StateError, match=f"cannot resume from .*{word}: "):
+            mvpt.render(scene, **kw, resume=state)
+    phong = mvpt.load_file(SCENES / "cornell_phong9.xml", res=8)
+    mvpt.render(phong, spp=2, seed=1, views=[0, 1], state=state)
+    with pytest.raises(mvpt.StateError, match="the -D overrides: .*'filter': 'gaussian'"):
+        mvpt.render(mvpt.load_file(SCENES / "cornell_phong9.xml", res=8, filter="gaussian"), spp=2, seed=1,
+                    views=[0, 1], resume=state)
+    monkeypatch.setattr(state_file, "__version__", "0.0.0")
+    with pytest.raises(mvpt.StateError, match="mvpt version .* wrote it, this is 0.0.0"):
+        mvpt.render(scene, spp=4, seed=1, method="mvpt", resume=state)
+
+
+def test_resume_refuses_a_changed_scene_file(tmp_path):
+    xml = tmp_path / "room.xml"
+    xml.write_text(slow_scene(2, res=16))
+    state = tmp_path / "s.mvpt-state"
+    mvpt.render(mvpt.load_file(xml), spp=2, seed=1, state=state)
+    xml.write_text(slow_scene(2, res=16).replace("<scene", "<!-- edited -->\n<scene", 1))
+    with pytest.raises(mvpt.StateError, match=f"{xml} has changed"):
+        mvpt.render(mvpt.load_file(xml), spp=2, seed=1, resume=state)
+
+
+def test_scene_source_files(tmp_path):
+    """The files a scene is read from: its XML, its includes, and the data files they name."""
+    mesh = tmp_path / "tri.obj"
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp_path / "inc.xml").write_text('<scene version="3.0.0"><shape type="obj"><string name="filename" '
+                                      'value="tri.obj"/></shape></scene>')
+    xml = slow_scene(1, res=8).replace("</scene>", '<include filename="inc.xml"/></scene>')
+    (tmp_path / "main.xml").write_text(xml)
+    scene = mvpt.load_file(tmp_path / "main.xml")
+    assert scene.source_files == [str(tmp_path / "main.xml"), str(tmp_path / "inc.xml"), str(mesh)]
+
+
+@pytest.mark.parametrize("method", ["pt", "mvpt"])
+def test_time_budget_is_the_total(tmp_path, method):
+    """Under a time budget a resume spends what is left of it: a state that used it all adds nothing."""
+    scene = mvpt.load_string(slow_scene(2, res=16))
+    state = tmp_path / "s.mvpt-state"
+    first = mvpt.render(scene, time=0.3, seed=1, method=method, state=state)
+    later = mvpt.render(scene, time=0.3, seed=1, method=method, state=state, resume=state)
+    assert later.stats["resumed_from_pass"] == first.stats["passes"] == later.stats["passes"]
+    _assert_same(first, later)
+
+
+def _corrupt(path: Path, how: str):
+    data = bytearray(path.read_bytes())
+    if how == "truncated":
+        path.write_bytes(bytes(data[: len(data) * 2 // 3]))
+    elif how == "flipped":
+        data[len(data) // 2] ^= 0x10
+        path.write_bytes(bytes(data))
+    elif how == "appended":
+        path.write_bytes(bytes(data) + b"\0")
+    else:
+        path.write_bytes(b"not a state file at all")
+
+
+@pytest.mark.parametrize("how,message", [("truncated", "is truncated"), ("flipped", "is corrupt"),
+                                         ("appended", "is corrupt"), ("garbage", "is not an mvpt state file")])
+def test_corrupt_state_is_refused(tmp_path, capsys, how, message):
+    scene_path = tmp_path / "room.xml"
+    scene_path.write_text(slow_scene(2, res=16))
+    out = tmp_path / "out"
+    assert cli.main(["render", str(scene_path), "--spp", "3", "--checkpoint", "100", "-o", str(out), "-q"]) == 0
+    state = out / f"room{state_file.SUFFIX}"
+    _corrupt(state, how)
+    capsys.readouterr()
+    assert cli.main(["render", "--resume", str(out), "-q"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mvpt: error: ") and message in err[0], err
+    with pytest.raises(mvpt.StateError, match=message):
+        mvpt.render(mvpt.load_file(scene_path), spp=3, resume=state)
+
+
+def test_resume_takes_no_image_options(tmp_path, capsys):
+    assert cli.main(["render", "--resume", str(tmp_path), "--spp", "4"]) == 2
+    assert "--resume continues a render with its own scene and settings; drop --spp" in capsys.readouterr().err
+    assert cli.main(["render", "--resume", str(tmp_path)]) == 1
+    assert "holds no render states" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_cli_signal_then_resume(tmp_path, sig):
+    path = tmp_path / "slow.xml"
+    path.write_text(slow_scene(3, res=32))
+    args = ["--spp", "400", "--seed", "3", "--method", "mvpt", "--aovs", "-q"]
+    whole = tmp_path / "whole"
+    assert subprocess.run(CLI + ["render", str(path), *args, "-o", str(whole)], env=ENV).returncode == 0
+    assert not (whole / "slow.mvpt-state").exists()  # a finished render keeps no state unless asked
+    out = tmp_path / "out"
+    proc = subprocess.Popen(CLI + ["render", str(path), *args, "--checkpoint", "0.2", "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 60
+        while not (out / "slow.mvpt-state").exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        proc.send_signal(sig)
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 128 + int(sig), stderr
+    assert "Traceback" not in stderr and f"mvpt render --resume {out}" in stderr
+    cut = json.loads((out / "slow.json").read_text())
+    assert cut["cancelled"] and cut["passes"] < json.loads((whole / "slow.json").read_text())["passes"]
+    resumed = subprocess.run(CLI + ["render", "--resume", str(out), "--threads", "1", "-q"], env=ENV,
+                             capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    data = json.loads((out / "slow.json").read_text())
+    assert data["resumed_from_pass"] == cut["passes"] and not data["cancelled"]
+    for i in range(3):
+        assert (out / f"slow_v{i}.exr").read_bytes() == (whole / f"slow_v{i}.exr").read_bytes()
+    assert (out / "slow.mvpt-state").exists()  # --checkpoint keeps the state of the finished render
