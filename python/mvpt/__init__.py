@@ -8,7 +8,7 @@
 __version__ = "0.1.0"
 
 from ._core import SceneError, Scene, StateError
-from .api import load_file, load_string, render, RenderResult
+from .api import load_file, load_string, merge, render, RenderResult
 from .output import write_outputs
 
-__all__ = ["SceneError", "StateError", "Scene", "load_file", "load_string", "render", "RenderResult", "write_outputs"]
+__all__ = ["SceneError", "StateError", "Scene", "load_file", "load_string", "render", "merge", "RenderResult", "write_outputs"]

@@ -87,7 +87,7 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
            progress: Optional[Callable[[dict], None]] = None, poll: float = 0.1,
            method: str = "scene", state: Optional[str | os.PathLike] = None, checkpoint: float = 0.0,
            resume: Optional[str | os.PathLike] = None, state_at_end: bool = True,
-           state_extra: Optional[dict] = None) -> RenderResult:
+           state_extra: Optional[dict] = None, passes: Optional[Sequence[int]] = None) -> RenderResult:
     """Render all views (or `views`: ids or indices) of `scene`.
 
     method: "pt" (independent path tracing of every view), "mvpt" (multi-view path tracing,
@@ -113,7 +113,12 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     state file of the same scene and settings to continue from: the images are bit-identical
     to those of a render that was never stopped (with `time`, the budget is the total of all
     runs). A state of another scene, setting or mvpt version raises mvpt.StateError naming
-    what differs, as does a file that is truncated or corrupt."""
+    what differs, as does a file that is truncated or corrupt.
+
+    passes: (first, count) renders one range of a render split over processes or machines
+    (docs/distributed.md): `count` passes of every view, taking the samples of passes
+    first .. first + count - 1 (spp is ignored); the states of ranges that do not overlap
+    (or of other seeds) combine with `merge`."""
     if int(spp) < 0:
         raise ValueError(f"spp must be >= 0, got {spp}")
     if not float(time) >= 0.0:
@@ -128,12 +133,17 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"method must be 'pt', 'mvpt' or 'scene', got {method!r}")
     if not (float(checkpoint) >= 0.0):
         raise ValueError(f"checkpoint must be >= 0 seconds, got {checkpoint}")
+    if passes is not None:
+        first, count = (int(x) for x in passes)
+        if not (0 <= first and 1 <= count and first + count < 2**31):
+            raise ValueError(f"passes must be (first >= 0, count >= 1) within 2^31, got {tuple(passes)}")
+        passes = [first, count]
     index = resolve_views(scene, views)
     header = None
     if state is not None or resume is not None:
         ids = [v["id"] for v in scene.views]
-        settings = dict(method=method, spp=int(spp), time=float(time), seed=None if seed is None else int(seed),
-                        views=[ids[i] for i in index] or ids)
+        settings = dict(method=method, spp=0 if passes else int(spp), time=float(time),
+                        seed=None if seed is None else int(seed), views=[ids[i] for i in index] or ids, passes=passes)
         header = state_file.make_header(scene, settings, state_extra)
     if resume is not None:
         state_file.check_resumable(resume, header)
@@ -142,7 +152,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
                           state_path=os.fspath(state) if state is not None else "",
                           state_header=json.dumps(header) if state is not None else "",
                           checkpoint_interval=float(checkpoint), state_at_end=bool(state_at_end),
-                          resume_path=os.fspath(resume) if resume is not None else "")
+                          resume_path=os.fspath(resume) if resume is not None else "",
+                          first_pass=passes[0] if passes else 0, pass_count=passes[1] if passes else 0)
     job.start()
     interrupted = None
     try:
@@ -156,6 +167,51 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         job.cancel()
         while not job.wait(poll):
             pass
+    result = _result(scene, job, index, dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads),
+                                             method=method, passes=passes))
+    if interrupted is not None:
+        result.stats["cancelled"] = True
+        if not isinstance(interrupted, KeyboardInterrupt):
+            raise interrupted
+    return result
+
+
+def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int = 0,
+          state: Optional[str | os.PathLike] = None) -> RenderResult:
+    """The images of the state files `states`, ranges (or seeds) of one render of `scene`
+    (render(passes=...)), as if one process had rendered them all: their accumulators are
+    added in the order of their ranges (whatever order they are given in) and developed with the estimator's own arithmetic. States that
+    differ in anything but their ranges and seeds, or that share samples, raise
+    mvpt.StateError naming what differs. `state`: where to write the merged state (which can
+    be merged further, not resumed)."""
+    paths = [os.fspath(p) for p in states]
+    if not paths:
+        raise ValueError("merge needs at least one state file")
+    # In the order of their parts (seed, first pass), whatever order they are given in, so
+    # that the sums are added in one order.
+    headers = state_file.check_mergeable(paths)
+    order = sorted(range(len(paths)), key=lambda i: state_file.part_key(headers[i]["parts"][0]))
+    paths, headers = [paths[i] for i in order], [headers[i] for i in order]
+    first = headers[0]
+    ids = [v["id"] for v in scene.views]
+    settings = first["settings"]
+    current = state_file.make_header(scene, dict(settings, passes=None))
+    diff = [d for d in state_file.differences(dict(first, settings=current["settings"]), current)]
+    if diff:
+        raise state_file.StateError(f"cannot merge '{paths[0]}' for this scene: " + "; ".join(diff))
+    index = resolve_views(scene, settings["views"])
+    if index == list(range(len(ids))):
+        index = []
+    merged = state_file.merged_header(headers)
+    job = _core.RenderJob(scene, spp=int(settings["spp"] or 0), time=0.0, threads=int(threads), views=index,
+                          method=settings["method"], state_path=os.fspath(state) if state is not None else "",
+                          state_header=json.dumps(merged))
+    job.merge(paths)
+    return _result(scene, job, index, dict(settings, threads=int(threads), merged=len(paths)))
+
+
+def _result(scene, job, index: list, settings: dict) -> RenderResult:
+    """The images and statistics of a finished job."""
     result = RenderResult()
     results = job.results()
     for r in results:
@@ -165,12 +221,7 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         if "contributions" in r:
             result.contributions[r["id"]] = r["contributions"]
             result.weight_sum[r["id"]] = r["weight_sum"]
-    result.stats = _stats(scene, job.stats(), results, index,
-                          dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads), method=method))
-    if interrupted is not None:
-        result.stats["cancelled"] = True
-        if not isinstance(interrupted, KeyboardInterrupt):
-            raise interrupted
+    result.stats = _stats(scene, job.stats(), results, index, settings)
     return result
 
 

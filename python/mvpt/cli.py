@@ -8,9 +8,7 @@ had finished)."""
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
 import signal
 import sys
 import threading
@@ -20,8 +18,8 @@ from pathlib import Path
 
 from . import __version__, api
 from . import state as state_file
-from ._core import SceneError, StateError
-from . import displays, reports_cli
+from ._core import SceneError
+from . import displays, reports_cli, state_cli
 from .output import write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -211,19 +209,25 @@ def _render(scene_path: Path, args, stem: str) -> int:
         return EXIT_USAGE
     if not args.quiet:
         n = len(views) if views else len(scene.views)
-        budget = [f"{args.spp} spp" if args.spp else "each sensor's spp"] + ([f"{args.time:g} s"] if args.time else [])
+        budget = [f"passes {args.passes[0]}:{args.passes[1]}" if args.passes else
+                  f"{args.spp} spp" if args.spp else "each sensor's spp"] + ([f"{args.time:g} s"] if args.time else [])
         print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
               f"and writes the passes finished so far)", flush=True)
+    if args.passes and args.spp:
+        _error("--passes renders COUNT passes of every view; drop --spp")
+        return EXIT_USAGE
     bar = ProgressBar(enabled=False if args.quiet else None)
     state = state_file.state_file(args.output, stem)
+    keep_state = args.checkpoint > 0 or args.passes is not None  # a range's state is what merges
     resume = getattr(args, "resume_state", None)
     try:
         if not resume:
             args.output.mkdir(parents=True, exist_ok=True)
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
                             views=views, progress=bar, method=args.method, state=state,
-                            checkpoint=args.checkpoint, resume=resume, state_at_end=args.checkpoint > 0,
-                            state_extra={"command": _command_record(scene_path, args, stem)})
+                            checkpoint=args.checkpoint, resume=resume, state_at_end=keep_state,
+                            state_extra={"command": state_cli.command_record(scene_path, args, stem)},
+                            passes=args.passes)
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
         bar.finish(done=False)
         _error(str(e) or type(e).__name__)
@@ -235,7 +239,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
             state.unlink(missing_ok=True)
         print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
         return 128 + int(_stopped_by)
-    if not cancelled and args.checkpoint == 0:
+    if not cancelled and not keep_state:
         state.unlink(missing_ok=True)  # the render is complete: a state was not asked for
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
     if args.rig:
@@ -255,54 +259,6 @@ def _render(scene_path: Path, args, stem: str) -> int:
               f"mvpt render --resume {args.output}", file=sys.stderr)
         return 128 + int(_stopped_by)
     return EXIT_OK
-
-
-# The options that make a render's image: `--resume` takes them from the state file.
-_IMAGE_OPTIONS = ("define", "spp", "time", "seed", "method", "rig", "views")
-# What a resume reuses of the first run's command line (outputs included).
-_RECORDED_OPTIONS = _IMAGE_OPTIONS + ("aovs", "multiview_exr", "stereo", "quilt", "contact_sheet", "gif", "mp4",
-                                      "fps", "exposure")
-
-
-def _command_record(scene_path: Path, args, stem: str) -> dict:
-    """The command line of a render as its state file keeps it, for `--resume`."""
-    record = {k: getattr(args, k, None) for k in _RECORDED_OPTIONS}
-    record["define"] = [list(d) for d in (args.define or [])]
-    return dict(record, scene=str(Path(scene_path).resolve()), stem=stem, checkpoint=args.checkpoint)
-
-
-def _resume(args) -> int:
-    """`mvpt render --resume OUT`: continue the render whose state is in OUT (or is the file OUT)."""
-    given = [f"--{k.replace('_', '-')}" for k in _IMAGE_OPTIONS if getattr(args, k) not in (None, 0, 0.0, "scene", [])]
-    if args.scene is not None:
-        given.insert(0, "a scene")
-    if given:
-        _error(f"--resume continues a render with its own scene and settings; drop {', '.join(given)}")
-        return EXIT_USAGE
-    path = Path(args.resume)
-    if path.is_dir():
-        found = sorted(path.glob(f"*{state_file.SUFFIX}"))
-        if len(found) != 1:
-            _error(f"{path} holds {'no' if not found else len(found)} render states ({state_file.SUFFIX})"
-                   + (": name one" if found else ""))
-            return EXIT_ERROR
-        path = found[0]
-    try:
-        record = state_file.read_header(path).get("extra", {}).get("command")
-    except StateError as e:
-        _error(str(e))
-        return EXIT_ERROR
-    if not isinstance(record, dict) or "scene" not in record:
-        _error(f"the state file '{path}' was not written by `mvpt render`; resume it with mvpt.render(resume=...)")
-        return EXIT_ERROR
-    for k in _RECORDED_OPTIONS:
-        setattr(args, k, record.get(k))
-    args.define = [tuple(d) for d in record.get("define") or []]
-    args.output = path.parent
-    args.resume_state = path
-    if args.checkpoint == 0:  # periodic checkpoints go on unless changed
-        args.checkpoint = float(record.get("checkpoint") or 0.0)
-    return _render(Path(record["scene"]), args, record["stem"])
 
 
 def _add_render_options(p: argparse.ArgumentParser) -> None:
@@ -328,6 +284,10 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="add variance and sample-count channels (mvpt: native samples and contributions "
                         "received) to the EXRs")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    p.add_argument("--passes", type=state_cli.pass_range, default=None, metavar="FIRST:COUNT",
+                   help="render one range of a render split over processes or machines: COUNT passes of "
+                        "every view with the samples of passes FIRST..FIRST+COUNT-1 (instead of --spp); "
+                        "combine the ranges' states with `mvpt merge`")
     p.add_argument("--checkpoint", type=_seconds, default=0.0, metavar="SECONDS",
                    help="write the render's state (<stem>.mvpt-state in the output directory) every SECONDS "
                         "and keep it at the end (an interrupted render always writes it)")
@@ -348,6 +308,7 @@ def main(argv=None) -> int:
     p_demo = sub.add_parser("demo", help="render the built-in demo scene")
     _add_render_options(p_demo)
     reports_cli.add_commands(sub)
+    state_cli.add_merge_command(sub)
     try:
         args = parser.parse_args(argv)
     except SystemExit as e:
@@ -360,13 +321,15 @@ def main(argv=None) -> int:
     try:
         if args.command == "render":
             if args.resume is not None:
-                return _resume(args)
+                return state_cli.resume(args, _render)
             if args.scene is None:
                 _error("render: the scene is required (or --resume OUT)")
                 return EXIT_USAGE
             return _render(args.scene, args, args.scene.stem)
         if args.command in reports_cli.COMMANDS:
             return reports_cli.run(args)
+        if args.command == "merge":
+            return state_cli.merge(args)
         with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
             return _render(demo, args, "demo")
     except KeyboardInterrupt:

@@ -18,7 +18,9 @@ SUFFIX = ".mvpt-state"
 StateError = _core.StateError
 
 # Settings that determine the image (threads do not: images are identical for any count).
-IMAGE_SETTINGS = ("method", "spp", "time", "seed", "views")
+IMAGE_SETTINGS = ("method", "spp", "time", "seed", "views", "passes")
+# What ranges of one render may differ in (each takes other samples); the rest must be equal.
+RANGE_SETTINGS = ("seed", "passes", "spp", "time")
 
 
 def state_file(out_dir, stem: str) -> Path:
@@ -45,8 +47,10 @@ def scene_identity(scene) -> dict:
 def make_header(scene, settings: dict, extra: dict | None = None) -> dict:
     """The header of a state file: version, scene identity, image settings and `extra` (e.g.
     the command line's outputs, which a resume reuses but which do not change the image)."""
+    first, count = settings["passes"] or (0, None)
     return {"mvpt": __version__, "scene": scene_identity(scene),
-            "settings": {k: settings[k] for k in IMAGE_SETTINGS}, "extra": extra or {}}
+            "settings": {k: settings[k] for k in IMAGE_SETTINGS}, "extra": extra or {},
+            "parts": [[settings["seed"], first, count]]}
 
 
 def read_header(path) -> dict:
@@ -86,7 +90,56 @@ def differences(saved: dict, current: dict) -> list:
 def check_resumable(path, current: dict) -> dict:
     """The saved header of `path` if `current` may continue it; StateError naming what differs."""
     saved = read_header(path)
+    if saved.get("merged"):
+        raise StateError(f"cannot resume from '{path}': it is a merge of {len(saved['parts'])} states")
     diff = differences(saved, current)
     if diff:
         raise StateError(f"cannot resume from '{path}': " + "; ".join(diff))
     return saved
+
+
+def _overlap(a: list, b: list) -> bool:
+    """Whether two parts [seed, first pass, count or None (unbounded)] can share samples."""
+    if a[0] != b[0]:
+        return False  # other seeds: other sample streams
+    end = lambda p: float("inf") if p[2] is None else p[1] + p[2]
+    return a[1] < end(b) and b[1] < end(a)
+
+
+def _part(p: list) -> str:
+    seed = "the sensors' seed" if p[0] is None else f"seed {p[0]}"
+    return f"passes {p[1]}:{'all' if p[2] is None else p[2]} of {seed}"
+
+
+def check_mergeable(paths: list) -> list:
+    """The headers of the state files `paths` if they are parts of one render that take
+    disjoint samples (other pass ranges or seeds); StateError naming what differs otherwise."""
+    headers = [read_header(p) for p in paths]
+    first = headers[0]
+    for path, h in zip(paths[1:], headers[1:]):
+        a, b = dict(first), dict(h)
+        a["settings"] = {k: v for k, v in first["settings"].items() if k not in RANGE_SETTINGS}
+        b["settings"] = {k: v for k, v in h["settings"].items() if k not in RANGE_SETTINGS}
+        diff = differences(a, b)
+        if diff:
+            raise StateError(f"cannot merge '{paths[0]}' and '{path}': " + "; ".join(diff))
+    parts = [(path, part) for path, h in zip(paths, headers) for part in h.get("parts", [])]
+    for i, (pa, a) in enumerate(parts):
+        for pb, b in parts[i + 1:]:
+            if _overlap(a, b):
+                raise StateError(f"cannot merge '{pa}' ({_part(a)}) and '{pb}' ({_part(b)}): they share samples")
+    return headers
+
+
+def part_key(part: list) -> tuple:
+    """Parts in order: the sensors' seed first, then by seed, then by first pass."""
+    return (part[0] is not None, part[0] or 0, part[1])
+
+
+def merged_header(headers: list) -> dict:
+    """The header of the merge of states with `headers` (check_mergeable)."""
+    out = dict(headers[0])
+    out["settings"] = dict(out["settings"], seed=None, passes=None)
+    out["parts"] = sorted((p for h in headers for p in h.get("parts", [])), key=part_key)
+    out["merged"] = True
+    return out

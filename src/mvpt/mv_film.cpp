@@ -104,8 +104,8 @@ void MvFilm::load(StateReader &in) {
     // The film was made for this render: the file's must have its kind and size.
     const uint32_t est = in.get<uint32_t>(), cv = in.get<uint32_t>(), adaptive = in.get<uint32_t>();
     const int32_t w_ = in.get<int32_t>(), h_ = in.get<int32_t>(), m_ = in.get<int32_t>();
-    if (est != uint32_t(estimator) || cv != uint32_t(control_variate) || adaptive != uint32_t(!e_sum.empty()))
-        throw StateError("the state was rendered with another multi-view estimator or adaptive setting");
+    if (est != uint32_t(estimator) || cv != uint32_t(control_variate))
+        throw StateError("the state was rendered with another multi-view estimator");
     if (w_ != width || h_ != height || m_ != margin)
         throw StateError("the state has a view of " + std::to_string(w_) + "x" + std::to_string(h_) + " pixels (margin " +
                          std::to_string(m_) + ") where this render has " + std::to_string(width) + "x" +
@@ -113,8 +113,33 @@ void MvFilm::load(StateReader &in) {
     passes = in.get<uint32_t>(), level = in.get<double>(), nonfinite = in.get<uint64_t>(), map_total = in.get<uint64_t>();
     const size_t n = pixels();
     in.get(sum, sum.size()), in.get(m2, m2.size()), in.get(w_sum, n), in.get(lw, lw.size()), in.get(e, e.size());
-    in.get(w, w.size()), in.get(e_sum, e_sum.size()), in.get(e_sq, e_sq.size()), in.get(s_sq, s_sq.size());
+    // The adaptive maps' statistics as the file has them (a range too short for maps has none).
+    const size_t stats = adaptive ? n : 0;
+    in.get(w, w.size()), in.get(e_sum, stats), in.get(e_sq, stats), in.get(s_sq, stats);
     in.get(native, n), in.get(received, n), in.get(map, map.size());
+}
+
+void MvFilm::merge(const MvFilm &o) {
+    const double na = passes, nb = o.passes, n = na + nb;
+    for (size_t i = 0; i < sum.size(); ++i) {
+        const double delta = (nb > 0.0 ? o.sum[i] / nb : 0.0) - (na > 0.0 ? sum[i] / na : 0.0);
+        m2[i] = float(double(m2[i]) + double(o.m2[i]) + (n > 0.0 ? delta * delta * na * nb / n : 0.0));
+        sum[i] += o.sum[i];
+    }
+    for (size_t i = 0; i < lw.size(); ++i) lw[i] += o.lw[i], e[i] += o.e[i];
+    for (size_t p = 0; p < pixels(); ++p) {
+        w_sum[p] += o.w_sum[p];
+        if (!w.empty()) w[p] += o.w[p];
+        native[p] += o.native[p];
+        received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + o.received[p], UINT32_MAX));
+    }
+    // The adaptive statistics only where both have them (the maps are not used again).
+    if (e_sum.size() == o.e_sum.size())
+        for (size_t p = 0; p < e_sum.size(); ++p) e_sum[p] += o.e_sum[p], e_sq[p] += o.e_sq[p], s_sq[p] += o.s_sq[p];
+    else
+        e_sum.clear(), e_sq.clear(), s_sq.clear();
+    passes += o.passes;
+    nonfinite += o.nonfinite;
 }
 
 } // namespace mvpt

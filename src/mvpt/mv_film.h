@@ -63,6 +63,9 @@ struct MvFilm {
     /// Every accumulator into a state file, and back (a StateError if the file's do not fit).
     void save(StateWriter &out) const;
     void load(StateReader &in);
+    /// Adds the accumulators of `other` (the same view, disjoint passes): sums add, the
+    /// squared deviations combine with the difference of the means (Chan et al.).
+    void merge(const MvFilm &other);
     /// Mean over passes of the sum of W of pixel p (1 in expectation for the balance estimator).
     float weight_sum(size_t p) const { return passes ? float(double(w_sum[p]) / passes) : 0.f; }
 };

@@ -50,6 +50,8 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
             throw std::invalid_argument("view index " + std::to_string(v) + " out of range (the scene has " +
                                         std::to_string(cams.size()) + " views)");
     if (m_opts.spp < 0) throw std::invalid_argument("spp must be >= 0");
+    if (m_opts.first_pass < 0 || m_opts.pass_count < 0 || m_opts.first_pass > INT32_MAX - m_opts.pass_count)
+        throw std::invalid_argument("the pass range must lie in [0, 2^31)");
     if (!(m_opts.time_budget >= 0.0)) throw std::invalid_argument("time budget must be >= 0");
     m_multiview = m_opts.method == RenderMethod::MultiView ||
                   (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));
@@ -88,7 +90,7 @@ double Renderer::estimate_peak_bytes() const {
     double per_pixel = std::max(double(6 * sizeof(double) + sizeof(uint32_t)), developed), per_thread = 1 << 19;
     if (m_multiview) {
         const MvConfig cfg = multiview_config(m_scene.integrator());
-        const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > cfg.adaptive_warmup);
+        const bool adaptive = adaptive_maps(cfg);
         const double film = double(MvFilm::bytes_per_pixel(cfg.estimator, adaptive));
         per_pixel = std::max(film + double(MvPassFilm::bytes_per_pixel(cfg.estimator == MvEstimator::Weighted)),
                              developed + 2 * sizeof(float));
@@ -117,12 +119,14 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     m_stats.threads = threads;
     tbb::task_arena arena(threads);
 
-    // Target samples per view: the option, or each sensor's sampler, or unbounded under a time budget.
+    // Target samples per view: the option, or each sensor's sampler, or unbounded under a time
+    // budget; a range's passes. (Pass q takes sample first_pass + q of every pixel.)
     std::vector<int> target(m_views.size());
     int max_target = 0;
     for (size_t i = 0; i < m_views.size(); ++i) {
         int t = m_opts.spp > 0 ? m_opts.spp : cams[m_views[i]]->sample_count;
         if (m_opts.time_budget > 0.0 && m_opts.spp == 0) t = INT32_MAX;
+        if (m_opts.pass_count > 0) t = m_opts.pass_count;
         target[i] = t;
         max_target = std::max(max_target, t);
     }
@@ -131,7 +135,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
 
     tbb::enumerable_thread_specific<RayCounters> counters;
     std::mutex nonfinite_mutex;
-    if (!m_opts.resume_path.empty()) read_state();
+    if (!m_opts.resume_path.empty()) read_state(m_opts.resume_path);
+    const uint32_t sample0 = uint32_t(m_opts.first_pass);
     // A resumed render's clock goes on from the seconds of the runs before (for --time).
     const auto t_start = clock::now() - std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(m_elapsed_before));
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
@@ -176,14 +181,14 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         };
         if (pass1 - pass0 == 1) {
             for (int y = tile.y0; y < tile.y1; ++y)
-                for (int x = tile.x0; x < tile.x1; ++x) add(x, y, pass0);
+                for (int x = tile.x0; x < tile.x1; ++x) add(x, y, sample0 + pass0);
         } else {
             constexpr int Block = 4;
             for (int by = tile.y0; by < tile.y1; by += Block)
                 for (int bx = tile.x0; bx < tile.x1; bx += Block)
                     for (int y = by; y < std::min(by + Block, tile.y1); ++y)
                         for (int x = bx; x < std::min(bx + Block, tile.x1); ++x)
-                            for (int q = pass0; q < pass1; ++q) add(x, y, q);
+                            for (int q = pass0; q < pass1; ++q) add(x, y, sample0 + q);
         }
         std::vector<Sampler> &samplers = tb.samplers;
         std::vector<Ray> &rays = tb.rays;

@@ -44,6 +44,12 @@ struct RenderOptions {
     /// A state file of the same scene and settings to continue from (the caller compares their
     /// headers; the renderer checks that the accumulators fit).
     std::string resume_path;
+    /// A range of a render split over processes or machines (docs/distributed.md): with
+    /// `pass_count` > 0, every view renders `pass_count` passes whose samples are those of passes
+    /// [first_pass, first_pass + pass_count) (spp is ignored; multi-view path tracing numbers a
+    /// pixel's native samples from first_pass times the most it takes in a pass). Ranges that do
+    /// not overlap take disjoint samples, and their states merge (Renderer::merge).
+    int first_pass = 0, pass_count = 0;
 };
 
 /// Result of one view: crop-window-sized images, row-major, y down.
@@ -104,6 +110,10 @@ public:
     Renderer(const Scene &scene, RenderOptions opts);
     /// Run to completion, cancellation, or budget; `progress` is called after each pass.
     void render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress = {});
+    /// Instead of rendering: the sum of the state files of disjoint ranges (or seeds) of this
+    /// render, added in the order given, developed into the results; `state_path`, if set, gets
+    /// the merged state.
+    void merge(const std::vector<std::string> &paths);
 
     const std::vector<ViewResult> &results() const { return m_results; }
     /// The results, moved out (the renderer keeps none).
@@ -148,8 +158,14 @@ private:
     /// multi-view path tracing, its statistics and dropped contributions by slot.
     void write_state(int next_pass, double elapsed, double last_pass, const RayCounters &counters,
                      const std::vector<MvViewStats> &mv_stats = {}, const std::vector<uint64_t> &mv_dropped = {}) const;
-    /// Continues from m_opts.resume_path (after the accumulators are made).
-    void read_state();
+    /// Loads the state file at `path` into the accumulators (made for this render).
+    void read_state(const std::string &path);
+    /// Adds another renderer's loaded state to this one's.
+    void add_state(const Renderer &other);
+    /// Multi-view path tracing: whether this render makes adaptive native-sample maps.
+    bool adaptive_maps(const MvConfig &cfg) const;
+    /// Multi-view path tracing: the method's settings, context, accumulators and maps.
+    std::vector<SplatFootprint> prepare_multiview_render(MvConfig &cfg);
     /// Writes the state file when a checkpoint is due (`last`: the time of the previous one).
     bool checkpoint_due(double elapsed, double &last) const;
 

@@ -87,25 +87,26 @@ std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scen
 void Renderer::render_multiview(const std::atomic<bool> &cancel,
                                 const std::function<void(const RenderProgress &)> &progress) {
     using clock = std::chrono::steady_clock;
-    auto [path, cfg] = multiview_settings(m_scene);
-    m_stats.method = "mvpt";
-    m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
-                                                              : (cfg.mis_selected_only ? "weighted-selected" : "weighted");
+    MvConfig cfg;
+    const std::vector<SplatFootprint> footprints = prepare_multiview_render(cfg);
+    const bool adaptive = adaptive_maps(cfg);
+    if (!m_opts.resume_path.empty()) read_state(m_opts.resume_path);
     int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     m_stats.threads = threads;
     tbb::task_arena arena(threads);
 
-    // The adaptive maps' statistics are kept only if a map will be made (after the warm-up).
-    const bool adaptive = cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > std::max(2, cfg.adaptive_warmup));
-    const std::vector<SplatFootprint> footprints = prepare_multiview(path, cfg, adaptive);
-    m_mv_stats_before.assign(m_views.size(), MvViewStats{});
-    if (!m_opts.resume_path.empty()) read_state();
-
     // Target: spp native samples per pixel on average, the same for every view (all views take
     // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
     // native sample per pixel until the adaptive maps start, then `adaptive_budget` per pixel.
+    // A range renders its passes; its pixels' native samples are numbered from first_pass times
+    // the most a pixel takes in a pass, its margins' from first_pass (one per pass).
     const int spp_target = this->spp_target();
-    const bool unbounded = m_opts.time_budget > 0.0 && m_opts.spp == 0;
+    const bool range = m_opts.pass_count > 0;
+    const bool unbounded = range || (m_opts.time_budget > 0.0 && m_opts.spp == 0);
+    const uint64_t per_pass = adaptive ? uint64_t(cfg.adaptive_max) : 1;
+    if ((uint64_t(m_opts.first_pass) + uint64_t(m_opts.pass_count)) * per_pass > UINT32_MAX)
+        throw std::invalid_argument("the pass range numbers samples beyond 2^32");
+    const uint32_t sample0 = uint32_t(uint64_t(m_opts.first_pass) * per_pass), margin0 = uint32_t(m_opts.first_pass);
     double &native_done = m_native_done; // mean native samples per pixel so far
     uint64_t pixels_total = 0;
     for (const MvFilm &mf : m_mv_films) pixels_total += mf.pixels();
@@ -127,7 +128,8 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
                 // sample per pass.
                 const int cx = x - w.margin, cy = y - w.margin;
                 const bool inside = cx >= 0 && cy >= 0 && cx < mf.width && cy < mf.height;
-                const uint32_t first = inside ? mf.native[size_t(cy) * size_t(mf.width) + size_t(cx)] : uint32_t(pass);
+                const uint32_t first = inside ? sample0 + mf.native[size_t(cy) * size_t(mf.width) + size_t(cx)]
+                                              : margin0 + uint32_t(pass);
                 const uint16_t n = mf.map[size_t(y) * size_t(w.width()) + size_t(x)];
                 for (uint32_t j = 0; j < n; ++j) prim.push(x + w.x0, y + w.y0, first + j);
             }
@@ -166,7 +168,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         for (uint64_t d : dropped) counters.nonfinite += d;
         write_state(next_pass, seconds(), last_pass, counters, stats, dropped);
     };
-    for (; unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
+    for (; range ? pass < m_opts.pass_count : unbounded || native_done < double(spp_target) - 1e-6; ++pass) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
         if (pass > 0 && budget > 0.0 && seconds() + last_pass > budget) break;
         const double t_pass = seconds();
@@ -181,7 +183,9 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
             p.pass = pass;
             p.elapsed = seconds();
             p.samples = m_stats.samples + samples_done;
-            p.fraction = unbounded ? 0.0 : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) / spp_target);
+            p.fraction = range      ? (pass + double(samples_done) / double(pass_samples)) / m_opts.pass_count
+                         : unbounded ? 0.0
+                                     : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) / spp_target);
             if (budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / budget));
             progress(p);
         };
@@ -219,7 +223,10 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         m_stats.between_passes_seconds += seconds() - t_between;
         last_pass = seconds() - t_pass;
         finish_pass(pass, pass_samples, last_pass, seconds(),
-                    unbounded ? 0.0 : std::min(1.0, native_done / double(spp_target)), progress);
+                    range       ? double(pass + 1) / m_opts.pass_count
+                    : unbounded ? 0.0
+                                : std::min(1.0, native_done / double(spp_target)),
+                    progress);
         if (checkpoint_due(seconds(), last_checkpoint)) save_state(pass + 1);
     }
     m_stats.seconds = seconds();
@@ -246,6 +253,23 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         m_results[s].mv = per_view[s];
         m_stats.mv += per_view[s];
     }
+}
+
+bool Renderer::adaptive_maps(const MvConfig &cfg) const {
+    // The adaptive maps' statistics are kept only if a map will be made (after the warm-up).
+    const int warmup = std::max(2, cfg.adaptive_warmup);
+    if (m_opts.pass_count > 0) return cfg.adaptive && m_opts.pass_count > warmup;
+    return cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > warmup);
+}
+
+std::vector<SplatFootprint> Renderer::prepare_multiview_render(MvConfig &cfg) {
+    const auto [path, config] = multiview_settings(m_scene);
+    cfg = config;
+    m_stats.method = "mvpt";
+    m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
+                                                              : (cfg.mis_selected_only ? "weighted-selected" : "weighted");
+    m_mv_stats_before.assign(m_views.size(), MvViewStats{});
+    return prepare_multiview(path, cfg, adaptive_maps(cfg));
 }
 
 std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *path, const MvConfig &cfg,

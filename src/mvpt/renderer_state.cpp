@@ -5,6 +5,8 @@
 #include "render/camera.h"
 #include "render_state.h"
 
+#include <tbb/task_arena.h>
+
 #include <array>
 
 namespace mvpt {
@@ -59,8 +61,8 @@ void Renderer::write_state(int next_pass, double elapsed, double last_pass, cons
     out.commit();
 }
 
-void Renderer::read_state() {
-    StateReader in(m_opts.resume_path);
+void Renderer::read_state(const std::string &path) {
+    StateReader in(path);
     check_layout(in, m_multiview, m_views, m_scene);
     m_first_pass = in.get<int32_t>();
     m_elapsed_before = in.get<double>();
@@ -69,7 +71,8 @@ void Renderer::read_state() {
     m_stats.counters = in.get<RayCounters>();
     const auto nf = in.get<NonfiniteKey>();
     m_stats.nonfinite_sample = nf[0], m_stats.nonfinite_view = nf[1], m_stats.nonfinite_y = nf[2], m_stats.nonfinite_x = nf[3];
-    if (m_first_pass < 0 || !(m_elapsed_before >= 0.0) || !(m_last_pass_before >= 0.0)) throw StateError("the state file '" + m_opts.resume_path + "' is corrupt");
+    if (m_first_pass < 0 || !(m_elapsed_before >= 0.0) || !(m_last_pass_before >= 0.0))
+        throw StateError("the state file '" + path + "' is corrupt");
     m_stats.passes = m_stats.first_pass = m_first_pass;
     if (!m_multiview) {
         for (FilmBuffer &fb : m_films) {
@@ -88,6 +91,65 @@ void Renderer::read_state() {
         }
     }
     in.finish();
+}
+
+void Renderer::add_state(const Renderer &o) {
+    m_stats.passes += o.m_stats.passes;
+    m_first_pass += o.m_first_pass;
+    m_elapsed_before += o.m_elapsed_before;
+    m_stats.samples += o.m_stats.samples;
+    m_stats.counters += o.m_stats.counters;
+    const NonfiniteKey mine{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x};
+    const NonfiniteKey theirs{o.m_stats.nonfinite_sample, o.m_stats.nonfinite_view, o.m_stats.nonfinite_y, o.m_stats.nonfinite_x};
+    if (theirs[1] >= 0 && (mine[1] < 0 || theirs < mine))
+        m_stats.nonfinite_sample = theirs[0], m_stats.nonfinite_view = theirs[1], m_stats.nonfinite_y = theirs[2],
+        m_stats.nonfinite_x = theirs[3];
+    for (size_t s = 0; s < m_films.size(); ++s) {
+        FilmBuffer &a = m_films[s];
+        const FilmBuffer &b = o.m_films[s];
+        for (size_t i = 0; i < a.sum.size(); ++i) a.sum[i] += b.sum[i], a.sum_sq[i] += b.sum_sq[i];
+        for (size_t p = 0; p < a.count.size(); ++p) a.count[p] += b.count[p];
+        *a.nonfinite += b.nonfinite->load();
+    }
+    m_native_done += o.m_native_done;
+    for (size_t s = 0; s < m_mv_films.size(); ++s) {
+        m_mv_films[s].merge(o.m_mv_films[s]);
+        m_mv_stats_before[s] += o.m_mv_stats_before[s];
+    }
+}
+
+void Renderer::merge(const std::vector<std::string> &paths) {
+    if (paths.empty()) throw std::invalid_argument("nothing to merge");
+    MvConfig cfg;
+    for (size_t i = 0; i < paths.size(); ++i) {
+        if (i == 0) {
+            if (m_multiview) prepare_multiview_render(cfg);
+            read_state(paths[0]);
+            continue;
+        }
+        Renderer other(m_scene, m_opts);
+        if (m_multiview) other.prepare_multiview_render(cfg);
+        other.read_state(paths[i]);
+        add_state(other);
+    }
+    m_stats.seconds = m_elapsed_before;
+    m_stats.first_pass = 0;
+    m_stats.threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
+    if (!m_opts.state_path.empty())
+        write_state(m_first_pass, m_elapsed_before, m_last_pass_before, m_stats.counters, {}, {});
+    if (!m_multiview) {
+        develop();
+        return;
+    }
+    for (size_t s = 0; s < m_views.size(); ++s) { // contributions received, as render_multiview counts them
+        m_mv_stats_before[s].received += m_mv_films[s].nonfinite;
+        for (uint32_t r : m_mv_films[s].received) m_mv_stats_before[s].received += r;
+    }
+    develop_multiview();
+    for (size_t s = 0; s < m_views.size(); ++s) {
+        m_results[s].mv = m_mv_stats_before[s];
+        m_stats.mv += m_mv_stats_before[s];
+    }
 }
 
 bool Renderer::checkpoint_due(double elapsed, double &last) const {

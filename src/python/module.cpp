@@ -100,6 +100,14 @@ public:
 
     void cancel() { m_cancel = true; }
 
+    /// Instead of start(): merges the state files of disjoint ranges (Renderer::merge).
+    void merge(const std::vector<std::string> &paths) {
+        if (m_thread.joinable() || m_done) throw std::runtime_error("render job already started");
+        m_renderer.merge(paths);
+        std::lock_guard<std::mutex> lock(m_mutex);
+        m_done = true;
+    }
+
     nb::dict progress() {
         std::lock_guard<std::mutex> lock(m_mutex);
         nb::dict d;
@@ -289,11 +297,12 @@ NB_MODULE(_core, m) {
         .def("__init__", [](RenderJob *self, std::shared_ptr<Scene> scene, int spp, double time, std::optional<uint32_t> seed,
                             int threads, std::vector<int> views, const std::string &method, const std::string &state_path,
                             const std::string &state_header, double checkpoint_interval, bool state_at_end,
-                            const std::string &resume_path) {
+                            const std::string &resume_path, int first_pass, int pass_count) {
             RenderOptions o;
             o.spp = spp; o.time_budget = time; o.seed = seed; o.threads = threads; o.views = std::move(views);
             o.state_path = state_path; o.state_header = state_header; o.checkpoint_interval = checkpoint_interval;
             o.state_at_end = state_at_end; o.resume_path = resume_path;
+            o.first_pass = first_pass; o.pass_count = pass_count;
             if (method == "scene") o.method = RenderMethod::Scene;
             else if (method == "pt") o.method = RenderMethod::PathTracing;
             else if (method == "mvpt") o.method = RenderMethod::MultiView;
@@ -301,10 +310,11 @@ NB_MODULE(_core, m) {
             new (self) RenderJob(std::move(scene), std::move(o));
         }, "scene"_a, "spp"_a = 0, "time"_a = 0.0, "seed"_a = nb::none(), "threads"_a = 0, "views"_a = std::vector<int>{},
            "method"_a = "scene", "state_path"_a = "", "state_header"_a = "", "checkpoint_interval"_a = 0.0,
-           "state_at_end"_a = false, "resume_path"_a = "")
+           "state_at_end"_a = false, "resume_path"_a = "", "first_pass"_a = 0, "pass_count"_a = 0)
         .def("start", &RenderJob::start)
         .def("wait", &RenderJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
         .def("cancel", &RenderJob::cancel)
+        .def("merge", &RenderJob::merge, "paths"_a, nb::call_guard<nb::gil_scoped_release>())
         .def("progress", &RenderJob::progress)
         .def("results", &RenderJob::results)
         .def("stats", &RenderJob::stats);

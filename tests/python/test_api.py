@@ -166,7 +166,7 @@ def test_nonfinite_samples_counted_not_written():
 def test_stats_content(small):
     r = mvpt.render(small, spp=2, seed=3, threads=2)
     s = r.stats
-    assert s["settings"] == {"spp": 2, "time": 0.0, "seed": 3, "threads": 2, "views": ["v0", "v1"],
+    assert s["settings"] == {"spp": 2, "time": 0.0, "seed": 3, "threads": 2, "views": ["v0", "v1"], "passes": None,
                              "integrator": "path", "method": "scene"}
     assert s["method"] == "pt" and s["notes"] == []
     assert s["passes"] == 2 and s["samples"] == 2 * 16 * 16 * 2

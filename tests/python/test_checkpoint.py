@@ -206,3 +206,20 @@ def test_cli_signal_then_resume(tmp_path, sig):
     for i in range(3):
         assert (out / f"slow_v{i}.exr").read_bytes() == (whole / f"slow_v{i}.exr").read_bytes()
     assert (out / "slow.mvpt-state").exists()  # --checkpoint keeps the state of the finished render
+
+
+@pytest.mark.parametrize("method", ["pt", "mvpt"])
+def test_range_resumes_to_the_same_state(tmp_path, method):
+    """A range of a split render (passes=...) resumes like any render, and its state merges the same."""
+    scene = _mvpath("balance") if method == "mvpt" else mvpt.load_string(slow_scene(3, res=24))
+    n = 12 if method == "mvpt" else 200  # path tracing runs passes in groups of up to 16
+    whole_state, state = tmp_path / "whole.mvpt-state", tmp_path / "part.mvpt-state"
+    whole = mvpt.render(scene, seed=4, method=method, passes=(10, n), state=whole_state)
+    part = mvpt.render(scene, seed=4, method=method, passes=(10, n), state=state, poll=0.001,
+                       progress=_interrupt_at(5))
+    assert part.stats["cancelled"] and part.stats["passes"] < n
+    with pytest.raises(mvpt.StateError, match=rf"passes: \[10, {n}\] then, \[10, {n + 1}\] now"):
+        mvpt.render(scene, seed=4, method=method, passes=(10, n + 1), resume=state)
+    done = mvpt.render(scene, seed=4, method=method, passes=(10, n), state=state, resume=state, threads=1)
+    _assert_same(whole, done)
+    _assert_same(mvpt.merge(scene, [whole_state]), mvpt.merge(scene, [state]))
