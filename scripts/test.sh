@@ -6,9 +6,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 [ -x .venv/bin/python ] || { echo "run scripts/setup.sh first" >&2; exit 1; }
 # Test-only dependencies (Mitsuba 3 is the independent reference renderer; the OpenEXR
-# bindings read our multi-view EXRs independently), then mvpt with its report extras.
-.venv/bin/pip install -q pytest scipy "mitsuba==3.9.1" "OpenEXR>=3.3"
-.venv/bin/pip install -q ".[reports]"
+# bindings read our multi-view EXRs independently; psutil finds Ray's worker processes),
+# then mvpt with its report and Ray extras.
+.venv/bin/pip install -q pytest scipy "mitsuba==3.9.1" "OpenEXR>=3.3" psutil
+.venv/bin/pip install -q ".[reports,ray]"
 # Headless Chromium (Debian) loads the HTML reports in tests/python/test_report.py; that
 # test fails under CI without it and skips elsewhere.
 if ! command -v chromium >/dev/null 2>&1; then

@@ -177,13 +177,16 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
 
 
 def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int = 0,
-          state: Optional[str | os.PathLike] = None) -> RenderResult:
+          state: Optional[str | os.PathLike] = None, images: bool = True,
+          identity: Optional[dict] = None) -> Optional[RenderResult]:
     """The images of the state files `states`, ranges (or seeds) of one render of `scene`
     (render(passes=...)), as if one process had rendered them all: their accumulators are
     added in the order of their ranges (whatever order they are given in) and developed with the estimator's own arithmetic. States that
     differ in anything but their ranges and seeds, or that share samples, raise
     mvpt.StateError naming what differs. `state`: where to write the merged state (which can
-    be merged further, not resumed)."""
+    be merged further, not resumed). With images=False only that state is written (merging
+    it with the next state then gives the same bits as merging all at once); `identity` is
+    state.scene_identity(scene) if already known (it reads every file of the scene)."""
     paths = [os.fspath(p) for p in states]
     if not paths:
         raise ValueError("merge needs at least one state file")
@@ -195,7 +198,7 @@ def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int 
     first = headers[0]
     ids = [v["id"] for v in scene.views]
     settings = first["settings"]
-    current = state_file.make_header(scene, dict(settings, passes=None))
+    current = state_file.make_header(scene, dict(settings, passes=None), identity=identity)
     diff = [d for d in state_file.differences(dict(first, settings=current["settings"]), current)]
     if diff:
         raise state_file.StateError(f"cannot merge '{paths[0]}' for this scene: " + "; ".join(diff))
@@ -206,7 +209,9 @@ def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int 
     job = _core.RenderJob(scene, spp=int(settings["spp"] or 0), time=0.0, threads=int(threads), views=index,
                           method=settings["method"], state_path=os.fspath(state) if state is not None else "",
                           state_header=json.dumps(merged))
-    job.merge(paths)
+    job.merge(paths, images)
+    if not images:
+        return None
     return _result(scene, job, index, dict(settings, threads=int(threads), merged=len(paths)))
 
 

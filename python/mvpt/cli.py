@@ -207,16 +207,21 @@ def _render(scene_path: Path, args, stem: str) -> int:
     except ValueError as e:
         _error(f"--views: {e}")
         return EXIT_USAGE
+    if args.passes and args.spp:
+        _error("--passes renders COUNT passes of every view; drop --spp")
+        return EXIT_USAGE
+    if getattr(args, "ray", None) is not None and (args.passes or args.checkpoint or getattr(args, "resume", None)):
+        _error("--ray splits the render into ranges itself; drop --passes, --checkpoint and --resume")
+        return EXIT_USAGE
     if not args.quiet:
         n = len(views) if views else len(scene.views)
         budget = [f"passes {args.passes[0]}:{args.passes[1]}" if args.passes else
                   f"{args.spp} spp" if args.spp else "each sensor's spp"] + ([f"{args.time:g} s"] if args.time else [])
         print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
               f"and writes the passes finished so far)", flush=True)
-    if args.passes and args.spp:
-        _error("--passes renders COUNT passes of every view; drop --spp")
-        return EXIT_USAGE
     bar = ProgressBar(enabled=False if args.quiet else None)
+    if getattr(args, "ray", None) is not None:
+        return _render_on_ray(scene_path, args, stem, views, bar)
     state = state_file.state_file(args.output, stem)
     keep_state = args.checkpoint > 0 or args.passes is not None  # a range's state is what merges
     resume = getattr(args, "resume_state", None)
@@ -261,6 +266,44 @@ def _render(scene_path: Path, args, stem: str) -> int:
     return EXIT_OK
 
 
+def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
+    """`mvpt render --ray [ADDRESS] --workers N` (docs/distributed.md)."""
+    from . import distributed
+    try:
+        result = distributed.render(scene_path, spp=args.spp, time=args.time, seed=args.seed, method=args.method,
+                                    views=views, rig=args.rig, defines=dict(args.define or []),
+                                    address=None if args.ray == "local" else args.ray, workers=args.workers,
+                                    task_cpus=args.threads, progress=bar)
+    except KeyboardInterrupt:
+        bar.finish(done=False)
+        print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
+        return 128 + int(_stopped_by)
+    except (RuntimeError, MemoryError, ValueError, OSError) as e:
+        bar.finish(done=False)
+        _error(str(e) or type(e).__name__)
+        return EXIT_ERROR
+    cancelled = bool(result.stats.get("cancelled"))
+    bar.finish(done=not cancelled)
+    settings = {"scene": str(scene_path), "defines": dict(args.define or []), "output": str(args.output),
+                "ray": args.ray, "workers": result.stats["distributed"]["workers"]}
+    try:
+        paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
+        if displays.wants_displays(args):
+            paths += displays.write_displays(result, args, args.output, stem)
+    except (OSError, RuntimeError, ValueError, ImportError) as e:
+        _error(str(e))
+        return EXIT_ERROR
+    if not args.quiet:
+        print_summary(result)
+        d = result.stats["distributed"]
+        print(f"{d['tasks']} tasks on {d['workers']} workers of {d['cpus_per_task']} cores, {d['wall_seconds']:.2f} s; "
+              f"wrote {len(paths)} files to {args.output}")
+    if cancelled:
+        print("mvpt: interrupted; wrote the ranges finished so far", file=sys.stderr)
+        return 128 + int(_stopped_by)
+    return EXIT_OK
+
+
 def _add_render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("-D", "--define", action="append", type=_define, metavar="NAME=VALUE",
                    help="override a <default> of the scene (repeatable)")
@@ -288,6 +331,11 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="render one range of a render split over processes or machines: COUNT passes of "
                         "every view with the samples of passes FIRST..FIRST+COUNT-1 (instead of --spp); "
                         "combine the ranges' states with `mvpt merge`")
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
+                   help="render on a Ray cluster (ADDRESS, e.g. auto or ray://head:10001; without one, a local "
+                        "Ray instance): ranges of passes as tasks, merged in order (needs mvpt[ray])")
+    p.add_argument("--workers", type=_count, default=0,
+                   help="with --ray: tasks at a time (default: one per node); --threads is then each task's cores")
     p.add_argument("--checkpoint", type=_seconds, default=0.0, metavar="SECONDS",
                    help="write the render's state (<stem>.mvpt-state in the output directory) every SECONDS "
                         "and keep it at the end (an interrupted render always writes it)")

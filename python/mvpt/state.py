@@ -38,17 +38,21 @@ def _sha256(path: str) -> str:
 
 
 def scene_identity(scene) -> dict:
-    """The scene as a state file names it: its files by content, its overrides and rig."""
-    return {"files": {p: _sha256(p) for p in scene.source_files},
+    """The scene as a state file names it: its files by content (named relative to the scene
+    file's directory, so that a copy of the scene elsewhere, as on a cluster's nodes, is the same
+    scene), its overrides and rig."""
+    files = scene.source_files
+    root = os.path.dirname(files[0]) if files else ""
+    return {"files": {os.path.relpath(p, root) if root else p: _sha256(p) for p in files},
             "defines": dict(sorted(scene.defines.items())), "rig": scene.rig,
             "views": [v["id"] for v in scene.views]}
 
 
-def make_header(scene, settings: dict, extra: dict | None = None) -> dict:
+def make_header(scene, settings: dict, extra: dict | None = None, identity: dict | None = None) -> dict:
     """The header of a state file: version, scene identity, image settings and `extra` (e.g.
     the command line's outputs, which a resume reuses but which do not change the image)."""
     first, count = settings["passes"] or (0, None)
-    return {"mvpt": __version__, "scene": scene_identity(scene),
+    return {"mvpt": __version__, "scene": identity or scene_identity(scene),
             "settings": {k: settings[k] for k in IMAGE_SETTINGS}, "extra": extra or {},
             "parts": [[settings["seed"], first, count]]}
 

@@ -113,7 +113,7 @@ public:
     /// Instead of rendering: the sum of the state files of disjoint ranges (or seeds) of this
     /// render, added in the order given, developed into the results; `state_path`, if set, gets
     /// the merged state.
-    void merge(const std::vector<std::string> &paths);
+    void merge(const std::vector<std::string> &paths, bool develop = true);
 
     const std::vector<ViewResult> &results() const { return m_results; }
     /// The results, moved out (the renderer keeps none).

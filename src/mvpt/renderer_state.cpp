@@ -118,7 +118,7 @@ void Renderer::add_state(const Renderer &o) {
     }
 }
 
-void Renderer::merge(const std::vector<std::string> &paths) {
+void Renderer::merge(const std::vector<std::string> &paths, bool develop_images) {
     if (paths.empty()) throw std::invalid_argument("nothing to merge");
     MvConfig cfg;
     for (size_t i = 0; i < paths.size(); ++i) {
@@ -137,6 +137,7 @@ void Renderer::merge(const std::vector<std::string> &paths) {
     m_stats.threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     if (!m_opts.state_path.empty())
         write_state(m_first_pass, m_elapsed_before, m_last_pass_before, m_stats.counters, {}, {});
+    if (!develop_images) return;
     if (!m_multiview) {
         develop();
         return;

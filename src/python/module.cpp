@@ -101,9 +101,9 @@ public:
     void cancel() { m_cancel = true; }
 
     /// Instead of start(): merges the state files of disjoint ranges (Renderer::merge).
-    void merge(const std::vector<std::string> &paths) {
+    void merge(const std::vector<std::string> &paths, bool develop) {
         if (m_thread.joinable() || m_done) throw std::runtime_error("render job already started");
-        m_renderer.merge(paths);
+        m_renderer.merge(paths, develop);
         std::lock_guard<std::mutex> lock(m_mutex);
         m_done = true;
     }
@@ -314,7 +314,7 @@ NB_MODULE(_core, m) {
         .def("start", &RenderJob::start)
         .def("wait", &RenderJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
         .def("cancel", &RenderJob::cancel)
-        .def("merge", &RenderJob::merge, "paths"_a, nb::call_guard<nb::gil_scoped_release>())
+        .def("merge", &RenderJob::merge, "paths"_a, "develop"_a = true, nb::call_guard<nb::gil_scoped_release>())
         .def("progress", &RenderJob::progress)
         .def("results", &RenderJob::results)
         .def("stats", &RenderJob::stats);
