@@ -273,7 +273,8 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
         result = distributed.render(scene_path, spp=args.spp, time=args.time, seed=args.seed, method=args.method,
                                     views=views, rig=args.rig, defines=dict(args.define or []),
                                     address=None if args.ray == "local" else args.ray, workers=args.workers,
-                                    task_cpus=args.threads, progress=bar)
+                                    task_cpus=args.threads, progress=bar, shared=args.shared_scene,
+                                    wheel=args.wheel)
     except KeyboardInterrupt:
         bar.finish(done=False)
         print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
@@ -336,6 +337,12 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                         "Ray instance): ranges of passes as tasks, merged in order (needs mvpt[ray])")
     p.add_argument("--workers", type=_count, default=0,
                    help="with --ray: tasks at a time (default: one per node); --threads is then each task's cores")
+    p.add_argument("--shared-scene", action="store_true",
+                   help="with --ray: the scene's files are at the same path on every node (else they are "
+                        "packed once and sent through Ray)")
+    p.add_argument("--wheel", default=None, metavar="WHL",
+                   help="with --ray: a wheel from scripts/build-wheel.sh that Ray installs for the tasks on "
+                        "nodes without mvpt")
     p.add_argument("--checkpoint", type=_seconds, default=0.0, metavar="SECONDS",
                    help="write the render's state (<stem>.mvpt-state in the output directory) every SECONDS "
                         "and keep it at the end (an interrupted render always writes it)")

@@ -62,13 +62,13 @@ def _worker_scene(pack, scene_file: str, rig: str, defines: dict, shared: bool):
 def render_range(pack, scene_file: str, rig: str, defines: dict, shared: bool, settings: dict,
                  first: int, count: int, threads: int, time_budget: float) -> tuple:
     """One task: passes first..first+count-1 of every view; returns (first, count, state bytes,
-    seconds). Deterministic: a task run again gives the same bytes."""
+    seconds, where the worker's mvpt is). Deterministic: a task run again gives the same bytes."""
     scene = _worker_scene(pack, scene_file, rig, defines, shared)
     with tempfile.TemporaryDirectory(prefix="mvpt-range-") as tmp:
         path = Path(tmp) / "range.mvpt-state"
         r = api.render(scene, seed=settings["seed"], method=settings["method"], views=settings["views"],
                        threads=threads, time=time_budget, passes=(first, count), state=path)
-        return first, count, path.read_bytes(), r.stats["seconds"]
+        return first, count, path.read_bytes(), r.stats["seconds"], os.path.dirname(api.__file__)
 
 
 # The shortest range a plan makes: a range's first pass has no control variate and its
@@ -88,14 +88,16 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
            method: str = "scene", views: Optional[Sequence] = None, rig: Optional[str] = None,
            defines: Optional[dict] = None, address: Optional[str] = None, workers: int = 0,
            task_cpus: int = 0, tasks_per_worker: int = 4, shared: bool = False, max_retries: int = 3,
-           progress: Optional[Callable[[dict], None]] = None, keep_state: Optional[str | os.PathLike] = None
-           ) -> api.RenderResult:
+           progress: Optional[Callable[[dict], None]] = None, keep_state: Optional[str | os.PathLike] = None,
+           wheel: Optional[str | os.PathLike] = None) -> api.RenderResult:
     """Render `scene_path` on a Ray cluster: `spp` passes (0: the sensors' largest sample_count)
     in `workers` * `tasks_per_worker` ranges, `workers` at a time, each task with `task_cpus`
     cores (0: the cluster's CPUs divided among the workers). address: a running cluster
     ("auto", "ray://host:10001", ...); None starts a local Ray instance. shared: the scene's
     files are at the same path on every node; otherwise they are packed once, put in the object
-    store, and unpacked by each worker process. time: a wall-clock budget for the whole render
+    store, and unpacked by each worker process. wheel: a self-contained mvpt wheel
+    (scripts/build-wheel.sh) that Ray installs on nodes for the tasks (its runtime environment's
+    py_modules), for clusters whose nodes lack mvpt. time: a wall-clock budget for the whole render
     (ranges started before it ends stop at it). The result is that of api.merge of the ranges'
     states, in their order; stats["distributed"] has the tasks, their seconds and the bytes that
     crossed the network."""
@@ -107,10 +109,15 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
     view_ids = [ids[i] for i in index] or ids
     total = int(spp) or max(v["spp"] for v in scene.views)
     started_here = not ray.is_initialized()
+    if wheel is not None and not started_here:
+        raise RuntimeError("a wheel for the nodes is given to Ray when it starts: call distributed.render "
+                           "before ray.init, or pass runtime_env={'py_modules': [wheel]} to ray.init")
     if started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False,
-                 runtime_env={"env_vars": {"PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}}
-                 if address is None else None)
+        # The job's environment: the wheel for nodes without mvpt, or (a local instance) this
+        # process's module path.
+        runtime_env = {"py_modules": [os.fspath(Path(wheel).resolve())]} if wheel is not None else \
+            {"env_vars": {"PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}} if address is None else None
+        ray.init(address=address, include_dashboard=False, log_to_driver=False, runtime_env=runtime_env)
     try:
         cluster_cpus = int(ray.cluster_resources().get("CPU", 1))
         workers = int(workers) or max(1, len(ray.nodes()))
@@ -163,7 +170,7 @@ def _run(ray, task, pack_ref, pack_bytes, scene, scene_file, rig, defines, share
     """Submit the ranges, `workers` at a time, and merge their states as they come. Ctrl-C
     cancels the running tasks and keeps the merged ranges."""
     t0 = _time.monotonic()
-    pending, running, bytes_back, task_seconds = list(ranges), {}, 0, []
+    pending, running, bytes_back, task_seconds, modules = list(ranges), {}, 0, [], set()
     cancelled = False
     with tempfile.TemporaryDirectory(prefix="mvpt-merge-") as tmp:
         merger = _Merger(scene, Path(tmp), ranges[0][0], sum(c for _, c in ranges), progress)
@@ -180,7 +187,8 @@ def _run(ray, task, pack_ref, pack_bytes, scene, scene_file, rig, defines, share
                 ready, _ = ray.wait(list(running), num_returns=1)
                 for ref in ready:
                     running.pop(ref)
-                    first, count, data, seconds = ray.get(ref)
+                    first, count, data, seconds, module = ray.get(ref)
+                    modules.add(module)
                     bytes_back += len(data)
                     task_seconds.append(seconds)
                     merger.add(first, count, data)
@@ -195,6 +203,6 @@ def _run(ray, task, pack_ref, pack_bytes, scene, scene_file, rig, defines, share
     result.stats["distributed"] = {
         "tasks": len(task_seconds), "workers": workers, "cpus_per_task": cpus,
         "task_seconds": task_seconds, "scene_pack_bytes": pack_bytes, "state_bytes_returned": bytes_back,
-        "wall_seconds": _time.monotonic() - t0,
+        "wall_seconds": _time.monotonic() - t0, "worker_modules": sorted(modules),
     }
     return result

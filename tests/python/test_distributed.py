@@ -59,12 +59,12 @@ def _same(a, b):
         assert np.array_equal(a.sample_count[v], b.sample_count[v]), v
 
 
-@pytest.mark.parametrize("method", ["pt", "mvpt"])
-def test_distributed_equals_local_ranges(cluster, scene_file, tmp_path, method):
+@pytest.mark.parametrize("method,shared", [("pt", False), ("mvpt", False), ("mvpt", True)])
+def test_distributed_equals_local_ranges(cluster, scene_file, tmp_path, method, shared):
     assert len(ray.nodes()) == 2
-    r = distributed.render(scene_file, spp=32, seed=5, method=method, workers=2, tasks_per_worker=2)
+    r = distributed.render(scene_file, spp=32, seed=5, method=method, workers=2, tasks_per_worker=2, shared=shared)
     d = r.stats["distributed"]
-    assert d["tasks"] == 4 and d["scene_pack_bytes"] > 0 and d["state_bytes_returned"] > 0
+    assert d["tasks"] == 4 and (d["scene_pack_bytes"] == 0) == shared and d["state_bytes_returned"] > 0
     _same(r, _local(scene_file, tmp_path, method, distributed.plan_ranges(32, 4), seed=5))
 
 
