@@ -249,12 +249,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
     if args.rig:
         settings["rig"] = args.rig
-    try:
-        paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
-        if displays.wants_displays(args):
-            paths += displays.write_displays(result, args, args.output, stem)
-    except (OSError, RuntimeError, ValueError, ImportError) as e:
-        _error(str(e))
+    paths = write_all(result, args, stem, settings)
+    if paths is None:
         return EXIT_ERROR
     if not args.quiet:
         print_summary(result)
@@ -264,6 +260,19 @@ def _render(scene_path: Path, args, stem: str) -> int:
               f"mvpt render --resume {args.output}", file=sys.stderr)
         return 128 + int(_stopped_by)
     return EXIT_OK
+
+
+def write_all(result, args, stem: str, settings: dict):
+    """The per-view files, the JSON and the displays asked for in args.output; their paths, or
+    None after printing the error."""
+    try:
+        paths = write_outputs(result, args.output, stem, aovs=bool(args.aovs), settings=settings)
+        if displays.wants_displays(args):
+            paths += displays.write_displays(result, args, args.output, stem)
+    except (OSError, RuntimeError, ValueError, ImportError) as e:
+        _error(str(e))
+        return None
+    return paths
 
 
 def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
@@ -287,12 +296,8 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     bar.finish(done=not cancelled)
     settings = {"scene": str(scene_path), "defines": dict(args.define or []), "output": str(args.output),
                 "ray": args.ray, "workers": result.stats["distributed"]["workers"]}
-    try:
-        paths = write_outputs(result, args.output, stem, aovs=args.aovs, settings=settings)
-        if displays.wants_displays(args):
-            paths += displays.write_displays(result, args, args.output, stem)
-    except (OSError, RuntimeError, ValueError, ImportError) as e:
-        _error(str(e))
+    paths = write_all(result, args, stem, settings)
+    if paths is None:
         return EXIT_ERROR
     if not args.quiet:
         print_summary(result)

@@ -143,8 +143,10 @@ class _Merger:
         self.progress = progress
         self.identity = state_file.scene_identity(scene)
         self.merged, self.waiting, self.t0 = None, {}, _time.monotonic()
+        self.seconds = 0.0  # spent merging
 
     def add(self, first: int, count: int, data: bytes) -> None:
+        t = _time.monotonic()
         path = self.tmp / f"range_{first:010d}{state_file.SUFFIX}"
         path.write_bytes(data)
         self.waiting[first] = (count, path)
@@ -163,6 +165,7 @@ class _Merger:
             if self.progress is not None:
                 done = self.next - self.first
                 self.progress({"pass": done, "fraction": done / self.total, "elapsed": _time.monotonic() - self.t0})
+        self.seconds += _time.monotonic() - t
 
 
 def _run(ray, task, pack_ref, pack_bytes, scene, scene_file, rig, defines, shared, settings, ranges, workers,
@@ -203,6 +206,6 @@ def _run(ray, task, pack_ref, pack_bytes, scene, scene_file, rig, defines, share
     result.stats["distributed"] = {
         "tasks": len(task_seconds), "workers": workers, "cpus_per_task": cpus,
         "task_seconds": task_seconds, "scene_pack_bytes": pack_bytes, "state_bytes_returned": bytes_back,
-        "wall_seconds": _time.monotonic() - t0, "worker_modules": sorted(modules),
+        "wall_seconds": _time.monotonic() - t0, "merge_seconds": merger.seconds, "worker_modules": sorted(modules),
     }
     return result

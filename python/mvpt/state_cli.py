@@ -6,10 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from . import api, displays
+from . import api
 from . import state as state_file
 from ._core import SceneError, StateError
-from .output import write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
@@ -106,7 +105,7 @@ def add_merge_command(sub) -> None:
 def merge(args) -> int:
     """`mvpt merge STATE... -o OUT`: the images of the states' render as if one process had
     rendered all their passes, with the first state's outputs (and the merged state) in OUT."""
-    from .cli import print_summary
+    from .cli import print_summary, write_all
     try:
         paths = [find_state(p) for p in args.states]
         record = _record(paths[0])
@@ -120,12 +119,8 @@ def merge(args) -> int:
     _restore(args, record)
     settings = {"scene": record["scene"], "defines": dict(args.define), "output": str(args.output),
                 "merged_from": [str(p) for p in paths]}
-    try:
-        written = write_outputs(result, args.output, record["stem"], aovs=bool(args.aovs), settings=settings)
-        if displays.wants_displays(args):
-            written += displays.write_displays(result, args, args.output, record["stem"])
-    except (OSError, RuntimeError, ValueError, ImportError) as e:
-        _error(str(e))
+    written = write_all(result, args, record["stem"], settings)
+    if written is None:
         return EXIT_ERROR
     if not args.quiet:
         print_summary(result)
