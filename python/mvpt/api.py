@@ -119,12 +119,12 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     (docs/distributed.md): `count` passes of every view, taking the samples of passes
     first .. first + count - 1 (spp is ignored); the states of ranges that do not overlap
     (or of other seeds) combine with `merge`."""
-    if int(spp) < 0:
-        raise ValueError(f"spp must be >= 0, got {spp}")
+    if not 0 <= int(spp) < 2**31:
+        raise ValueError(f"spp must lie in [0, 2^31), got {spp}")
     if not float(time) >= 0.0:
         raise ValueError(f"time must be >= 0 seconds, got {time}")
-    if int(threads) < 0:
-        raise ValueError(f"threads must be >= 0, got {threads}")
+    if not 0 <= int(threads) < 2**31:
+        raise ValueError(f"threads must lie in [0, 2^31), got {threads}")
     if not float(poll) > 0.0:
         raise ValueError(f"poll must be > 0 seconds, got {poll}")
     if seed is not None and not 0 <= int(seed) < 2**32:

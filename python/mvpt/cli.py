@@ -53,8 +53,8 @@ def _count(text: str) -> int:
         v = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer, got '{text}'")
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {v}")
+    if not 0 <= v < 2**31:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer below 2^31, got {v}")
     return v
 
 

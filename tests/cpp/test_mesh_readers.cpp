@@ -215,6 +215,21 @@ TEST(SerializedReader, CorruptFilesFailCleanly) {
     expect_error(temp_file("junk.serialized", junk), "", false);
 }
 
+TEST(SerializedReader, DictionaryOffsetsOutsideTheFileFailCleanly) {
+    // Offsets near 2^64 once wrapped around the bounds check (an out-of-bounds read).
+    for (uint64_t off : {~uint64_t(0), ~uint64_t(0) - 3, uint64_t(1) << 40}) {
+        std::string f = serialized_file(4, false);
+        std::memcpy(&f[f.size() - 4 - 8], &off, 8);
+        auto p = temp_file("offset.serialized", f);
+        try {
+            read_serialized(p, 1, {"scene.xml", 3, 5});
+            FAIL() << "no error for offset " << off;
+        } catch (const SceneError &e) {
+            EXPECT_NE(std::string(e.what()).find("lies outside the file"), std::string::npos) << e.what();
+        }
+    }
+}
+
 TEST(SerializedReader, MatpreviewFile) {
     const char *env = std::getenv("MVPT_SHARED");
     fs::path root = env ? fs::path(env) / "scenes" : fs::path("/work/shared/scenes");

@@ -210,7 +210,10 @@ def test_digit_ids_win_over_indices():
 
 @pytest.mark.parametrize("kwargs, match", [(dict(spp=-1), "spp"), (dict(time=-1.0), "time"),
                                            (dict(time=float("nan")), "time"), (dict(threads=-2), "threads"),
-                                           (dict(seed=-1), "seed"), (dict(seed=2**32), "seed")])
+                                           (dict(seed=-1), "seed"), (dict(seed=2**32), "seed"),
+                                           (dict(spp=2**31), "spp"), (dict(threads=2**31), "threads"),
+                                           (dict(passes=(0, 0)), "passes"), (dict(passes=(-1, 4)), "passes"),
+                                           (dict(checkpoint=-1.0), "checkpoint")])
 def test_bad_render_arguments(small, kwargs, match):
     with pytest.raises(ValueError, match=match):
         mvpt.render(small, **kwargs)

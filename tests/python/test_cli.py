@@ -259,6 +259,10 @@ def test_views_by_id_and_index(tmp_path):
     (["--spp", "many"], "--spp"),
     (["--time", "-1"], "--time"),
     (["--threads", "-3"], "--threads"),
+    (["--spp", str(2**31)], "below 2^31"),  # once a traceback from the native module
+    (["--threads", str(2**40)], "below 2^31"),
+    (["--passes", "0:0"], "FIRST:COUNT"),
+    (["--passes", f"{2**31 - 1}:2"], "FIRST:COUNT"),
     (["--seed", "-1"], "--seed"),
     (["-D", "novalue"], "NAME=VALUE"),
     (["--frobnicate"], "unrecognized arguments"),

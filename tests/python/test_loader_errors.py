@@ -110,6 +110,15 @@ CASES = {
                       '<string name="filename"', r"empty\.obj.*contains no faces", files={"empty.obj": ""}),
     "corrupt_obj_index": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="bad.obj"/>\n    </shape>\n'),
                               '<string name="filename"', r"bad\.obj", files={"bad.obj": "v 0 0 0\nv 1 0 0\nf 1 2 9\n"}),
+    # Normal and texture-coordinate indices out of range (the fuzzers' crashes), far and near,
+    # absolute and relative (negative, counted back from the last one read).
+    **{f"obj_bad_{what}_{i}": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="bad.obj"/>\n'
+                                               '    </shape>\n'), '<string name="filename"',
+                                   rf"bad\.obj': face 1 uses {what.replace('_', ' ')} index .* but the file has",
+                                   files={"bad.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\n" + face})
+       for what, faces in (("normal", ("f 1//1 2//1 3//100000000", "f 1//1 2//1 3//5", "f 1//1 2//1 3//-9")),
+                           ("texture_coordinate", ("f 1/1 2/1 3/7", "f 1/1 2/1 3/-5", "f 1/99999999 2/1 3/1")))
+       for i, face in enumerate(faces)},
     "corrupt_obj_binary": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="bin.obj"/>\n    </shape>\n'),
                                '<string name="filename"', r"bin\.obj", files={"bin.obj": bytes(range(256)) * 8}),
     # tinyobjloader reads 'nan' as 0 (silently); an overflowing exponent still reaches the mesh check.
@@ -137,6 +146,14 @@ CASES = {
                        'value="0.5, nan', r"rgb 'reflectance': expected a finite number"),
     "non_numeric": Case(scene(sensor(fov="forty")), 'value="forty"', r"float 'fov': expected a number, got 'forty'"),
     "non_integer": Case(scene(sensor(spp="4.5")), 'value="4.5"', r"integer 'sample_count': expected an integer"),
+    # Integers beyond their type are errors, never truncations (2^32 + 1 once rendered as depth 1).
+    **{f"int_range_{name}_{value}": Case(scene(max_depth=value) if name == "max_depth" else
+                                         scene(sensor(spp=value)) if name == "sample_count" else
+                                         scene(sensor(seed=value)),
+                                         f'<integer name="{name}"', rf"'{name}' must be an integer in \[-?\d+, \d+\], got {value}")
+       for name, values in (("max_depth", (4294967297, -2, 2**31)), ("sample_count", (2**31, 0, -4)),
+                            ("seed", (2**40, 2**32, -1)))
+       for value in values},
     "bad_boolean": Case(_with_shape('<boolean name="flip_normals" value="maybe"/>'), 'value="maybe"',
                         r"expected true or false"),
     "rgb_wrong_count": Case(_with_shape('<bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5"/></bsdf>'),

@@ -23,10 +23,8 @@ namespace {
 
 std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &) {
     PathConfig pc;
-    pc.max_depth = int(props.get_int("max_depth", -1));
-    if (pc.max_depth < -1) props.fail("max_depth", "max_depth must be -1 (unlimited) or >= 0");
-    pc.rr_depth = int(props.get_int("rr_depth", 5));
-    if (pc.rr_depth <= 0) props.fail("rr_depth", "rr_depth must be > 0");
+    pc.max_depth = int(props.get_int_in("max_depth", -1, -1, INT32_MAX)); // -1: unlimited
+    pc.rr_depth = int(props.get_int_in("rr_depth", 5, 1, INT32_MAX));
     pc.hide_emitters = props.get_bool("hide_emitters", false);
 
     MvConfig cfg;
@@ -46,19 +44,15 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     else if (tv == "montecarlo") cfg.tv = MvTotalVariation::MonteCarlo;
     else props.fail("tv", "'tv' must be 'peak' or 'montecarlo', got '" + tv + "'");
     cfg.adaptive = props.get_bool("adaptive", true);
-    cfg.adaptive_warmup = int(props.get_int("adaptive_warmup", 4));
-    if (cfg.adaptive_warmup < 2) props.fail("adaptive_warmup", "'adaptive_warmup' must be >= 2 passes");
-    cfg.adaptive_max = int(props.get_int("adaptive_max", 16));
-    if (cfg.adaptive_max < 1 || cfg.adaptive_max > 1024)
-        props.fail("adaptive_max", "'adaptive_max' must be in [1, 1024]");
+    cfg.adaptive_warmup = int(props.get_int_in("adaptive_warmup", 4, 2, INT32_MAX)); // passes
+    cfg.adaptive_max = int(props.get_int_in("adaptive_max", 16, 1, 1024));
     cfg.adaptive_budget = props.get_float("adaptive_budget", 1.25f);
     if (!(cfg.adaptive_budget >= 1.f && cfg.adaptive_budget <= float(cfg.adaptive_max)))
         props.fail("adaptive_budget", "'adaptive_budget' must lie in [1, adaptive_max]");
     cfg.adaptive_eps = props.get_float("adaptive_eps", 0.01f);
     if (!(cfg.adaptive_eps >= 0.f && cfg.adaptive_eps < INFINITY))
         props.fail("adaptive_eps", "'adaptive_eps' must be a finite number >= 0");
-    cfg.rig_cells = int(props.get_int("rig_cells", 128));
-    if (cfg.rig_cells < 0 || cfg.rig_cells > 1024) props.fail("rig_cells", "'rig_cells' must be in [0, 1024]");
+    cfg.rig_cells = int(props.get_int_in("rig_cells", 128, 0, 1024));
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
 }
 

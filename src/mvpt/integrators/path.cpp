@@ -130,10 +130,8 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
 namespace {
 std::shared_ptr<Object> make_path(const Properties &props, const LoadContext &) {
     PathConfig cfg;
-    cfg.max_depth = int(props.get_int("max_depth", -1));
-    if (cfg.max_depth < -1) props.fail("max_depth", "max_depth must be -1 (unlimited) or >= 0");
-    cfg.rr_depth = int(props.get_int("rr_depth", 5));
-    if (cfg.rr_depth <= 0) props.fail("rr_depth", "rr_depth must be > 0");
+    cfg.max_depth = int(props.get_int_in("max_depth", -1, -1, INT32_MAX)); // -1: unlimited
+    cfg.rr_depth = int(props.get_int_in("rr_depth", 5, 1, INT32_MAX));
     cfg.hide_emitters = props.get_bool("hide_emitters", false);
     return std::make_shared<PathIntegrator>(cfg);
 }

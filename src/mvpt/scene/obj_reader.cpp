@@ -26,11 +26,21 @@ MeshData read_obj(const std::filesystem::path &path, const FileLoc &loc) {
     MeshData mesh;
     std::map<std::tuple<int, int, int>, uint32_t> remap;
     bool any_normals = !attrib.normals.empty(), any_uvs = !attrib.texcoords.empty();
-    size_t nv = attrib.vertices.size() / 3;
+    const size_t nv = attrib.vertices.size() / 3, nn = attrib.normals.size() / 3, nt = attrib.texcoords.size() / 2;
+    size_t face = 0; // 1-based, counted over the file's faces, for messages
+    // An index into `count` values: in range, or -1 where the face gives none (not for positions).
+    auto check = [&](int index, size_t count, const char *what, bool optional) {
+        if ((optional && index == -1) || (index >= 0 && size_t(index) < count)) return;
+        const long long shown = index >= 0 ? index + 1LL : index; // as written (1-based), or the resolved relative index
+        throw SceneError(loc, "OBJ file '" + path.string() + "': face " + std::to_string(face) + " uses " + what +
+                                  " index " + std::to_string(shown) + " but the file has " + std::to_string(count) + " " +
+                                  what + (count == 1 ? "" : "s"));
+    };
     // One vertex per distinct (position, normal, uv) index triple.
     auto vertex_of = [&](const tinyobj::index_t &idx) {
-        if (idx.vertex_index < 0 || size_t(idx.vertex_index) >= nv)
-            throw SceneError(loc, "OBJ file '" + path.string() + "' has a face with an invalid vertex index");
+        check(idx.vertex_index, nv, "vertex", false);
+        check(idx.normal_index, nn, "normal", true);
+        check(idx.texcoord_index, nt, "texture coordinate", true);
         auto key = std::make_tuple(idx.vertex_index, any_normals ? idx.normal_index : -1, any_uvs ? idx.texcoord_index : -1);
         auto it = remap.find(key);
         if (it != remap.end()) return it->second;
@@ -60,6 +70,7 @@ MeshData read_obj(const std::filesystem::path &path, const FileLoc &loc) {
     for (const auto &shape : reader.GetShapes()) {
         size_t next = 0;
         for (unsigned nfv : shape.mesh.num_face_vertices) {
+            ++face;
             poly.clear();
             for (size_t k = 0; k < nfv && next < shape.mesh.indices.size(); ++k)
                 poly.push_back(vertex_of(shape.mesh.indices[next++]));

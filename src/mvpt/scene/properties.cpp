@@ -61,6 +61,14 @@ int64_t Properties::get_int(const std::string &name) const {
     return *p;
 }
 
+int64_t Properties::get_int_in(const std::string &name, int64_t def, int64_t lo, int64_t hi) const {
+    const int64_t v = get_int(name, def);
+    if (v < lo || v > hi)
+        fail(name, "'" + name + "' must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                       std::to_string(v));
+    return v;
+}
+
 float Properties::get_float(const std::string &name, float def) const {
     const Entry *e = find(name);
     if (!e) return def;

@@ -59,6 +59,8 @@ public:
     bool get_bool(const std::string &name, bool def) const;
     int64_t get_int(const std::string &name, int64_t def) const;
     int64_t get_int(const std::string &name) const;
+    /// An integer that must lie in [lo, hi] (an error at the parameter otherwise, never a truncation).
+    int64_t get_int_in(const std::string &name, int64_t def, int64_t lo, int64_t hi) const;
     float get_float(const std::string &name, float def) const;
     float get_float(const std::string &name) const;
     std::string get_string(const std::string &name, const std::string &def) const;

@@ -103,7 +103,7 @@ MeshData read_serialized(const std::filesystem::path &path, int shape_index, con
         if (uint64_t(count) * entry + 4 > data.size()) fail("corrupt offset dictionary");
         size_t at = data.size() - 4 - entry * size_t(count - uint32_t(shape_index));
         uint64_t off = version == 4 ? load_le<uint64_t>(bytes(at)) : load_le<uint32_t>(bytes(at));
-        if (off + 4 > data.size()) fail("offset of mesh " + std::to_string(shape_index) + " lies outside the file");
+        if (off > data.size() - 4) fail("offset of mesh " + std::to_string(shape_index) + " lies outside the file");
         offset = size_t(off);
         if (load_le<uint16_t>(bytes(offset)) != kFormatId)
             fail("mesh " + std::to_string(shape_index) + " does not start with a valid header");

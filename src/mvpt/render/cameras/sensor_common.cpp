@@ -46,10 +46,8 @@ std::shared_ptr<Object> make_hdrfilm(const Properties &props, const LoadContext 
 std::shared_ptr<Object> make_sampler(const Properties &props, SamplerKind kind) {
     auto s = std::make_shared<SamplerObject>();
     s->kind = kind;
-    int64_t n = props.get_int("sample_count", 4);
-    if (n <= 0 || n > (int64_t(1) << 31)) props.fail("sample_count", "sample_count must be positive, got " + std::to_string(n));
-    s->sample_count = int(n);
-    s->seed = uint32_t(props.get_int("seed", 0));
+    s->sample_count = int(props.get_int_in("sample_count", 4, 1, INT32_MAX));
+    s->seed = uint32_t(props.get_int_in("seed", 0, 0, UINT32_MAX));
     // Jittered/stratified samplers of Mitsuba map to our one low-discrepancy sampler.
     props.get_bool("jitter", true);
     props.get_float("strength", 0.f);
