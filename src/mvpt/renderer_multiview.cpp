@@ -28,6 +28,7 @@ struct MvThreadState {
     MvPrimaries primaries;
     MvPendingSamples pending;
     RayCounters counters;
+    SampleKey first_dropped = NoSample; ///< the first native sample with a contribution dropped
     explicit MvThreadState(MvPassFilm &film) : cache(film), stats(film.views()), dropped(film.views(), 0) {}
 };
 
@@ -117,7 +118,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     tbb::enumerable_thread_specific<MvThreadState> state([&] { return MvThreadState(pass_film); });
     int pass = m_first_pass;
     auto render_tile = [&](MvThreadState &ts, const Tile &tile) {
-        MvSplatSink sink{ts.cache, ts.dropped.data()};
+        MvSplatSink sink{ts.cache, ts.dropped.data(), &ts.first_dropped};
         const SampleWindow &w = m_mv.windows[tile.view_slot];
         const MvFilm &mf = m_mv_films[tile.view_slot];
         MvPrimaries &prim = ts.primaries;
@@ -149,15 +150,20 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
     // A resumed render's clock goes on from the seconds of the runs before (for --time).
     const auto t_start = clock::now() - std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(m_elapsed_before));
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
-    // The statistics of the threads, summed by slot (the ray counters with the runs' before).
+    // The statistics of the threads, summed by slot (the ray counters with the runs' before);
+    // the first native sample with a dropped contribution goes to m_stats.
     auto thread_sums = [&](std::vector<MvViewStats> &stats, std::vector<uint64_t> &dropped) {
         RayCounters counters = m_stats.counters;
         stats.assign(m_views.size(), MvViewStats{});
         dropped.assign(m_views.size(), 0);
+        SampleKey first{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x};
         for (MvThreadState &ts : state) {
+            keep_first(first, ts.first_dropped);
             counters += ts.counters;
             for (size_t s = 0; s < m_views.size(); ++s) stats[s] += ts.stats[s], dropped[s] += ts.dropped[s];
         }
+        m_stats.nonfinite_sample = first[0], m_stats.nonfinite_view = first[1];
+        m_stats.nonfinite_y = first[2], m_stats.nonfinite_x = first[3];
         return counters;
     };
     double last_pass = m_last_pass_before, last_checkpoint = m_elapsed_before;

@@ -37,7 +37,6 @@ void check_layout(StateReader &in, bool multiview, const std::vector<int> &views
     }
 }
 
-using NonfiniteKey = std::array<int64_t, 4>;
 } // namespace
 
 void Renderer::write_state(int next_pass, double elapsed, double last_pass, const RayCounters &counters,
@@ -45,7 +44,7 @@ void Renderer::write_state(int next_pass, double elapsed, double last_pass, cons
     StateWriter out(m_opts.state_path, m_opts.state_header);
     put_layout(out, m_multiview, m_views, m_scene);
     out.put(int32_t(next_pass)), out.put(elapsed), out.put(last_pass), out.put(m_stats.samples), out.put(counters);
-    out.put(NonfiniteKey{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x});
+    out.put(SampleKey{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x});
     if (!m_multiview) {
         for (const FilmBuffer &fb : m_films) out.put(fb.sum), out.put(fb.sum_sq), out.put(fb.count), out.put(fb.nonfinite->load());
     } else {
@@ -69,7 +68,7 @@ void Renderer::read_state(const std::string &path) {
     m_last_pass_before = in.get<double>();
     m_stats.samples = in.get<uint64_t>();
     m_stats.counters = in.get<RayCounters>();
-    const auto nf = in.get<NonfiniteKey>();
+    const auto nf = in.get<SampleKey>();
     m_stats.nonfinite_sample = nf[0], m_stats.nonfinite_view = nf[1], m_stats.nonfinite_y = nf[2], m_stats.nonfinite_x = nf[3];
     if (m_first_pass < 0 || !(m_elapsed_before >= 0.0) || !(m_last_pass_before >= 0.0))
         throw StateError("the state file '" + path + "' is corrupt");
@@ -99,11 +98,10 @@ void Renderer::add_state(const Renderer &o) {
     m_elapsed_before += o.m_elapsed_before;
     m_stats.samples += o.m_stats.samples;
     m_stats.counters += o.m_stats.counters;
-    const NonfiniteKey mine{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x};
-    const NonfiniteKey theirs{o.m_stats.nonfinite_sample, o.m_stats.nonfinite_view, o.m_stats.nonfinite_y, o.m_stats.nonfinite_x};
-    if (theirs[1] >= 0 && (mine[1] < 0 || theirs < mine))
-        m_stats.nonfinite_sample = theirs[0], m_stats.nonfinite_view = theirs[1], m_stats.nonfinite_y = theirs[2],
-        m_stats.nonfinite_x = theirs[3];
+    SampleKey first{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x};
+    keep_first(first, {o.m_stats.nonfinite_sample, o.m_stats.nonfinite_view, o.m_stats.nonfinite_y, o.m_stats.nonfinite_x});
+    m_stats.nonfinite_sample = first[0], m_stats.nonfinite_view = first[1], m_stats.nonfinite_y = first[2];
+    m_stats.nonfinite_x = first[3];
     for (size_t s = 0; s < m_films.size(); ++s) {
         FilmBuffer &a = m_films[s];
         const FilmBuffer &b = o.m_films[s];

@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -200,21 +201,38 @@ private:
     uint32_t m_mask;
 };
 
+/// A native sample as reports name it, ordered as path tracing orders its samples for replay:
+/// (sample index, view's scene index, y, x), full-film pixel; -1s for none.
+using SampleKey = std::array<int64_t, 4>;
+inline constexpr SampleKey NoSample{-1, -1, -1, -1};
+/// Keeps the earlier of `key` and `first` in `first`.
+inline void keep_first(SampleKey &first, const SampleKey &key) {
+    if (key[1] >= 0 && (first[1] < 0 || key < first)) first = key;
+}
+
 /// Where one thread's contributions go: its splat cache, and per view a count of the
-/// contributions dropped as not finite (or beyond SplatMax).
+/// contributions dropped as not finite (or beyond SplatMax), and the first native sample that
+/// had one dropped.
 struct MvSplatSink {
     SplatCache &cache;
     uint64_t *dropped;
+    SampleKey *first_dropped;
     /// A contribution W*L, W at film position `film` (window pixel `pixel`) of a view that
-    /// shares the native sample with Sampler::sample_hash `sample`.
-    void shared(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w) {
-        if (!cache.add(slot, pixel, film, sample, lw, w)) ++dropped[slot];
+    /// shares the native sample with Sampler::sample_hash `sample`; false if dropped.
+    bool shared(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w) {
+        if (cache.add(slot, pixel, film, sample, lw, w)) return true;
+        ++dropped[slot];
+        return false;
     }
     /// The contribution to the native view, with its native-only radiance E (emission seen
-    /// directly, paths through purely specular first vertices) divided by n_l.
-    void native(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w, const Spectrum &e) {
-        if (!cache.add(slot, pixel, film, sample, lw, w, e)) ++dropped[slot];
+    /// directly, paths through purely specular first vertices) divided by n_l; false if dropped.
+    bool native(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w, const Spectrum &e) {
+        if (cache.add(slot, pixel, film, sample, lw, w, e)) return true;
+        ++dropped[slot];
+        return false;
     }
+    /// The native sample `key` had a contribution dropped.
+    void lost(const SampleKey &key) { keep_first(*first_dropped, key); }
 };
 
 } // namespace mvpt

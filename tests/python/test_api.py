@@ -146,9 +146,12 @@ def test_gil_released_while_rendering(slow):
     assert np.diff(np.concatenate([[t0], during, [t1]])).max() < duration / 2
 
 
-def test_nonfinite_samples_counted_not_written():
+@pytest.mark.parametrize("method", ["pt", "mvpt"])
+def test_nonfinite_samples_counted_not_written(method):
+    """Non-finite samples (multi-view: contributions) are dropped, counted, and the first one
+    located for replay, under either method."""
     s = mvpt.load_string(overflow_scene())
-    r = mvpt.render(s, threads=2)
+    r = mvpt.render(s, threads=2, method=method)
     st = r.stats
     assert st["nonfinite_samples"] > 0
     assert st["views"]["cam"]["nonfinite_samples"] == st["nonfinite_samples"]
@@ -157,9 +160,9 @@ def test_nonfinite_samples_counted_not_written():
     assert first["view"] == 0 and first["view_id"] == "cam"
     assert 0 <= first["x"] < 16 and 0 <= first["y"] < 16 and 0 <= first["sample"] < 2
     # The first non-finite sample (in sample, view, y, x order) does not depend on the threads.
-    assert mvpt.render(s, threads=1).stats["first_nonfinite"] == first
+    assert mvpt.render(s, threads=1, method=method).stats["first_nonfinite"] == first
     # A well-behaved scene has none.
-    ok = mvpt.render(mvpt.load_string(scene()), spp=2).stats
+    ok = mvpt.render(mvpt.load_string(scene()), spp=2, method=method).stats
     assert ok["nonfinite_samples"] == 0 and ok["first_nonfinite"] is None
 
 

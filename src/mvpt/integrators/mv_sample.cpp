@@ -376,8 +376,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
 
     // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
     // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
+    const SampleKey key{int64_t(prim.sample_index[i_prim]), int64_t(l.scene_index), py, px};
     auto native_only = [&](const Spectrum &L) {
-        sink.native(slot_l, pixel_l, film_l, sampler.sample_hash(), Spectrum(0.f), 1.f / n_l, L * (1.f / n_l));
+        if (!sink.native(slot_l, pixel_l, film_l, sampler.sample_hash(), Spectrum(0.f), 1.f / n_l, L * (1.f / n_l)))
+            sink.lost(key);
         ++st_l.sharing;
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
     };
@@ -488,6 +490,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     const BsdfSample &bs = mix.bs;
     bool valid_after = valid || !(bs.sampled_type & BsdfNull);
     MvPendingSamples::Sample rec;
+    rec.key = key;
     rec.valid = valid_after;
     float b_scale = 0.f; // b_i = fs[i] * b_scale (smooth), or mix.weight |S| b_scale for the delta view only
     if (!mix.weight.is_black() && mix.pdf > 0.f) {

@@ -130,6 +130,7 @@ struct MvPendingSamples {
         bool valid = false;
         bool nee = false; ///< nee_weight is not black
         uint64_t hash = 0; ///< the native sample's Sampler::sample_hash (for the splats' taps)
+        SampleKey key = NoSample; ///< the native sample, for the report of dropped contributions
         float b_scale = 0.f;
         Spectrum nee_weight{0.f}, delta_bounce{0.f};
         Spectrum e{0.f}; ///< the native view's own radiance E
@@ -188,9 +189,9 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
 /// Adds entries [begin, end) of one sample to `cache`: W·L (mv_entry_value) and W at film
 /// position films[i] (window pixel pixels[i]) of view slots[i], of the native sample with
 /// Sampler::sample_hash `sample`, the same bits as SplatCache::add; entries that do not fit are
-/// counted in dropped[slot]. f_nee and f_bounce are read 16 bytes per entry: one Spectrum past
-/// `end` must be readable.
-void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
+/// counted in dropped[slot] (and returned). f_nee and f_bounce are read 16 bytes per entry: one
+/// Spectrum past `end` must be readable.
+size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
                       const float *w, const int *slots, const uint32_t *pixels, const Vec2f *films, uint64_t sample,
                       size_t begin, size_t end, uint64_t *dropped);
 

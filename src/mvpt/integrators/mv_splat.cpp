@@ -24,15 +24,16 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
 // then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer (to nearest even) in its
 // low bits: exactly to_fixed's llrint when |v| < 2^21. Other values that fit take to_fixed per
 // channel.
-MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
+MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
                                      const Spectrum *__restrict f_bounce, const float *__restrict w,
                                      const int *__restrict slots, const uint32_t *__restrict pixels,
                                      const Vec2f *__restrict films, uint64_t sample, size_t begin, size_t end,
                                      uint64_t *__restrict dropped) {
+    size_t lost = 0;
 #if !defined(__SSE2__) // not x86-64: entry by entry
     for (size_t i = begin; i < end; ++i)
         if (!cache.add(slots[i], pixels[i], films[i], sample, mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i]))
-            ++dropped[slots[i]];
+            ++dropped[slots[i]], ++lost;
 #else
     typedef double D4 __attribute__((vector_size(32)));
     typedef int64_t I4 __attribute__((vector_size(32)));
@@ -59,11 +60,12 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, c
         float f[4];
         _mm_storeu_ps(f, v);
         if (!cache.is_box(slots[i])) { // spread over the pixels the view's filter covers
-            if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(f[0], f[1], f[2]), f[3])) ++dropped[slots[i]];
+            if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(f[0], f[1], f[2]), f[3]))
+                ++dropped[slots[i]], ++lost;
             continue;
         }
         if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) != 0xf) {
-            ++dropped[slots[i]];
+            ++dropped[slots[i]], ++lost;
             continue;
         }
         SplatEntry &p = cache.at(slots[i], pixels[i]);
@@ -81,6 +83,7 @@ MVPT_MULTI_ISA void mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, c
         ++p.count;
     }
 #endif
+    return lost;
 }
 
 void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
@@ -118,15 +121,16 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
             L += rec.delta_bounce * suffix;
             return t.valid ? L * w[i] : Spectrum(0.f);
         };
-        sink.native(slots[0], pixels[0], films[0], rec.hash, value(0), w[0], rec.e);
+        size_t lost = !sink.native(slots[0], pixels[0], films[0], rec.hash, value(0), w[0], rec.e);
         if (delta > 0) {
-            sink.shared(slots[delta], pixels[delta], films[delta], rec.hash, value(delta), w[delta]);
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, size_t(delta),
-                             sink.dropped);
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, size_t(delta) + 1, n,
-                             sink.dropped);
+            lost += !sink.shared(slots[delta], pixels[delta], films[delta], rec.hash, value(delta), w[delta]);
+            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1,
+                                     size_t(delta), sink.dropped);
+            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash,
+                                     size_t(delta) + 1, n, sink.dropped);
         } else
-            mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, n, sink.dropped);
+            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, n, sink.dropped);
+        if (lost) sink.lost(rec.key);
     }
     pending.clear();
 }
