@@ -20,7 +20,7 @@ from . import __version__, api
 from . import state as state_file
 from ._core import SceneError
 from . import displays, reports_cli, state_cli
-from .output import write_outputs
+from .output import staged_outputs, write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
@@ -263,15 +263,36 @@ def _render(scene_path: Path, args, stem: str) -> int:
 
 
 def write_all(result, args, stem: str, settings: dict):
-    """The per-view files, the JSON and the displays asked for in args.output; their paths, or
-    None after printing the error."""
+    """The per-view files, the JSON and the displays asked for in args.output, as one set
+    (output.staged_outputs); their paths, or None after printing the error. Ctrl-C, SIGTERM and
+    SIGHUP while writing do not interrupt it: they are reported, and the exit code says so."""
+    global _stopped_by
+    deferred = []
+
+    def finish_first(signum, frame):
+        if not deferred:
+            print(f"\nmvpt: {signal.Signals(signum).name}: finishing writing the outputs", file=sys.stderr)
+        deferred.append(signum)
+
+    in_main = threading.current_thread() is threading.main_thread()
+    previous = {s: signal.signal(s, finish_first) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)} \
+        if in_main else {}
+    staging = None
     try:
-        paths = write_outputs(result, args.output, stem, aovs=bool(args.aovs), settings=settings)
-        if displays.wants_displays(args):
-            paths += displays.write_displays(result, args, args.output, stem)
+        with staged_outputs(args.output) as (staging, paths):
+            paths += write_outputs(result, staging, stem, aovs=bool(args.aovs), settings=settings)
+            if displays.wants_displays(args):
+                paths += displays.write_displays(result, args, staging, stem)
     except (OSError, RuntimeError, ValueError, ImportError) as e:
-        _error(str(e))
+        _error(str(e).replace(f"{staging}/", f"{args.output}/") if staging else str(e))
         return None
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    if deferred:
+        _stopped_by = signal.Signals(deferred[0])
+        print(f"mvpt: wrote the outputs ({len(paths)} files to {args.output})", file=sys.stderr)
+        raise KeyboardInterrupt
     return paths
 
 

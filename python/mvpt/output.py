@@ -1,14 +1,20 @@
 """Per-view outputs: float EXR (RGB plus optional AOVs), sRGB PNG preview, JSON summary.
 
 Every file is written to a temporary name in the output directory and renamed into place,
-so a reader never sees a partial file and no temporary file is left behind."""
+so a reader never sees a partial file and no temporary file is left behind. A render's whole
+set of outputs is first written into a hidden staging directory inside the output directory
+and then moved into place, the JSON summary last (`staged_outputs`): an interruption or an
+error while writing leaves the previous outputs, and a JSON that is new means every file
+named in it is new."""
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import re
 import secrets
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -45,9 +51,11 @@ def write_json_atomic(path: Path, data: dict) -> None:
             json.dump(_json_clean(data), f, indent=2, sort_keys=True, allow_nan=False)
             f.write("\n")
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(e, OSError):
+            raise OSError(f"cannot write '{path}': {e.strerror or e}") from None
         raise
 
 
@@ -127,3 +135,48 @@ def write_multiview_exr(result, path, stereo: bool = False, aovs: bool = False) 
         parts.append((str(name), channels))
     _core.write_multiview_exr(str(path), parts)
     return str(path)
+
+
+STAGING_PREFIX = ".mvpt-writing-"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def staged_outputs(out_dir):
+    """A staging directory inside `out_dir` for a render's outputs; on success the files
+    written there (their paths appended to the yielded list) move into `out_dir`, JSON files
+    last, and the list then holds their final paths. On an exception nothing moves and the
+    staging directory is removed. Staging directories of processes that no longer run (killed
+    while writing) are removed first."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for old in out.glob(f"{STAGING_PREFIX}*"):
+        pid = old.name[len(STAGING_PREFIX):].split("-")[0]
+        if pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(old, ignore_errors=True)
+    staging = out / f"{STAGING_PREFIX}{os.getpid()}-{secrets.token_hex(4)}"
+    staging.mkdir()
+    written: list = []
+    try:
+        yield staging, written
+        order = sorted(written, key=lambda p: Path(p).suffix == ".json")
+        for p in order:  # what would stop a move, before anything moves
+            if (out / Path(p).name).is_dir():
+                raise IsADirectoryError(f"cannot write '{out / Path(p).name}': a directory is in the way")
+        moved = []
+        for p in order:
+            final = out / Path(p).name
+            os.replace(p, final)
+            moved.append(str(final))
+        written[:] = moved
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)

@@ -13,6 +13,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -62,11 +65,21 @@ void write_exr(const fs::path &path, int width, int height, const std::vector<Ex
 void write_png_srgb(const fs::path &path, int width, int height, const float *rgb) {
     std::vector<unsigned char> px(size_t(width) * height * 3);
     for (size_t i = 0; i < px.size(); ++i) px[i] = (unsigned char)std::lround(srgb_encode(rgb[i]) * 255.f);
+    // Encoded in memory, then written with every error checked (stb's file writer ignores
+    // them: a full disk left an empty PNG).
+    std::string png;
+    auto append = [](void *out, void *data, int size) { static_cast<std::string *>(out)->append((char *)data, size_t(size)); };
+    if (!stbi_write_png_to_func(append, &png, width, height, 3, px.data(), width * 3))
+        throw std::runtime_error("cannot encode PNG '" + path.string() + "'");
     fs::path tmp = temp_path_for(path);
-    if (!stbi_write_png(tmp.c_str(), width, height, 3, px.data(), width * 3)) {
+    std::FILE *f = std::fopen(tmp.c_str(), "wb");
+    bool ok = f && std::fwrite(png.data(), 1, png.size(), f) == png.size() && std::fflush(f) == 0;
+    const std::string why = ok ? "" : std::strerror(errno);
+    if (f && std::fclose(f) != 0 && ok) ok = false;
+    if (!ok) {
         std::error_code ec;
         fs::remove(tmp, ec);
-        throw std::runtime_error("cannot write PNG '" + path.string() + "'");
+        throw std::runtime_error("cannot write PNG '" + path.string() + "'" + (why.empty() ? "" : ": " + why));
     }
     commit_file(tmp, path);
 }

@@ -1,0 +1,145 @@
+"""A render's outputs appear as a set: SIGINT, SIGTERM and SIGHUP at random points of a render
+and of its writing leave a consistent set (the JSON describes every image present: the
+previous render's or the new one's); SIGKILL leaves every file whole and, once the JSON is the
+new one, every image new; a write that fails (the file-size limit standing in for a full disk)
+leaves the previous outputs and no file under a final name."""
+from __future__ import annotations
+
+import json
+import os
+import random
+import resource
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mvpt import _core
+
+from small_scenes import scene, views
+
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+CLI = [sys.executable, "-m", "mvpt.cli"]
+N_VIEWS = 40
+
+
+@pytest.fixture(scope="module")
+def many(tmp_path_factory):
+    """A scene of 40 small views, its outputs from seed 1 and from seed 2, and a run's seconds."""
+    root = tmp_path_factory.mktemp("set")
+    path = root / "many.xml"
+    path.write_text(scene(views(N_VIEWS, res=24, spp=2)))
+    outs = {}
+    for seed in (1, 2):
+        out = root / f"seed{seed}"
+        t = time.monotonic()
+        assert subprocess.run(CLI + ["render", str(path), "--seed", str(seed), "-q", "-o", str(out)], env=ENV).returncode == 0
+        seconds = time.monotonic() - t
+        outs[seed] = _read_set(out)
+    return path, outs, seconds
+
+
+def _read_set(out: Path) -> dict:
+    """{'json': the summary, view id: image} of an output directory (every file must be whole)."""
+    data = json.loads((out / "many.json").read_text())
+    got = {"json": data}
+    for vid in data["views"]:
+        got[vid] = _core.read_image(str(out / f"many_{vid}.exr"))
+        _core.read_image(str(out / f"many_{vid}.png"))
+    return got
+
+
+def _which(images: dict, vid: str, outs: dict) -> int:
+    for seed in (1, 2):
+        if np.array_equal(images[vid], outs[seed][vid]):
+            return seed
+    return 0
+
+
+def _trial(path: Path, out: Path, sig: int, delay: float) -> int:
+    """Render seed 2 into `out` and send `sig` `delay` seconds after the render started (its
+    first line: mvpt has loaded the scene)."""
+    proc = subprocess.Popen(CLI + ["render", str(path), "--seed", "2", "-o", str(out)], env=ENV,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    first = proc.stdout.readline()
+    assert first.startswith("rendering"), first
+    time.sleep(delay)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    assert "Traceback" not in err, err
+    return proc.returncode
+
+
+def _previous(out: Path, path: Path):
+    assert subprocess.run(CLI + ["render", str(path), "--seed", "1", "-q", "-o", str(out)], env=ENV).returncode == 0
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_signals_leave_a_consistent_set(many, tmp_path, sig):
+    path, outs, seconds = many
+    rng = random.Random(int(sig))
+    for k in range(4):
+        out = tmp_path / f"t{k}"
+        _previous(out, path)
+        rc = _trial(path, out, sig, rng.uniform(0.0, 0.9) * seconds)
+        got = _read_set(out)
+        seeds = {_which(got, v, outs) for v in got["json"]["views"]}
+        assert len(seeds) == 1 and 0 not in seeds, seeds  # one render's images, all of them
+        (seed,) = seeds
+        assert got["json"]["settings"]["seed"] == seed  # and the JSON that describes them
+        # (-sig: the signal came as the interpreter exited, after mvpt had finished.)
+        assert rc in (0, 128 + int(sig), -int(sig)), rc
+        assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+def test_sigkill_leaves_whole_files(many, tmp_path):
+    path, outs, seconds = many
+    rng = random.Random(9)
+    for k in range(6):
+        out = tmp_path / f"k{k}"
+        _previous(out, path)
+        _trial(path, out, signal.SIGKILL, rng.uniform(0.0, 0.9) * seconds)
+        got = _read_set(out)  # every file present reads whole
+        seeds = {_which(got, v, outs) for v in got["json"]["views"]}
+        assert 0 not in seeds
+        if got["json"]["settings"]["seed"] == 2:
+            assert seeds == {2}  # the JSON moves last: a new JSON means a complete new set
+        # A later render removes the killed one's staging directory.
+        _previous(out, path)
+        assert not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+def _limit_file_size(limit: int):
+    def setup():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG) instead
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    return setup
+
+
+def test_png_write_errors_are_checked(tmp_path):
+    """stb's file writer ignored write errors: a full disk left an empty PNG."""
+    target = tmp_path / "big.png"
+    code = ("import numpy as np, sys; from mvpt import _core\n"
+            "img = np.random.default_rng(1).random((256, 256, 3), dtype=np.float32)\n"
+            "try:\n    _core.write_png(sys.argv[1], img)\nexcept RuntimeError as e:\n    print(e); sys.exit(3)\n")
+    proc = subprocess.run([sys.executable, "-c", code, str(target)], env=ENV, capture_output=True, text=True,
+                          preexec_fn=_limit_file_size(20000))
+    assert proc.returncode == 3 and "cannot write PNG" in proc.stdout, (proc.stdout, proc.stderr)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_full_disk_keeps_the_previous_outputs(many, tmp_path):
+    path, outs, _ = many
+    out = tmp_path / "full"
+    _previous(out, path)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    proc = subprocess.run(CLI + ["render", str(path), "--seed", "2", "-q", "-o", str(out)], env=ENV,
+                          capture_output=True, text=True, preexec_fn=_limit_file_size(3000))
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 1 and len(err) == 1 and err[0].startswith("mvpt: error: cannot write"), proc.stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
