@@ -12,12 +12,27 @@ from . import _core
 from . import state as state_file
 
 
+def _text(s: str, what: str) -> str:
+    """`s` if it is text the native code can take (command-line bytes that are not UTF-8 arrive
+    as lone surrogates); a ValueError naming `what` and showing the bytes escaped otherwise."""
+    try:
+        s.encode("utf-8")
+    except UnicodeEncodeError:
+        raise ValueError(f"{what} is not UTF-8 text: {shown(s)}") from None
+    return s
+
+
+def shown(s: str) -> str:
+    """`s` for a message: bytes that are not UTF-8 (lone surrogates from the command line) as \\xNN."""
+    return s.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
 def _defines(kwargs: dict) -> dict:
     out = {}
     for k, v in kwargs.items():
         if isinstance(v, bool):
             v = "true" if v else "false"
-        out[str(k)] = str(v)
+        out[_text(str(k), "a define's name")] = _text(str(v), f"the define {k!r}")
     return out
 
 
@@ -29,12 +44,13 @@ def load_file(path: str | os.PathLike, rig: Optional[str] = None, **defines) -> 
     sensors by the views generated from its first sensor (README, "Camera rigs and shots").
     Raises mvpt.SceneError (a ValueError) naming file:line:col on bad input; the error
     also has the attributes file, line, column and message."""
-    return _core.load_file(os.fspath(path), _defines(defines), rig or "")
+    return _core.load_file(_text(os.fspath(path), "the scene path"), _defines(defines), _text(rig or "", "the rig"))
 
 
 def load_string(xml: str, base_dir: str | os.PathLike = ".", rig: Optional[str] = None, **defines) -> _core.Scene:
     """Load a scene from an XML string; relative file names resolve in `base_dir`."""
-    return _core.load_string(xml, os.fspath(base_dir), _defines(defines), rig or "")
+    return _core.load_string(_text(xml, "the scene"), _text(os.fspath(base_dir), "base_dir"), _defines(defines),
+                             _text(rig or "", "the rig"))
 
 
 @dataclass
@@ -74,7 +90,7 @@ def resolve_views(scene: _core.Scene, views: Optional[Sequence]) -> list:
         elif str(v).strip().isdigit():
             i = int(str(v))
         else:
-            raise ValueError(f"unknown view {str(v)!r}; the scene's views are {', '.join(ids)}")
+            raise ValueError(f"unknown view '{shown(str(v))}'; the scene's views are {', '.join(ids)}")
         if not 0 <= i < len(ids):
             raise ValueError(f"view index {i} is out of range: the scene has {len(ids)} views (0..{len(ids) - 1})")
         if i not in index:
@@ -131,6 +147,9 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"seed must lie in [0, 2^32), got {seed}")
     if method not in ("scene", "pt", "mvpt"):
         raise ValueError(f"method must be 'pt', 'mvpt' or 'scene', got {method!r}")
+    for path, what in ((state, "the state path"), (resume, "the resume path")):
+        if path is not None:
+            _text(os.fspath(path), what)
     if not (float(checkpoint) >= 0.0):
         raise ValueError(f"checkpoint must be >= 0 seconds, got {checkpoint}")
     if passes is not None:

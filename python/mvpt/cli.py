@@ -192,6 +192,11 @@ def print_multiview_summary(s: dict, stream) -> None:
 
 
 def _render(scene_path: Path, args, stem: str) -> int:
+    try:
+        api._text(str(args.output), "the output directory")
+    except ValueError as e:
+        _error(str(e))
+        return EXIT_USAGE
     defines = dict(args.define or [])
     problem = displays.check_display_options(args)
     if problem:
@@ -199,7 +204,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
         return EXIT_USAGE
     try:
         scene = api.load_file(scene_path, rig=args.rig, **defines)
-    except SceneError as e:
+    except (SceneError, ValueError) as e:  # ValueError: arguments that are not text
         _error(str(e))
         return EXIT_ERROR
     try:

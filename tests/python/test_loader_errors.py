@@ -20,6 +20,9 @@ from mvpt import cli
 
 from small_scenes import scene, sensor
 
+CLI = [sys.executable, "-m", "mvpt.cli"]
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+
 
 @dataclass
 class Case:
@@ -317,3 +320,38 @@ def test_unused_define(tmp_path):
 def test_missing_scene_file(tmp_path):
     with pytest.raises(mvpt.SceneError, match="not found"):
         mvpt.load_file(tmp_path / "nothere.xml")
+
+
+@pytest.mark.parametrize("where", ["element", "attribute", "value", "filename", "comment"])
+def test_bytes_that_are_not_utf8(tmp_path, capsys, where):
+    """A scene byte that is not UTF-8 is one error at its line and column, shown escaped (it once
+    made a traceback where a name or value reached Python)."""
+    text = scene(body='    <shape type="obj" id="mesh">\n        <string name="filename" value="m.obj"/>\n    </shape>\n'
+                      '    <!-- note -->\n').encode()
+    (tmp_path / "m.obj").write_text(GOOD_OBJ)
+    old = {"element": b"<shape type", "attribute": b'name="filename"', "value": b'id="mesh"',
+           "filename": b'value="m.obj"', "comment": b"<!-- note"}[where]
+    new = old[:3] + b"\xe9" + old[3:]  # a Latin-1 byte
+    path = tmp_path / "scene.xml"
+    path.write_bytes(text.replace(old, new, 1))
+    offset = text.index(old) + 3
+    line = text[:offset].count(b"\n") + 1
+    col = offset - (text.rfind(b"\n", 0, offset) + 1) + 1
+    with pytest.raises(mvpt.SceneError) as e:
+        mvpt.load_file(path)
+    assert str(e.value) == f"{path}:{line}:{col}: a byte that is not UTF-8 text: \\xE9 (scene files are UTF-8)"
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mvpt: error: ") and "\\xE9" in err[0]
+
+
+@pytest.mark.parametrize("args", [["-D", b"res=\xff"], [b"--views", b"\xff"], ["-o", b"out\xff"],
+                                  ["--rig", b"grid:2x2,spacing=\xff"], [b"-D\xff=1"]])
+def test_arguments_that_are_not_utf8(tmp_path, args):
+    path = tmp_path / "scene.xml"
+    path.write_text(scene())
+    argv = [a if isinstance(a, bytes) else a.encode() for a in CLI + ["render", str(path), "-q"] + args]
+    proc = subprocess.run(argv, capture_output=True, cwd=tmp_path, env=ENV)
+    err = proc.stderr.decode("utf-8", "backslashreplace").strip().splitlines()
+    assert proc.returncode in (1, 2) and len(err) == 1 and err[0].startswith("mvpt: error: "), err
+    assert "\\xff" in err[0].lower(), err

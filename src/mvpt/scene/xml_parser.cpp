@@ -143,6 +143,11 @@ public:
         if (depth == 0) m_root_dir = dir;
         auto src = std::make_shared<SourceText>(display_path, text);
         m_sources.push_back(src);
+        // Names, ids, values and file names are text: a byte that is not UTF-8 is an error where it is.
+        if (const size_t bad = first_invalid_utf8(text); bad != std::string::npos)
+            throw SceneError(src->loc(ptrdiff_t(bad)), "a byte that is not UTF-8 text: " +
+                                                           escape_invalid_utf8(text.substr(bad, 1)) +
+                                                           " (scene files are UTF-8)");
         pugi::xml_document doc;
         pugi::xml_parse_result res = doc.load_buffer(text.data(), text.size(), pugi::parse_default);
         if (res.status == pugi::status_end_element_mismatch) src->fail_unclosed(res.offset);
