@@ -249,6 +249,15 @@ def _result(scene, job, index: list, settings: dict) -> RenderResult:
     return result
 
 
+def _warnings(raw: dict, results: list) -> list:
+    """The renderer's warnings, and one when every view came out black although the scene has
+    an emitter (the cameras see nothing lit)."""
+    out = list(raw["warnings"])
+    if not out and raw["passes"] > 0 and results and not any(r["image"].any() for r in results):
+        out.append("every view is black: no light reaches the cameras (do they look at the scene?)")
+    return out
+
+
 def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict:
     """The statistics of one render, as returned in RenderResult.stats and written to JSON."""
     ids = [v["id"] for v in scene.views]
@@ -290,5 +299,6 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "integrator": scene.integrator,
         "method": raw["method"],
         "notes": list(raw["notes"]),
+        "warnings": _warnings(raw, results),
         "views": views,
     } | ({"estimator": raw["estimator"], "multiview": dict(raw["multiview"])} if raw["method"] == "mvpt" else {})

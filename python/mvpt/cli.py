@@ -244,6 +244,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
         return EXIT_ERROR
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
+    for warning in result.stats.get("warnings", []):
+        print(f"mvpt: warning: {warning}", file=sys.stderr)
     if cancelled and result.stats["passes"] == 0:
         if not resume:
             state.unlink(missing_ok=True)

@@ -95,6 +95,8 @@ struct RenderStats {
     std::string method = "pt", estimator;
     /// Things the user should know about the run (e.g. a filter replaced by a box).
     std::vector<std::string> notes;
+    /// Things that make the images useless (a scene that cannot produce light).
+    std::vector<std::string> warnings;
     MvViewStats mv; ///< multi-view statistics summed over views
 };
 

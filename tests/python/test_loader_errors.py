@@ -157,6 +157,17 @@ CASES = {
        for name, values in (("max_depth", (4294967297, -2, 2**31)), ("sample_count", (2**31, 0, -4)),
                             ("seed", (2**40, 2**32, -1)))
        for value in values},
+    "matrix_beyond_float": Case(_with_shape('<transform name="to_world">\n            '
+                                            '<matrix value="1e39 0 0 0  0 1 0 0  0 0 1 0  0 0 0 1"/>\n        </transform>'),
+                                '<matrix value="1e39', r"transform is not finite in single precision"),
+    "crop_offset_near_2_63": Case(scene(sensor(film_extra='\n            <integer name="crop_offset_x" value="9223372036854775800"/>'
+                                                          '\n            <integer name="crop_width" value="100"/>')),
+                                  '<integer name="crop_width"', r"crop window .* does not fit in the 16x16 film"),
+    "cdata_section": Case(_with_shape('<![CDATA[ <bsdf type="diffuse"/> ]]>'), "<![CDATA[",
+                          r"a CDATA section inside <shape>"),
+    "defaults_that_double": Case(scene().replace('<scene version="3.0.0">', '<scene version="3.0.0">\n    <default name="a0" value="xxxxxxxx"/>' +
+                                                 "".join(f'\n    <default name="a{i + 1}" value="$a{i}$a{i}"/>' for i in range(24)), 1),
+                                 'value="$a17$a17"', r"substituting \$a17 makes a value longer than 1 MiB"),
     "bad_boolean": Case(_with_shape('<boolean name="flip_normals" value="maybe"/>'), 'value="maybe"',
                         r"expected true or false"),
     "rgb_wrong_count": Case(_with_shape('<bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5"/></bsdf>'),
@@ -355,3 +366,75 @@ def test_arguments_that_are_not_utf8(tmp_path, args):
     err = proc.stderr.decode("utf-8", "backslashreplace").strip().splitlines()
     assert proc.returncode in (1, 2) and len(err) == 1 and err[0].startswith("mvpt: error: "), err
     assert "\\xff" in err[0].lower(), err
+
+
+def _rgbe(rgb):
+    """RGBE bytes of a float RGB (values > 0), as Radiance stores them."""
+    import math
+    m = max(rgb)
+    e = math.frexp(m)[1]
+    return bytes([int(v / 2.0 ** e * 256) for v in rgb] + [e + 128])
+
+
+def _radiance(width: int, height: int, rle: bool) -> tuple:
+    """A Radiance HDR file (new run-length scanlines, or flat) and the image stb decodes from it."""
+    import numpy as np
+    rng = np.random.default_rng(3)
+    px = [[_rgbe([float(v) for v in rng.uniform(0.1, 4.0, 3)]) for _ in range(width)] for _ in range(height)]
+    for row in px:  # a run of equal pixels in each row
+        row[2:7] = [row[2]] * 5
+    out = bytearray(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (height, width))
+    for row in px:
+        if not rle:
+            out += b"".join(row)
+            continue
+        out += bytes([2, 2, width >> 8, width & 255])
+        for c in range(4):
+            comp, x = [p[c] for p in row], 0
+            while x < width:
+                run = 1
+                while x + run < width and run < 127 and comp[x + run] == comp[x]:
+                    run += 1
+                if run >= 3:
+                    out += bytes([128 + run, comp[x]])
+                    x += run
+                else:
+                    lit = min(width - x, 128, 2)
+                    out += bytes([lit]) + bytes(comp[x:x + lit])
+                    x += lit
+    expected = np.array([[[p[c] * 2.0 ** (p[3] - 136) for c in range(3)] for p in row] for row in px], dtype=np.float32)
+    return bytes(out), expected
+
+
+@pytest.mark.parametrize("rle", [True, False])
+def test_truncated_radiance_hdr_is_an_error(tmp_path, rle):
+    """stb_image read a truncated Radiance file as if its missing scanlines were there."""
+    import numpy as np
+    data, expected = _radiance(24, 10, rle)
+    whole = tmp_path / "whole.hdr"
+    whole.write_bytes(data)
+    np.testing.assert_allclose(mvpt._core.read_image(str(whole)), expected, rtol=1e-6)
+    for cut in (len(data) - 1, len(data) - 50, len(data) // 2, 60):
+        part = tmp_path / f"cut{cut}.hdr"
+        part.write_bytes(data[:cut])
+        with pytest.raises(RuntimeError, match="truncated or corrupt Radiance HDR"):
+            mvpt._core.read_image(str(part))
+    # In a scene: one error naming the texture.
+    (tmp_path / "tex.hdr").write_bytes(data[: len(data) // 2])
+    xml = _with_shape('<bsdf type="diffuse">\n            <texture type="bitmap" name="reflectance">\n'
+                      '                <string name="filename" value="tex.hdr"/>\n            </texture>\n        </bsdf>')
+    (tmp_path / "scene.xml").write_text(xml)
+    with pytest.raises(mvpt.SceneError, match=r"tex\.hdr.*truncated or corrupt Radiance HDR"):
+        mvpt.load_file(tmp_path / "scene.xml")
+
+
+def test_scenes_that_cannot_produce_light_warn(tmp_path, capsys):
+    dark = tmp_path / "dark.xml"
+    dark.write_text('<scene version="3.0.0">\n<integrator type="path"/>\n' + sensor() + '<shape type="cube"/>\n</scene>\n')
+    assert cli.main(["render", str(dark), "-q", "-o", str(tmp_path / "a")]) == 0
+    assert "mvpt: warning: the scene has no emitter: every image is black" in capsys.readouterr().err
+    away = tmp_path / "away.xml"  # lit, but the camera looks into the void
+    away.write_text(scene(sensor(origin="0, 0, 40").replace('target="0, 0.5, 0"', 'target="0, 0, 80"')))
+    r = mvpt.render(mvpt.load_file(away), spp=2)
+    assert r.stats["warnings"] == ["every view is black: no light reaches the cameras (do they look at the scene?)"]
+    assert mvpt.render(mvpt.load_string(scene()), spp=2).stats["warnings"] == []

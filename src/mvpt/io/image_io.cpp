@@ -16,6 +16,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -84,6 +86,47 @@ void write_png_srgb(const fs::path &path, int width, int height, const float *rg
     commit_file(tmp, path);
 }
 
+namespace {
+/// Empty if the Radiance HDR file `data` holds every scanline its header promises, otherwise
+/// what is missing (stb_image reads past a truncated file's end as if it had data).
+std::string radiance_incomplete(const std::string &data) {
+    size_t pos = data.find("\n\n");
+    if (pos == std::string::npos) return "no end of header";
+    pos += 2;
+    const size_t eol = data.find('\n', pos);
+    if (eol == std::string::npos) return "no resolution line";
+    char a[3] = {}, b[3] = {};
+    long n1 = 0, n2 = 0;
+    if (std::sscanf(data.substr(pos, eol - pos).c_str(), "%2s %ld %2s %ld", a, &n1, b, &n2) != 4 || n1 <= 0 || n2 <= 0)
+        return "a bad resolution line";
+    const long lines = n1, width = n2; // scanlines run along the second axis
+    size_t p = eol + 1;
+    auto at = [&](size_t k) { return (unsigned char)data[p + k]; };
+    for (long y = 0; y < lines; ++y) {
+        const bool rle = width >= 8 && width < 32768 && p + 4 <= data.size() && at(0) == 2 && at(1) == 2 &&
+                         ((long(at(2)) << 8) | at(3)) == width;
+        if (!rle) { // flat: four bytes per pixel
+            if (data.size() - p < size_t(width) * 4) return "scanline " + std::to_string(y + 1) + " of " + std::to_string(lines);
+            p += size_t(width) * 4;
+            continue;
+        }
+        p += 4;
+        for (int c = 0; c < 4; ++c)
+            for (long x = 0; x < width;) {
+                if (p >= data.size()) return "scanline " + std::to_string(y + 1) + " of " + std::to_string(lines);
+                const unsigned count = (unsigned char)data[p++];
+                const long run = count > 128 ? long(count) - 128 : long(count);
+                if (run == 0 || x + run > width) return "a bad run in scanline " + std::to_string(y + 1);
+                const size_t bytes = count > 128 ? 1 : size_t(run);
+                if (data.size() - p < bytes) return "scanline " + std::to_string(y + 1) + " of " + std::to_string(lines);
+                p += bytes;
+                x += run;
+            }
+    }
+    return {};
+}
+} // namespace
+
 ImageRGB read_image(const fs::path &path, bool raw) {
     ImageRGB img;
     std::string ext = path.extension().string();
@@ -117,6 +160,10 @@ ImageRGB read_image(const fs::path &path, bool raw) {
     }
     int w, h, n;
     if (ext == ".hdr") {
+        std::ifstream in(path, std::ios::binary);
+        const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        if (const std::string missing = radiance_incomplete(data); !missing.empty())
+            throw std::runtime_error("cannot read image: a truncated or corrupt Radiance HDR file (" + missing + ")");
         float *d = stbi_loadf(path.c_str(), &w, &h, &n, 3);
         if (!d) throw std::runtime_error(std::string("cannot read image: ") + stbi_failure_reason());
         img.rgb.assign(d, d + size_t(w) * h * 3);

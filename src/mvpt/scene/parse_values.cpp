@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cfloat>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -36,6 +37,18 @@ std::string trim(const std::string &s) {
     size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
     return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
 }
+} // namespace
+
+namespace {
+/// Shapes, lights and cameras use transforms in single precision: every entry must fit a float.
+bool fits_float(const Transform &t) {
+    for (const Matrix4 *m : {&t.matrix(), &t.inverse_matrix()})
+        for (auto &row : m->m)
+            for (double v : row)
+                if (!(std::fabs(v) <= double(FLT_MAX))) return false;
+    return true;
+}
+const char *NotFloat = "transform is not finite in single precision (an entry or its inverse's beyond 3.4e38)";
 } // namespace
 
 double parse_float(const std::string &s_, const FileLoc &loc, const std::string &what) {
@@ -150,9 +163,10 @@ Transform parse_transform_ops(const XmlNode &node) {
             throw SceneError(op.loc, "unknown transform operation <" + tag + ">" +
                                          (hint.empty() ? " (expected translate, rotate, scale, matrix or lookat)" : hint));
         }
+        if (!fits_float(m)) throw SceneError(op.loc, NotFloat);
         t = m * t;
     }
-    if (!t.matrix().is_finite()) throw SceneError(node.loc, "transform is not finite");
+    if (!fits_float(t)) throw SceneError(node.loc, NotFloat);
     return t;
 }
 

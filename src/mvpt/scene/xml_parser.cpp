@@ -215,6 +215,9 @@ private:
                          int depth) {
         for (pugi::xml_node c : parent.children()) {
             if (c.type() != pugi::node_element) {
+                if (c.type() == pugi::node_cdata) // (pugixml's offset is that of the content, after "<![CDATA[")
+                    throw SceneError(src.loc(std::max<ptrdiff_t>(0, c.offset_debug() - 9)), "a CDATA section inside <" + std::string(parent.name()) +
+                                                                    ">: scene files say everything with elements and attributes");
                 if (c.type() == pugi::node_pcdata && std::string(c.value()).find_first_not_of(" \t\r\n") != std::string::npos)
                     throw SceneError(src.loc(c.offset_debug()), "unexpected text inside <" + std::string(parent.name()) + ">");
                 continue;
@@ -292,11 +295,16 @@ private:
                 throw SceneError(loc, "undefined variable '$" + name + "': add <default name=\"" + name +
                                           "\" value=\"...\"/> or pass -D " + name + "=...");
             r += it->second;
+            if (r.size() > MaxSubstitution)
+                throw SceneError(loc, "substituting $" + name + " makes a value longer than " +
+                                          std::to_string(MaxSubstitution >> 20) + " MiB (defaults that double each other?)");
             i = j;
         }
         return r;
     }
 
+    /// The longest value substitutions may make (chained defaults could grow without bound).
+    static constexpr size_t MaxSubstitution = size_t(1) << 20;
     std::map<std::string, std::string> m_vars;
     std::set<std::string> m_from_caller;
     std::vector<fs::path> m_path_dirs;

@@ -22,7 +22,8 @@ std::shared_ptr<Object> make_hdrfilm(const Properties &props, const LoadContext 
     d.height = int(h);
     int64_t cx = props.get_int("crop_offset_x", 0), cy = props.get_int("crop_offset_y", 0);
     int64_t cw = props.get_int("crop_width", w - cx), ch = props.get_int("crop_height", h - cy);
-    if (cx < 0 || cy < 0 || cw <= 0 || ch <= 0 || cx + cw > w || cy + ch > h)
+    // (Compared without sums: offsets near 2^63 once wrapped around.)
+    if (cx < 0 || cy < 0 || cx >= w || cy >= h || cw <= 0 || ch <= 0 || cw > w - cx || ch > h - cy)
         props.fail("crop_width", "crop window (" + std::to_string(cx) + ", " + std::to_string(cy) + ") + " +
                                      std::to_string(cw) + "x" + std::to_string(ch) + " does not fit in the " +
                                      std::to_string(w) + "x" + std::to_string(h) + " film");
