@@ -1,8 +1,11 @@
 """Python API: load scenes, render them (cancellable, GIL released), get NumPy images."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
+import threading
 from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
@@ -25,6 +28,19 @@ def _text(s: str, what: str) -> str:
 def shown(s: str) -> str:
     """`s` for a message: bytes that are not UTF-8 (lone surrogates from the command line) as \\xNN."""
     return s.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
+@contextlib.contextmanager
+def _interrupts_ignored():
+    """Ctrl-C does nothing inside (in the main thread; elsewhere Python delivers none)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: None)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _defines(kwargs: dict) -> dict:
@@ -182,10 +198,13 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         if progress is not None:
             progress(job.progress())  # the final state
     except BaseException as e:  # KeyboardInterrupt included: stop cleanly, keep the passes done
-        interrupted = e
-        job.cancel()
-        while not job.wait(poll):
-            pass
+        # A second Ctrl-C (people press it twice) must not abandon the passes already done: the
+        # render stops within a fraction of a second anyway.
+        with _interrupts_ignored():
+            interrupted = e
+            job.cancel()
+            while not job.wait(poll):
+                pass
     result = _result(scene, job, index, dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads),
                                              method=method, passes=passes))
     if interrupted is not None:

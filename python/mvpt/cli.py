@@ -24,16 +24,25 @@ from .output import staged_outputs, write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 
-# The signal that stopped the render (SIGINT or SIGTERM): the exit code is 128 + its number.
-_stopped_by = signal.SIGINT
+# The signal that stopped the render (SIGINT, SIGTERM or SIGHUP): the exit code is 128 + its
+# number; None until one came.
+_stopped_by = None
 
 
 def _on_signal(signum, frame):
-    """SIGTERM (batch schedulers, `kill`) and SIGHUP (a closed terminal) stop like Ctrl-C: with
-    the outputs of the passes finished and a state to resume from."""
+    """Ctrl-C, SIGTERM (batch schedulers, `kill`) and SIGHUP (a closed terminal) stop the render
+    with the outputs of the passes finished and a state to resume from. Only the first stops it:
+    later ones (people press Ctrl-C twice) must not abandon what it is saving."""
     global _stopped_by
-    _stopped_by = signal.Signals(signum)
-    raise KeyboardInterrupt
+    if _stopped_by is None:
+        _stopped_by = signal.Signals(signum)
+        raise KeyboardInterrupt
+    print(f"\nmvpt: {signal.Signals(signum).name}: finishing what was started", file=sys.stderr)
+
+
+def _exit_code() -> int:
+    """The exit code of a render stopped by a signal (Ctrl-C when none was recorded)."""
+    return 128 + int(_stopped_by or signal.SIGINT)
 
 
 def _error(msg: str) -> None:
@@ -250,7 +259,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
         if not resume:
             state.unlink(missing_ok=True)
         print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
-        return 128 + int(_stopped_by)
+        return _exit_code()
     if not cancelled and not keep_state:
         state.unlink(missing_ok=True)  # the render is complete: a state was not asked for
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
@@ -265,7 +274,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
     if cancelled:
         print(f"mvpt: interrupted; wrote the passes finished so far and their state; continue with: "
               f"mvpt render --resume {args.output}", file=sys.stderr)
-        return 128 + int(_stopped_by)
+        return _exit_code()
     return EXIT_OK
 
 
@@ -297,7 +306,7 @@ def write_all(result, args, stem: str, settings: dict):
         for s, handler in previous.items():
             signal.signal(s, handler)
     if deferred:
-        _stopped_by = signal.Signals(deferred[0])
+        _stopped_by = _stopped_by or signal.Signals(deferred[0])
         print(f"mvpt: wrote the outputs ({len(paths)} files to {args.output})", file=sys.stderr)
         raise KeyboardInterrupt
     return paths
@@ -315,7 +324,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     except KeyboardInterrupt:
         bar.finish(done=False)
         print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
-        return 128 + int(_stopped_by)
+        return _exit_code()
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
         bar.finish(done=False)
         _error(str(e) or type(e).__name__)
@@ -334,7 +343,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
               f"wrote {len(paths)} files to {args.output}")
     if cancelled:
         print("mvpt: interrupted; wrote the ranges finished so far", file=sys.stderr)
-        return 128 + int(_stopped_by)
+        return _exit_code()
     return EXIT_OK
 
 
@@ -402,9 +411,9 @@ def main(argv=None) -> int:
     except SystemExit as e:
         return int(e.code) if isinstance(e.code, int) else EXIT_USAGE
     global _stopped_by
-    _stopped_by = signal.SIGINT
+    _stopped_by = None
     in_main_thread = threading.current_thread() is threading.main_thread()
-    stops = (signal.SIGTERM, signal.SIGHUP)
+    stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
     previous = {s: signal.signal(s, _on_signal) for s in stops} if in_main_thread else {}
     try:
         if args.command == "render":
@@ -422,7 +431,7 @@ def main(argv=None) -> int:
             return _render(demo, args, "demo")
     except KeyboardInterrupt:
         print("\nmvpt: interrupted", file=sys.stderr)
-        return 128 + int(_stopped_by)
+        return _exit_code()
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler if handler is not None else signal.SIG_DFL)
