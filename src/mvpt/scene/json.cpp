@@ -82,7 +82,7 @@ private:
                 if (m_pos >= m_text.size() || m_text[m_pos] != '"') fail("expected a \"key\" in the object");
                 std::string key = parse_string();
                 expect(':', "after an object key");
-                v.members.emplace_back(key, parse_value(depth + 1));
+                v.members.push_back({key, parse_value(depth + 1)});
             } while (consume(','));
             expect('}', "or ',' in the object");
         } else if (c == '[') {

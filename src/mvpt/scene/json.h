@@ -12,6 +12,8 @@
 
 namespace mvpt {
 
+struct JsonMember;
+
 /// One JSON value (RFC 8259): null, boolean, number, string, array or object.
 struct JsonValue {
     enum class Kind { Null, Bool, Number, String, Array, Object };
@@ -20,13 +22,20 @@ struct JsonValue {
     double number = 0;
     std::string string;
     std::vector<JsonValue> items;                          ///< array elements
-    std::vector<std::pair<std::string, JsonValue>> members; ///< object members, in file order
+    std::vector<JsonMember> members;                       ///< object members, in file order
     FileLoc loc;                                           ///< where the value starts
 
     /// The member `key` of an object, or nullptr.
     const JsonValue *find(const std::string &key) const;
     /// "null", "a boolean", "a number", "a string", "an array" or "an object" (for messages).
     const char *kind_name() const;
+};
+
+/// A member of an object: its key and value (a pair of a type still incomplete in JsonValue
+/// would not be portable).
+struct JsonMember {
+    std::string first;
+    JsonValue second;
 };
 
 /// Parse JSON text; syntax errors throw SceneError at `display_path`:line:col.
