@@ -119,6 +119,13 @@ def test_cli_rig(tmp_path, capsys):
     assert cli.main(["render", str(scene), "--rig", "grid:2x2,spacing=nan", "-q", "-o", str(out)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mvpt: error: --rig grid:2x2,spacing=nan: grid rig 'spacing'")
+    # Finite in double but not once the views are made in single precision: an error at the option.
+    for spec, name in (("grid:2x2,spacing=1e39", "spacing"), ("orbit:n=3,radius=2e30", "radius"),
+                       ("linear:n=3,baseline=-1e31", "baseline")):
+        assert cli.main(["render", str(scene), "--rig", spec, "-q", "-o", str(out)]) == 1
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0] == f"mvpt: error: --rig {spec}: {spec.split(':')[0]} rig '{name}' must lie " \
+                                           f"within +-1e30, got {spec.split('=')[-1]}", err
 
 
 EXPECTED_VIEWS = {"cornell-glossy-9": 9, "lightfield-5x5": 25, "stereo": 2, "shot-100": 100, "glossy-ggx-9": 9}

@@ -48,7 +48,12 @@ public:
             throw SceneError(m_spec.loc, m_spec.prefix() + "the " + m_spec.type + " rig needs '" + name + "'");
         return it->second.value;
     }
-    double number(const std::string &name) const { return parse_float(string(name), loc(name), what(name)); }
+    /// A finite number small enough that the views made with it stay finite in single precision.
+    double number(const std::string &name) const {
+        const double v = parse_float(string(name), loc(name), what(name));
+        if (std::fabs(v) > 1e30) fail(name, "must lie within +-1e30, got " + string(name));
+        return v;
+    }
     double number(const std::string &name, double def) const { return has(name) ? number(name) : def; }
     /// A positive length (NaN, infinity, zero and negative values are errors).
     double length(const std::string &name) const {
