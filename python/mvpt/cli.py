@@ -200,6 +200,13 @@ def print_multiview_summary(s: dict, stream) -> None:
     stream.write(_table(rows, ["view", "native", "received", "|S|", "rays/native"] + list(_TESTS), "<>>>>>>>>>>"))
 
 
+def _failed(bar: "ProgressBar", e: Exception) -> int:
+    """A render that raised: the progress line ended, one error line, the error exit code."""
+    bar.finish(done=False)
+    _error(str(e) or type(e).__name__)
+    return EXIT_ERROR
+
+
 def _render(scene_path: Path, args, stem: str) -> int:
     try:
         api._text(str(args.output), "the output directory")
@@ -248,9 +255,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
                             state_extra={"command": state_cli.command_record(scene_path, args, stem)},
                             passes=args.passes)
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
-        bar.finish(done=False)
-        _error(str(e) or type(e).__name__)
-        return EXIT_ERROR
+        return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     for warning in result.stats.get("warnings", []):
@@ -326,9 +331,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
         print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
         return _exit_code()
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
-        bar.finish(done=False)
-        _error(str(e) or type(e).__name__)
-        return EXIT_ERROR
+        return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     settings = {"scene": str(scene_path), "defines": dict(args.define or []), "output": str(args.output),
