@@ -317,7 +317,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "first_nonfinite": first,
         "integrator": scene.integrator,
         "method": raw["method"],
-        "notes": list(raw["notes"]),
+        "notes": list(scene.notes) + list(raw["notes"]),
         "warnings": _warnings(raw, results),
         "views": views,
     } | ({"estimator": raw["estimator"], "multiview": dict(raw["multiview"])} if raw["method"] == "mvpt" else {})

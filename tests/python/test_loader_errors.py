@@ -53,7 +53,6 @@ CASES = {
                                  "40/>", r"malformed XML: bad attribute syntax \(expected name=\"value\"\)"),
     "bad_start_tag": Case(scene(body='    <shape type="cube"/ >\n'), ' >\n', r"malformed XML: bad start tag"),
     "missing_version": Case(scene(header="<scene>"), "<scene>", r"version"),
-    "mitsuba_06": Case(scene(header='<scene version="0.6.0">'), 'version="0.6.0"', r"0\.6.*Mitsuba 3|Mitsuba 0"),
     "root_not_scene": Case('<scena version="3.0.0">\n</scena>\n', "<scena", r"root element must be <scene>"),
     "empty_file": Case("", "", r"no root element|empty"),
     # --- structure ----------------------------------------------------------------------

@@ -33,6 +33,7 @@ Scene::~Scene() {
 void Scene::build(const SceneTree &tree) {
     const Properties &props = tree.props;
     m_source_files = tree.source_files;
+    m_notes = tree.notes;
     for (const ChildObject &c : props.children()) {
         c.queried = true;
         bool owned_elsewhere = !c.id.empty() && tree.referenced_ids.count(c.id);

@@ -69,6 +69,8 @@ public:
     const Integrator &integrator() const { return *m_integrator; }
     /// The files the scene was read from (XML, meshes, textures, ...), absolute, without repeats.
     const std::vector<std::filesystem::path> &source_files() const { return m_source_files; }
+    /// Notes on how the scene was read (a Mitsuba 0.6 file upgraded, and what that changed).
+    const std::vector<std::string> &notes() const { return m_notes; }
     /// How the scene was loaded: the <default> overrides and the rig option.
     const std::map<std::string, std::string> &defines() const { return m_defines; }
     const std::string &rig() const { return m_rig; }
@@ -104,6 +106,7 @@ private:
     /// Some shape moves (otherwise Embree's ray time is irrelevant and left at 0).
     bool m_animated = false;
     std::vector<std::filesystem::path> m_source_files;
+    std::vector<std::string> m_notes;
     std::map<std::string, std::string> m_defines;
     std::string m_rig;
 };

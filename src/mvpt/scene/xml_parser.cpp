@@ -1,5 +1,6 @@
 #include "xml_parser.h"
 
+#include "legacy_upgrade.h"
 #include "parse_values.h"
 #include "plugin.h"
 #include "rig.h"
@@ -170,15 +171,16 @@ public:
         if (!ver->second.empty() && std::isdigit((unsigned char)ver->second[0])) major = std::atoi(ver->second.c_str());
         if (major < 0)
             throw SceneError(ver->loc, "scene version '" + ver->second + "' is not a version number (expected e.g. \"3.0.0\")");
-        if (major < 2)
-            throw SceneError(ver->loc, "scene version " + ver->second +
-                                           " is the Mitsuba 0.x format; mvpt reads Mitsuba 3 scenes (version 3.x)");
+        const bool legacy = is_legacy_version(major);
+        if (legacy)
+            m_notes.push_back("'" + fs::path(display_path).filename().string() + "' is in the Mitsuba " + ver->second +
+                              " format: upgraded on load as Mitsuba 3 does (camelCase names to snake_case)");
         XmlNode out;
         out.tag = "scene";
         out.loc = root_loc;
         out.dir = dir;
-        expand_children(root, *src, dir, out, depth);
-        if (depth == 0) out.search_dirs = m_path_dirs, out.source_files = m_files;
+        expand_children(root, *src, dir, out, depth, legacy);
+        if (depth == 0) out.search_dirs = m_path_dirs, out.source_files = m_files, out.notes = m_notes;
         return out;
     }
 
@@ -212,7 +214,7 @@ public:
 
 private:
     void expand_children(const pugi::xml_node &parent, const SourceText &src, const fs::path &dir, XmlNode &out,
-                         int depth) {
+                         int depth, bool legacy) {
         for (pugi::xml_node c : parent.children()) {
             if (c.type() != pugi::node_element) {
                 if (c.type() == pugi::node_cdata) // (pugixml's offset is that of the content, after "<![CDATA[")
@@ -265,8 +267,9 @@ private:
             n.loc = loc;
             n.dir = dir;
             if (++m_nesting > 256) throw SceneError(loc, "elements nested more than 256 levels deep");
-            expand_children(c, src, dir, n, depth);
+            expand_children(c, src, dir, n, depth, legacy);
             --m_nesting;
+            if (legacy) upgrade_legacy_element(n, m_notes);
             if (is_rig_element(tag)) {
                 // A camera rig becomes plain sensors here, before instantiation (rig_xml.cpp).
                 if (std::string(parent.name()) != "scene")
@@ -312,6 +315,7 @@ private:
     std::vector<std::shared_ptr<SourceText>> m_sources;
     std::vector<fs::path> m_stack;   ///< files being expanded, outermost first
     std::vector<fs::path> m_files;   ///< every XML file read, in order
+    std::vector<std::string> m_notes; ///< what upgrading Mitsuba 0.6 files changed
     mutable std::set<std::string> m_used; ///< variables substituted at least once
     int m_nesting = 0;
 };
@@ -467,6 +471,7 @@ SceneTree instantiate_scene(const XmlNode &root, const fs::path &scene_dir) {
     for (auto &c : tree.props.children())
         if (!c.id.empty() && inst.referenced(c.id)) tree.referenced_ids.insert(c.id);
     tree.source_files = root.source_files;
+    tree.notes = root.notes;
     for (const fs::path &f : inst.files())
         if (std::find(tree.source_files.begin(), tree.source_files.end(), f) == tree.source_files.end())
             tree.source_files.push_back(f);

@@ -38,6 +38,8 @@ struct XmlNode {
     std::vector<std::filesystem::path> search_dirs;
     /// Root only: the XML files read (the scene's and its includes'), absolute.
     std::vector<std::filesystem::path> source_files;
+    /// Root only: notes on how the files were read (Mitsuba 0.6 upgrades).
+    std::vector<std::string> notes;
 
     const std::string *attr(const std::string &name) const {
         for (auto &a : attrs)
@@ -65,6 +67,8 @@ struct SceneTree {
     std::set<std::string> referenced_ids;
     /// Every file the scene was read from: its XML files, then the files they name, absolute.
     std::vector<std::filesystem::path> source_files;
+    /// Notes for the user on how the scene was read (XmlNode::notes).
+    std::vector<std::string> notes;
 };
 
 /// Instantiate every object below the root node.
