@@ -117,6 +117,11 @@ EMITTERS = {
               '<transform name="to_world"><rotate x="1" angle="90"/><rotate z="1" angle="30"/></transform></emitter>',
     "area": '<shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.3"/><rotate x="1" angle="160"/>'
             '<translate x="-0.4" y="0.3" z="2.2"/></transform><emitter type="area"><rgb name="radiance" value="12, 10, 8"/></emitter></shape>',
+    # A mirroring to_world: the rectangle's normal is +z transformed as a normal (Mitsuba's analytic
+    # rectangle), not the side its mirrored triangles would give.
+    "area-mirrored": '<shape type="rectangle"><transform name="to_world"><scale x="-0.5" y="0.3"/><rotate x="1" angle="160"/>'
+                     '<translate x="-0.4" y="0.3" z="2.2"/></transform><emitter type="area"><rgb name="radiance" value="12, 10, 8"/>'
+                     '</emitter></shape>',
 }
 
 

@@ -68,7 +68,14 @@ MeshData cube_data() {
 }
 
 std::shared_ptr<Object> make_rectangle(const Properties &props, const LoadContext &) {
-    return make_mesh(rectangle_data(), props, "rectangle");
+    return make_maybe_animated(props, [&](const Transform &to_world) {
+        MeshData data = rectangle_data();
+        // Mitsuba's rectangle is analytic: its normal is +z transformed as a normal, also under a
+        // mirroring to_world, where the triangles' winding would give the opposite side.
+        if (to_world.flips_handedness())
+            for (size_t t = 0; t < data.indices.size(); t += 3) std::swap(data.indices[t + 1], data.indices[t + 2]);
+        return std::make_shared<TriangleMesh>(std::move(data), props, to_world, "rectangle");
+    });
 }
 
 std::shared_ptr<Object> make_cube(const Properties &props, const LoadContext &) {
