@@ -13,11 +13,11 @@ command -v clang++ >/dev/null || { echo "fuzz/run.sh needs clang++ (apt-get inst
 cmake -S . -B build/fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DMVPT_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build/fuzz >/dev/null
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_xml fuzz_obj fuzz_ply fuzz_serialized fuzz_image fuzz_json)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_xml fuzz_obj fuzz_ply fuzz_serialized fuzz_image fuzz_json fuzz_vol)
 
 # Seed corpora from the repository (and the shared scenes when present).
 seeds=build/fuzz/seeds
-rm -rf "$seeds" && mkdir -p "$seeds"/{fuzz_scene_xml,fuzz_obj,fuzz_ply,fuzz_serialized,fuzz_image,fuzz_json}
+rm -rf "$seeds" && mkdir -p "$seeds"/{fuzz_scene_xml,fuzz_obj,fuzz_ply,fuzz_serialized,fuzz_image,fuzz_json,fuzz_vol}
 find scenes tests/scenes python/mvpt/data -name '*.xml' -exec cp -t "$seeds/fuzz_scene_xml" {} + 2>/dev/null || true
 find tests/scenes -name '*.obj' -exec cp -t "$seeds/fuzz_obj" {} +
 find tests/scenes -name '*.ply' -exec cp -t "$seeds/fuzz_ply" {} +
@@ -37,6 +37,9 @@ with tempfile.TemporaryDirectory() as t:
         open(os.path.join(out, name), "wb").write(bytes([sel]) + open(os.path.join(t, name), "rb").read())
 hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 2\n" + bytes([128, 64, 32, 129]) * 4
 open(os.path.join(out, "a.hdr"), "wb").write(bytes([2]) + hdr)
+import struct  # a 2x3x2 grid of 3 channels for the .vol reader
+vol = b"VOL\x03" + struct.pack("<iiiii", 1, 2, 3, 2, 3) + struct.pack("<6f", 0, 0, 0, 1, 1, 1)
+open(os.path.join(os.path.dirname(out), "fuzz_vol", "a.vol"), "wb").write(vol + np.arange(36, dtype="<f4").tobytes())
 PY
 fi
 

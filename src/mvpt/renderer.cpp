@@ -240,7 +240,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             }
             cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
             rc.camera_rays += n;
-            integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc);
+            integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc, cam.medium.get());
             for (size_t i = 0; i < n; ++i) {
                 const int px = int(sx[i]), py = int(sy[i]), pass = int(sq[i]);
                 Spectrum L = radiance[i];

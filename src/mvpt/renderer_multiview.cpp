@@ -80,6 +80,9 @@ bool run_in_chunks(tbb::task_arena &arena, size_t tiles, int threads, double sam
 std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scene) {
     if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) return {&mv->path(), mv->config()};
     if (auto *pt = dynamic_cast<const PathIntegrator *>(&scene.integrator())) return {pt, MvConfig{}};
+    if (scene.integrator().name() == "volpath")
+        throw std::runtime_error("multi-view path tracing does not render participating media yet (the scene's "
+                                 "integrator is 'volpath'): render it with --method pt");
     throw std::runtime_error("multi-view path tracing needs a 'path' or 'mvpath' integrator, the scene has '" +
                              scene.integrator().name() + "'");
 }

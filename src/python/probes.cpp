@@ -4,6 +4,7 @@
 #include "mvpt/integrators/mv_mixture.h"
 #include "mvpt/integrators/mv_selection.h"
 #include "mvpt/render/bsdf.h"
+#include "mvpt/render/phase.h"
 #include "mvpt/scene/xml_parser.h"
 
 #include "arrays.h"
@@ -180,9 +181,41 @@ struct BsdfProbe {
     }
 };
 
+/// A phase function from a `<phase>` snippet: samples and densities for the chi-square tests.
+struct PhaseProbe {
+    std::shared_ptr<PhaseFunction> phase;
+
+    explicit PhaseProbe(const std::string &xml) {
+        phase = std::static_pointer_cast<PhaseFunction>(object_from_xml(xml, "phase", "."));
+    }
+
+    /// n directions for wi (n, 3).
+    OutArray sample(float wx, float wy, float wz, size_t n, uint32_t seed) {
+        OutArray wo = out_array(n, 3);
+        Sampler s(SamplerKind::Independent, seed);
+        for (size_t i = 0; i < n; ++i) {
+            s.start(0, 0, 0, uint32_t(i));
+            Vec3f d = phase->sample(Vec3f(wx, wy, wz), s.next_2d());
+            for (int c = 0; c < 3; ++c) wo.data()[3 * i + c] = d[c];
+        }
+        return wo;
+    }
+
+    OutArray eval(float wx, float wy, float wz, Vec3Array wo) {
+        size_t n = wo.shape(0);
+        OutArray r = out_array(n, 1);
+        for (size_t i = 0; i < n; ++i) r.data()[i] = phase->eval(Vec3f(wx, wy, wz), Vec3f(wo(i, 0), wo(i, 1), wo(i, 2)));
+        return r;
+    }
+};
+
 } // namespace
 
 void bind_probes(nb::module_ &m) {
+    nb::class_<PhaseProbe>(m, "PhaseProbe")
+        .def(nb::init<const std::string &>(), "xml"_a)
+        .def("sample", &PhaseProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0)
+        .def("eval", &PhaseProbe::eval, "wx"_a, "wy"_a, "wz"_a, "wo"_a);
     nb::class_<BsdfProbe>(m, "BsdfProbe")
         .def(nb::init<const std::string &, float, float, const std::string &>(), "xml"_a, "u"_a = 0.5f, "v"_a = 0.5f,
              "base_dir"_a = ".")

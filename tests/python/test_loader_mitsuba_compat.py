@@ -135,3 +135,16 @@ def test_mitsuba_06_conductor_ext_eta_other_than_one_is_an_error():
     old, _ = legacy_pair()
     with pytest.raises(mvpt.SceneError, match="ext_eta"):
         mvpt.load_string(old.replace('name="extEta" value="1"', 'name="extEta" value="1.33"'), SCENES)
+
+
+def test_first_default_wins_over_an_included_files(tmp_path):
+    """As in Mitsuba, a <default> does not replace a value the name already has: the
+    including file's default (declared first) wins over the included file's."""
+    (tmp_path / "body.xml").write_text(
+        '<scene version="3.0.0"><default name="integrator" value="path"/><default name="depth" value="7"/>'
+        '<integrator type="$integrator"><integer name="max_depth" value="$depth"/></integrator></scene>')
+    main = ('<scene version="3.0.0"><default name="integrator" value="volpath"/><include filename="body.xml"/>'
+            + scene_xml("", "").split('<scene version="3.0.0">')[1].replace(
+                '<shape type="obj"><string name="filename" value="icosphere.obj"/></shape>', ""))
+    assert mvpt.load_string(main, tmp_path).integrator == "volpath"
+    assert mvpt.load_string(main, tmp_path, integrator="path").integrator == "path"

@@ -21,12 +21,12 @@ Out of scope, not listed below (reason):
     emitter, direct); various_emitters/*_ptracer (ptracer integrator).
   m3data-testsuite/docs/scenes: bsdf_polarizer_*, bsdf_pplastic*, *_stokes*,
     integrator_stokes_cbox (polarisation / stokes); emitter_projector_* (projector);
-    integrator_aov (aov); integrator_direct_* (direct); medium_homogeneous_* (media);
+    integrator_aov (aov); integrator_direct_* (direct);
     sensor_orthographic* (orthographic); shape_bsplinecurve_*, shape_linearcurve_*
     (curves); shape_sdfgrid* (sdf); texture_mesh_attribute_* (mesh_attribute textures);
     variants_cbox_* (variant demo; spectral).
-  m3tut-cbox/simple.xml (direct integrator); bitterli-staircase2 (homogeneous medium, needs
-  volpath). m06-living-room (Mitsuba 0.6 format) has a test of its own at the end.
+  m3tut-cbox/simple.xml (direct integrator). m06-living-room (Mitsuba 0.6 format) has a test
+  of its own at the end.
 """
 import sys
 from pathlib import Path
@@ -70,6 +70,9 @@ CASES = [
     case("bitterli-veach-mis/scene.xml", {"twosided", "roughconductor", "sphere"}, BITTERLI, max_res=64, spp=1024),
     case("bitterli-veach-bidir/scene.xml", {"twosided", "roughconductor", "dielectric"}, BITTERLI, spp=512),
     case("nik-cornell-box-picture/scene_picture.xml", {"twosided", "bitmap"}, {"max_depth": 12}, spp=512),
+    # volpath: glass with an absorbing homogeneous medium; also eight mirrored rectangle lights.
+    case("bitterli-staircase2/scene.xml", {"twosided", "principled", "roughplastic", "roughconductor", "dielectric",
+                                           "bitmap", "disk", "homogeneous", "volpath"}, spp=256),
     # -- Mitsuba's regression scenes: vs Mitsuba and vs the stored references ---------------
     *[case(TS + f"bsdf_spheres/test_{n}_path.xml", req, refs=True, max_res=None) for n, req in [
         ("arealight", {"bitmap", "conductor", "dielectric", "mask", "plastic", "roughconductor", "roughdielectric",
@@ -131,6 +134,11 @@ CASES = [
     *[case(DOCS + f"bsdf_roughplastic_{n}.xml", MATPREVIEW | {"roughplastic", "bitmap"}) for n in
       ["beckmann", "diffuse", "ggx", "nopreserve", "preserve"]],
     case(DOCS + "bsdf_thindielectric_glass.xml", MATPREVIEW | {"thindielectric"}),
+    # Subsurface scattering: a dense homogeneous medium in a rough glass bunny (an albedo grid).
+    case(DOCS + "medium_homogeneous_sss.xml", {"homogeneous", "hg", "roughdielectric", "ply", "envmap", "volpath",
+                                               "checkerboard"}),
+    case(DOCS + "medium_homogeneous_sss_textured.xml", {"homogeneous", "hg", "roughdielectric", "ply", "envmap",
+                                                        "volpath", "checkerboard", "gridvolume"}),
     case(DOCS + "bsdf_twosided_cbox.xml", {"constant", "twosided"}),
     case(DOCS + "bsdf_twosided_cbox_onesided.xml", {"constant"}),
     case(DOCS + "emitter_spot_no_texture.xml", {"checkerboard", "constant", "plastic", "serialized", "sphere", "spot"}),

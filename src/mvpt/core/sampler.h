@@ -52,6 +52,17 @@ inline uint32_t owen_scramble(uint32_t x, uint32_t seed) {
 
 enum class SamplerKind { Independent, Sobol };
 
+/// An unbounded stream of uniform numbers from one 64-bit seed, for the estimators that
+/// draw as many numbers as they need (free-flight and ratio tracking in heterogeneous media).
+class RandomStream {
+public:
+    explicit RandomStream(uint64_t seed = 0) : m_state(seed) {}
+    float next_1d() { return bits_to_unit_float(uint32_t(mix_bits(m_state += 0x9e3779b97f4a7c15ULL))); }
+
+private:
+    uint64_t m_state;
+};
+
 /// One sample's stream of random numbers. `start` fixes (view, pixel, sample
 /// index); each `next_*` call consumes one dimension. Integrators place
 /// per-bounce blocks with `set_dimension` so that early exits never shift the
@@ -89,6 +100,8 @@ public:
         if (m_kind == SamplerKind::Independent) return bits_to_unit_float(uint32_t(independent_bits()));
         return sobol_1d();
     }
+    /// A stream of its own for this (sample, dimension), whichever the sampler (one dimension).
+    RandomStream next_stream() { return RandomStream(independent_bits()); }
     Vec2f next_2d() {
         if (m_kind == SamplerKind::Independent) {
             uint64_t r = independent_bits();

@@ -7,6 +7,7 @@
 
 namespace mvpt {
 
+class Medium;
 class Scene;
 
 /// Per-thread ray and event counters (summed after a pass).
@@ -25,9 +26,11 @@ class Integrator : public Object {
 public:
     virtual Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const = 0;
     /// Radiance along `n` camera rays, ray i with its own started `samplers[i]`, into
-    /// `out[i]`; must equal `li` per ray. The default calls `li` for each.
+    /// `out[i]`; must equal `li` per ray. The rays start in `medium` (the sensor's; only an
+    /// integrator of media reads it). The default calls `li` for each.
     virtual void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
-                          RayCounters &counters) const {
+                          RayCounters &counters, const Medium *medium = nullptr) const {
+        (void)medium;
         for (size_t i = 0; i < n; ++i) out[i] = li(scene, rays[i], samplers[i], counters);
     }
     virtual std::string name() const = 0;

@@ -22,10 +22,7 @@ namespace mvpt {
 namespace {
 
 std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &) {
-    PathConfig pc;
-    pc.max_depth = int(props.get_int_in("max_depth", -1, -1, INT32_MAX)); // -1: unlimited
-    pc.rr_depth = int(props.get_int_in("rr_depth", 5, 1, INT32_MAX));
-    pc.hide_emitters = props.get_bool("hide_emitters", false);
+    const PathConfig pc = read_path_config(props);
 
     MvConfig cfg;
     std::string est = props.get_string("estimator", "balance");

@@ -22,6 +22,20 @@ float emitter_pdf_from(const Scene &scene, const Light *light, float pdf_li) {
     return pdf_li / float(n);
 }
 
+Spectrum emitted_radiance(const Scene &scene, const Light *emitter, const Ray &ray, bool hit,
+                          const SurfaceInteraction &si, Point3f prev_p, float prev_pdf, bool prev_delta,
+                          float &mis_weight) {
+    // An escaped ray's radiance and NEE density come from one lookup of its direction.
+    float env_pdf = 0.f;
+    Spectrum le = hit ? emitter->eval(si, -ray.d)
+                      : emitter->eval_environment_pdf(prev_p, si, ray.d, prev_delta ? nullptr : &env_pdf);
+    mis_weight = 1.f;
+    if (!le.is_black() && !prev_delta)
+        mis_weight = mis_power(prev_pdf, hit ? emitter_pdf(scene, emitter, prev_p, si, ray.d)
+                                             : emitter_pdf_from(scene, emitter, env_pdf));
+    return le;
+}
+
 Spectrum PathIntegrator::li(const Scene &scene, const Ray &camera_ray, Sampler &sampler, RayCounters &counters) const {
     PathState state;
     // Mitsuba 3 keeps a path's radiance only if it scattered at a non-null surface, hit
@@ -60,17 +74,9 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
         const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
         if (emitter && !m_cfg.hide_emitters && hit) valid = true;
         if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
-            // An escaped ray's radiance and NEE density come from one lookup of its direction.
-            float env_pdf = 0.f;
-            Spectrum le = hit ? emitter->eval(si, -ray.d)
-                              : emitter->eval_environment_pdf(prev_p, si, ray.d, prev_bsdf_delta ? nullptr : &env_pdf);
-            if (!le.is_black()) {
-                float w = 1.f;
-                if (!prev_bsdf_delta)
-                    w = mis_power(prev_bsdf_pdf, hit ? emitter_pdf(scene, emitter, prev_p, si, ray.d)
-                                                     : emitter_pdf_from(scene, emitter, env_pdf));
-                result += throughput * le * w;
-            }
+            float w;
+            Spectrum le = emitted_radiance(scene, emitter, ray, hit, si, prev_p, prev_bsdf_pdf, prev_bsdf_delta, w);
+            if (!le.is_black()) result += throughput * le * w;
         }
         if (!hit || depth + 1 >= max_depth) break;
 
@@ -127,16 +133,16 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
     return valid ? result : Spectrum(0.f);
 }
 
-namespace {
-std::shared_ptr<Object> make_path(const Properties &props, const LoadContext &) {
+PathConfig read_path_config(const Properties &props) {
     PathConfig cfg;
     cfg.max_depth = int(props.get_int_in("max_depth", -1, -1, INT32_MAX)); // -1: unlimited
     cfg.rr_depth = int(props.get_int_in("rr_depth", 5, 1, INT32_MAX));
     cfg.hide_emitters = props.get_bool("hide_emitters", false);
-    return std::make_shared<PathIntegrator>(cfg);
+    return cfg;
 }
-} // namespace
 
-MVPT_REGISTER_PLUGIN("integrator", "path", make_path);
+MVPT_REGISTER_PLUGIN("integrator", "path", [](const Properties &props, const LoadContext &) {
+    return std::make_shared<PathIntegrator>(read_path_config(props));
+});
 
 } // namespace mvpt

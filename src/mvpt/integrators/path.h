@@ -19,6 +19,9 @@ struct PathConfig {
     bool hide_emitters = false;
 };
 
+/// `max_depth`, `rr_depth` and `hide_emitters` of an integrator element (Mitsuba's names and defaults).
+PathConfig read_path_config(const Properties &props);
+
 /// Sample dimensions consumed per path vertex (light choice, light point, lobe, direction, roulette).
 inline constexpr uint32_t DimsPerVertex = 5;
 
@@ -50,7 +53,7 @@ public:
     /// The paths of many camera rays traced bounce by bounce (a wavefront), with Embree's
     /// packet queries; each result is bit-identical to `li` given the same hits (path_batch.cpp).
     void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
-                  RayCounters &counters) const override;
+                  RayCounters &counters, const Medium *medium = nullptr) const override;
     /// `trace` for many paths as one wavefront: path i continues from `states[i]` along
     /// `rays[i]` (states null: li's start, camera rays), its result into `out[i]` and, when
     /// `valid_out` is given, its valid-path flag into `valid_out[i]`.
@@ -68,6 +71,14 @@ private:
 float emitter_pdf(const Scene &scene, const Light *light, Point3f ref, const SurfaceInteraction &si_light, Vec3f d);
 /// `emitter_pdf` from the light's own density `pdf_li` of that point or direction.
 float emitter_pdf_from(const Scene &scene, const Light *light, float pdf_li);
+
+/// Radiance that `ray` finds at the emitter `emitter` it hit (at `si`; the environment when
+/// `hit` is false), and into `mis_weight` its MIS weight against next-event estimation from
+/// `prev_p`, whose direction density was `prev_pdf` (1 after a delta lobe or the camera,
+/// `prev_delta`). Callers add throughput * radiance * weight, in that order (the wavefront's).
+Spectrum emitted_radiance(const Scene &scene, const Light *emitter, const Ray &ray, bool hit,
+                          const SurfaceInteraction &si, Point3f prev_p, float prev_pdf, bool prev_delta,
+                          float &mis_weight);
 
 /// Power heuristic with exponent 2 [Veach 1997, §9.2.4].
 inline float mis_power(float a, float b) {

@@ -106,7 +106,8 @@ struct WaveBuffers {
 } // namespace
 
 void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sampler *samplers, Spectrum *out, size_t n,
-                              RayCounters &counters) const {
+                              RayCounters &counters, const Medium *) const {
+    // Media are ignored, as by Mitsuba's `path` (Scene notes it).
     trace_batch(scene, camera_rays, nullptr, samplers, out, nullptr, n, counters);
 }
 

@@ -98,6 +98,10 @@ public:
         for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = eval_pdf(ctx, si, wi[c], wo);
     }
 
+    /// The fraction of light that passes straight through (the null lobe's weight, wo = -wi;
+    /// Mitsuba's eval_null_transmission): what a shadow ray through media keeps here.
+    virtual Spectrum null_transmission(const SurfaceInteraction &) const { return Spectrum(0.f); }
+
     uint32_t flags() const { return m_flags; }
     bool has_smooth() const { return (m_flags & BsdfSmooth) != 0; }
     bool is_purely_delta() const { return m_flags != 0 && (m_flags & BsdfSmooth) == 0; }

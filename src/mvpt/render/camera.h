@@ -23,6 +23,7 @@
 namespace mvpt {
 
 struct CameraProjection;
+class Medium;
 
 /// The `hdrfilm` of a sensor: full film size, the crop window that is rendered, the filter.
 struct FilmDesc {
@@ -98,6 +99,8 @@ public:
     int sample_count = 4;
     uint32_t seed = 0;
     float shutter_open = 0.f, shutter_close = 0.f;
+    /// The medium around the camera (its rays start in it; null: vacuum).
+    std::shared_ptr<Medium> medium;
 
     /// Scene time for a uniform sample in the shutter interval.
     float sample_time(float u) const { return shutter_open + u * (shutter_close - shutter_open); }

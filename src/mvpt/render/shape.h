@@ -19,6 +19,7 @@ namespace mvpt {
 
 class Bsdf;
 class Light;
+class Medium;
 
 struct BoundingBox {
     Point3f min{Infinity, Infinity, Infinity}, max{-Infinity, -Infinity, -Infinity};
@@ -91,6 +92,12 @@ public:
 
     std::shared_ptr<Bsdf> bsdf;
     std::shared_ptr<Light> emitter;
+    /// The media inside and outside the surface (null: vacuum), Mitsuba's `interior` and
+    /// `exterior`; outside is where the oriented geometric normal points.
+    std::shared_ptr<Medium> interior, exterior;
+    bool is_medium_transition() const { return interior || exterior; }
+    /// The medium a ray enters when it leaves the surface in direction `d` (geometric normal `n`).
+    const Medium *target_medium(Vec3f d, Normal3f n) const { return dot(d, n) > 0.f ? exterior.get() : interior.get(); }
     /// Whether `sample_area` / `sample_solid_angle` must fill `ShapeSample::uv`; false for
     /// an emitter whose radiance is uniform (it spares a sphere two inverse trig calls).
     bool sample_uv = true;

@@ -64,7 +64,8 @@ void Scene::build(const SceneTree &tree) {
         } else if (c.kind == "integrator") {
             if (m_integrator) throw SceneError(c.loc, "the scene has more than one <integrator>");
             m_integrator = std::static_pointer_cast<Integrator>(c.object);
-        } else if (c.kind == "bsdf" || c.kind == "texture" || owned_elsewhere) {
+        } else if (c.kind == "bsdf" || c.kind == "texture" || c.kind == "medium" || c.kind == "phase" ||
+                   c.kind == "volume" || owned_elsewhere) {
             // Declared for <ref> use (materials, textures, or a sampler/film shared by
             // several sensors); unreferenced materials and textures are simply unused.
         } else {
@@ -96,6 +97,11 @@ void Scene::build(const SceneTree &tree) {
         if (shape->emitter) m_lights.push_back(shape->emitter);
     }
     rtcCommitScene(m_scene);
+    for (auto &shape : m_shapes) m_has_media |= shape->is_medium_transition();
+    for (auto &cam : m_cameras) m_has_media |= cam->medium != nullptr;
+    if (m_has_media && m_integrator->name() == "path")
+        m_notes.push_back("the scene has participating media, which the 'path' integrator ignores (as Mitsuba 3's "
+                          "does): use 'volpath' to render them");
 
     Point3f center = m_bounds.valid() ? m_bounds.center() : Point3f(0.f);
     float radius = m_bounds.valid() ? norm(m_bounds.max - center) : 1.f;

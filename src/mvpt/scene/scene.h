@@ -79,6 +79,8 @@ public:
     }
     void set_integrator(std::shared_ptr<Integrator> i) { m_integrator = std::move(i); }
     const BoundingBox &bounds() const { return m_bounds; }
+    /// True when a shape bounds a participating medium or a sensor sits in one.
+    bool has_media() const { return m_has_media; }
     /// True when some shape moves (animated transforms): then time matters to every ray.
     bool is_animated() const { return m_animated; }
     RTCDevice device() const { return m_device; }
@@ -105,6 +107,7 @@ private:
     mutable std::mutex m_occluders_mutex;
     /// Some shape moves (otherwise Embree's ray time is irrelevant and left at 0).
     bool m_animated = false;
+    bool m_has_media = false;
     std::vector<std::filesystem::path> m_source_files;
     std::vector<std::string> m_notes;
     std::map<std::string, std::string> m_defines;

@@ -21,9 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::set<std::string> kObjectTags = {"bsdf", "emitter", "shape", "sensor", "film", "rfilter",
-                                           "sampler", "integrator", "texture"};
-const std::set<std::string> kUnsupportedTags = {"medium", "phase", "volume", "spectrum_texture"};
+const std::set<std::string> kObjectTags = {"bsdf", "emitter", "shape", "sensor", "film", "rfilter", "sampler",
+                                           "integrator", "texture", "medium", "phase", "volume"};
 
 /// Maps byte offsets of one file to line:col.
 struct SourceText {
@@ -232,7 +231,9 @@ private:
             if (tag == "default") {
                 check_attrs(attrs, {"name", "value"}, tag, loc);
                 std::string name = required(attrs, "name", tag, loc), value = required(attrs, "value", tag, loc);
-                if (!m_from_caller.count(name)) m_vars[name] = value;
+                // The first value of a name wins (the caller's, then the first <default>), as in
+                // Mitsuba: an included file's defaults do not override its includer's.
+                m_vars.emplace(name, value);
                 continue;
             }
             if (tag == "path") {
@@ -372,8 +373,6 @@ public:
                 co.loc = c.loc;
                 co.object = instantiate_node(*it->second);
                 add_child(props, std::move(co));
-            } else if (kUnsupportedTags.count(tag)) {
-                throw SceneError(c.loc, "<" + tag + "> (participating media) is not supported by mvpt");
             } else {
                 parse_value_node(c, props, context_for(c));
             }

@@ -40,6 +40,8 @@ public:
         return m_nested->pdf(ctx, si, wi, wo) * eval_opacity(si);
     }
 
+    Spectrum null_transmission(const SurfaceInteraction &si) const override { return Spectrum(1.f - eval_opacity(si)); }
+
     float roughness(const SurfaceInteraction &si) const override { return m_nested->roughness(si); }
 
 private:

@@ -1,6 +1,7 @@
 #include "sensor_common.h"
 
 #include "../../scene/plugin.h"
+#include "../medium.h"
 
 namespace mvpt {
 
@@ -70,6 +71,7 @@ void read_sensor_common(Camera &cam, const Properties &props) {
         cam.sample_count = so->sample_count;
         cam.seed = so->seed;
     }
+    if (const ChildObject *m = props.child_of_kind("medium")) cam.medium = std::static_pointer_cast<Medium>(m->object);
     cam.shutter_open = props.get_float("shutter_open", 0.f);
     cam.shutter_close = props.get_float("shutter_close", cam.shutter_open);
     if (!(cam.shutter_close >= cam.shutter_open))

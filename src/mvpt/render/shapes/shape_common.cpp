@@ -2,6 +2,7 @@
 
 #include "../bsdf.h"
 #include "../light.h"
+#include "../medium.h"
 
 namespace mvpt {
 
@@ -15,6 +16,12 @@ void attach_shape_children(Shape &shape, const Properties &props) {
         Properties dp("bsdf", "diffuse", props.loc());
         if (e) dp.set("reflectance", Properties::Value(Color3f(0.f)), props.loc(), "rgb");
         shape.bsdf = std::static_pointer_cast<Bsdf>((*PluginRegistry::find("bsdf", "diffuse"))(dp, {}));
+    }
+    for (const ChildObject *m : props.children_of_kind("medium")) {
+        auto medium = std::static_pointer_cast<Medium>(m->object);
+        if (m->name == "interior") shape.interior = medium;
+        else if (m->name == "exterior") shape.exterior = medium;
+        else throw SceneError(m->loc, "a shape's medium must be named 'interior' or 'exterior', got '" + m->name + "'");
     }
     if (e) {
         auto light = std::static_pointer_cast<Light>(e->object);

@@ -1,0 +1,174 @@
+#include "volpath.h"
+
+#include "../render/bsdf.h"
+#include "../render/light.h"
+#include "../render/medium.h"
+#include "../render/shape.h"
+#include "../scene/plugin.h"
+#include "../scene/scene.h"
+
+#include <climits>
+
+namespace mvpt {
+
+namespace {
+
+/// Longest chain of null surfaces a shadow ray crosses before it counts as blocked.
+constexpr int MaxNullCrossings = 256;
+
+/// Transmittance along `ray` (unit direction, over [0, ray.tmax)) through media and null
+/// surfaces, starting in `medium`; zero once a surface that is not null blocks it.
+Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, RandomStream &rs, RayCounters &counters) {
+    Spectrum tr(1.f);
+    const Point3f target = ray.at(ray.tmax);
+    const bool finite = std::isfinite(ray.tmax);
+    for (int crossing = 0; crossing < MaxNullCrossings; ++crossing) {
+        SurfaceInteraction si;
+        ++counters.shadow_rays;
+        const bool hit = scene.intersect(ray, si);
+        if (medium) tr *= medium->transmittance(ray, hit ? si.t : ray.tmax, rs);
+        if (!hit) return tr;
+        tr *= si.shape->bsdf->null_transmission(si);
+        if (tr.is_black()) return tr;
+        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
+        si.time = ray.time;
+        Point3f o = si.offset_p(ray.d);
+        float rest = finite ? dot(target - o, ray.d) : Infinity;
+        if (!(rest > 0.f)) return tr;
+        ray = Ray{o, ray.d, 0.f, rest, ray.time};
+    }
+    return Spectrum(0.f);
+}
+
+} // namespace
+
+Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const SurfaceInteraction *si,
+                                           const Medium *medium, float time, Sampler &sampler, RayCounters &counters,
+                                           LightSample &ls) const {
+    const auto &lights = scene.lights();
+    float u_select = sampler.next_1d();
+    Vec2f u_light = sampler.next_2d();
+    RandomStream rs = sampler.next_stream();
+    if (lights.empty()) return Spectrum(0.f);
+    size_t idx = std::min(size_t(u_select * float(lights.size())), lights.size() - 1);
+    Spectrum weight;
+    std::tie(ls, weight) = lights[idx]->sample_li(p, u_light, time);
+    if (weight.is_black()) return weight;
+    Ray shadow;
+    if (si) {
+        shadow = std::isinf(ls.dist) ? si->spawn_ray(ls.d) : si->spawn_ray_to(ls.p);
+        // Leaving the surface towards the emitter may enter the medium on its other side.
+        if (si->shape->is_medium_transition()) medium = si->shape->target_medium(ls.d, si->n);
+    } else {
+        shadow = Ray{p, ls.d, 0.f, std::isinf(ls.dist) ? Infinity : ls.dist * (1.f - ShadowEpsilon), time};
+    }
+    return weight * float(lights.size()) * transmittance(scene, shadow, medium, rs, counters);
+}
+
+Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler,
+                                  RayCounters &counters) const {
+    const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
+    const BsdfContext ctx;
+    // Start at the near plane: media fill the segment the camera sees.
+    ray.o = ray.at(ray.tmin), ray.tmax -= ray.tmin, ray.tmin = 0.f;
+
+    Spectrum result(0.f), throughput(1.f);
+    float eta = 1.f;
+    bool valid = !m_cfg.hide_emitters && scene.environment() != nullptr;
+    uint32_t depth = 0; // scattering events so far (crossing a null surface is none)
+    // The last scattering event and the density of the direction it sampled (MIS on emitters
+    // hit); `prev_delta`: that density is a delta (or the camera's), so the hit counts in full.
+    Point3f prev_p = ray.o;
+    float prev_pdf = 1.f;
+    bool prev_delta = true;
+
+    for (uint32_t step = 0;; ++step) {
+        sampler.set_dimension(DimCameraEnd + step * VolDimsPerStep);
+        // ---------------- Russian roulette, as Mitsuba's volpath: before each step ----------------
+        float u_rr = sampler.next_1d();
+        if (throughput.is_black() || depth >= max_depth) break;
+        if (depth > uint32_t(m_cfg.rr_depth)) {
+            float q = std::min(throughput.max_value() * eta * eta, 0.95f);
+            if (u_rr >= q) break;
+            throughput *= 1.f / q;
+        }
+
+        SurfaceInteraction si;
+        ++counters.rays;
+        const bool hit = scene.intersect(ray, si);
+        float u_flight = sampler.next_1d();
+        RandomStream rs = sampler.next_stream();
+
+        // ---------------- Free flight through the medium ----------------
+        if (medium) {
+            MediumSample ms = medium->sample(ray, hit ? si.t : Infinity, u_flight, rs);
+            throughput *= ms.weight;
+            if (ms.scattered) {
+                valid = true;
+                if (++depth >= max_depth || throughput.is_black()) break;
+                const Point3f p = ray.at(ms.t);
+                const Vec3f wi = -ray.d;
+                const PhaseFunction &phase = medium->phase();
+                if (medium->sample_emitters()) {
+                    LightSample ls;
+                    Spectrum le = sample_emitter(scene, p, nullptr, medium, ray.time, sampler, counters, ls);
+                    if (!le.is_black()) {
+                        float f = phase.eval(wi, ls.d);
+                        result += throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), f));
+                    }
+                }
+                sampler.set_dimension(DimCameraEnd + step * VolDimsPerStep + 6);
+                Vec3f wo = phase.sample(wi, sampler.next_2d());
+                prev_p = p, prev_pdf = phase.eval(wi, wo), prev_delta = !medium->sample_emitters();
+                ray = Ray{p, wo, 0.f, Infinity, ray.time};
+                continue;
+            }
+        }
+
+        // ---------------- Emission (hit by BSDF or phase sampling, MIS against NEE) ----------------
+        const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
+        if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
+            float w;
+            Spectrum le = emitted_radiance(scene, emitter, ray, hit, si, prev_p, prev_pdf, prev_delta, w);
+            if (!le.is_black()) result += throughput * le * w;
+        }
+        if (!hit) break;
+
+        // ---------------- Next-event estimation at the surface ----------------
+        const Bsdf &bsdf = *si.shape->bsdf;
+        si.wi = si.to_local(-ray.d);
+        if (bsdf.has_smooth() && depth + 1 < max_depth) {
+            LightSample ls;
+            Spectrum le = sample_emitter(scene, si.p, &si, medium, si.time, sampler, counters, ls);
+            if (!le.is_black()) {
+                Vec3f wo = si.to_local(ls.d);
+                auto [f, pdf] = bsdf.eval_pdf(ctx, si, si.wi, wo);
+                result += throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), pdf));
+            }
+        }
+
+        // ---------------- BSDF sampling ----------------
+        sampler.set_dimension(DimCameraEnd + step * VolDimsPerStep + 6);
+        float u_lobe = sampler.next_1d();
+        auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, sampler.next_2d());
+        const bool scattered = !(bs.sampled_type & BsdfNull); // a failed sample counts too, as in Mitsuba
+        valid |= scattered;
+        if (bsdf_weight.is_black()) break;
+        const Vec3f wo = si.to_world(bs.wo);
+        throughput *= bsdf_weight;
+        eta *= bs.eta;
+        if (scattered) {
+            ++depth;
+            prev_p = si.p, prev_pdf = bs.pdf, prev_delta = (bs.sampled_type & BsdfDelta) != 0;
+        }
+        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(wo, si.n);
+        ray = si.spawn_ray(wo);
+    }
+    return valid ? result : Spectrum(0.f);
+}
+
+MVPT_REGISTER_PLUGIN("integrator", "volpath", [](const Properties &props, const LoadContext &) {
+    return std::make_shared<VolPathIntegrator>(read_path_config(props));
+});
+
+} // namespace mvpt

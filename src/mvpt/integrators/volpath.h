@@ -1,0 +1,44 @@
+// Volumetric path tracer (Mitsuba 3's `volpath`): unidirectional paths through surfaces and
+// participating media, free-flight distance sampling, next-event estimation with the
+// transmittance of media and null surfaces along the shadow ray, MIS (power heuristic)
+// between emitter sampling and BSDF / phase sampling. Depth counts scattering events (at
+// surfaces that are not null, and in media), as Mitsuba's does.
+#pragma once
+
+#include "integrator.h"
+#include "path.h"
+
+namespace mvpt {
+
+class Medium;
+struct LightSample;
+
+/// Sample dimensions per step of a volumetric path: roulette, free flight and its stream,
+/// emitter choice, point and the shadow ray's stream, lobe, direction (phase: at the lobe's).
+inline constexpr uint32_t VolDimsPerStep = 8;
+
+class VolPathIntegrator final : public Integrator {
+public:
+    explicit VolPathIntegrator(const PathConfig &cfg) : m_cfg(cfg) {}
+    Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override {
+        return li_in(scene, ray, nullptr, sampler, counters);
+    }
+    void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
+                  RayCounters &counters, const Medium *medium = nullptr) const override {
+        for (size_t i = 0; i < n; ++i) out[i] = li_in(scene, rays[i], medium, samplers[i], counters);
+    }
+    /// Radiance along a camera ray that starts in `medium` (null: vacuum).
+    Spectrum li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler, RayCounters &counters) const;
+    std::string name() const override { return "volpath"; }
+
+private:
+    /// One emitter sample seen from `p` (a surface point `si`, or a point in a medium when
+    /// `si` is null): the emitter's radiance over its density times the transmittance to it,
+    /// with the light sample for the MIS weight; zero when blocked.
+    Spectrum sample_emitter(const Scene &scene, Point3f p, const SurfaceInteraction *si, const Medium *medium,
+                            float time, Sampler &sampler, RayCounters &counters, LightSample &ls) const;
+
+    PathConfig m_cfg;
+};
+
+} // namespace mvpt

@@ -1,0 +1,52 @@
+// Participating media (Mitsuba 3's "medium"): extinction sigma_t and single-scattering
+// albedo along rays, and a phase function. A medium fills the inside or outside of the
+// shapes that name it (`interior` / `exterior`) or surrounds a sensor (`medium`); a ray
+// changes medium only where it crosses such a shape (Mitsuba's rule: no nesting stack).
+//
+// In RGB the extinction differs per channel. Free-flight distances are drawn with one
+// channel chosen uniformly and weighted by the mixture of the three channels' densities
+// (one-sample MIS over channels, the "hero wavelength" scheme of pbrt-v4): unbiased for every
+// channel, and bounded where Mitsuba's weight by the chosen channel alone is not.
+#pragma once
+
+#include "../core/math.h"
+#include "../core/sampler.h"
+#include "../scene/properties.h"
+#include "phase.h"
+
+#include <memory>
+
+namespace mvpt {
+
+/// Outcome of free-flight sampling along a ray.
+struct MediumSample {
+    /// True: the ray scatters at distance t inside the medium; false: it reaches the surface.
+    bool scattered = false;
+    float t = Infinity;
+    /// What the path throughput is multiplied by: Tr(t) sigma_s(t) / pdf(t) for a scattering,
+    /// Tr(t_surface) / P(no scattering before t_surface) otherwise.
+    Spectrum weight{1.f};
+};
+
+class Medium : public Object {
+public:
+    /// Free-flight sampling along `ray` (unit direction, from its origin) before the next
+    /// surface at `t_surface` (may be infinite); `u` picks the channel and the distance,
+    /// `rs` serves estimators that need more numbers.
+    virtual MediumSample sample(const Ray &ray, float t_surface, float u, RandomStream &rs) const = 0;
+    /// Transmittance along `ray` over [0, t) (an unbiased estimate where it is not analytic).
+    virtual Spectrum transmittance(const Ray &ray, float t, RandomStream &rs) const = 0;
+
+    const PhaseFunction &phase() const { return *m_phase; }
+    /// Mitsuba's `sample_emitters`: next-event estimation at scattering points in this medium.
+    bool sample_emitters() const { return m_sample_emitters; }
+
+protected:
+    /// The nested `<phase>` (isotropic when absent) and `sample_emitters`.
+    void read_common(const Properties &props);
+
+    std::shared_ptr<PhaseFunction> m_phase;
+    bool m_sample_emitters = true;
+};
+
+} // namespace mvpt

@@ -1,0 +1,36 @@
+// Volumes (Mitsuba 3's "volume"): a quantity defined over space, such as a medium's
+// extinction or albedo. `constvolume` is one value everywhere; `gridvolume` a voxel grid.
+#pragma once
+
+#include "../core/math.h"
+#include "../core/spectrum_rgb.h"
+#include "../scene/properties.h"
+#include "shape.h"
+
+#include <memory>
+#include <string>
+
+namespace mvpt {
+
+class Volume : public Object {
+public:
+    /// The value at world point `p` (a one-channel volume repeats it in each channel).
+    virtual Spectrum eval(Point3f p) const = 0;
+    /// The largest value over every point and channel.
+    virtual float max_value() const = 0;
+    /// Where the volume can be non-zero (unbounded for a constant).
+    virtual BoundingBox bounds() const = 0;
+    /// 1 or 3.
+    virtual int channels() const = 0;
+    /// True, with the value, for a constant volume.
+    virtual bool constant(Spectrum &value) const { (void)value; return false; }
+};
+
+/// A volume of one value everywhere (`constvolume`).
+std::shared_ptr<Volume> constant_volume(Spectrum value);
+
+/// The volume parameter `name`: a nested or referenced `<volume name="...">`, or a constant
+/// given as `<float>`, `<rgb>` or `<spectrum>` (read as `use`), or `def` when absent.
+std::shared_ptr<Volume> get_volume(const Properties &props, const std::string &name, Color3f def, SpectrumUse use);
+
+} // namespace mvpt
