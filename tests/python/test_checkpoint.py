@@ -223,3 +223,30 @@ def test_range_resumes_to_the_same_state(tmp_path, method):
     done = mvpt.render(scene, seed=4, method=method, passes=(10, n), state=state, resume=state, threads=1)
     _assert_same(whole, done)
     _assert_same(mvpt.merge(scene, [whole_state]), mvpt.merge(scene, [state]))
+
+
+def test_a_path_rigs_key_file_is_part_of_the_scene(tmp_path):
+    """The key file of a camera-path rig (the option or the element) is one of the scene's
+    files: a resume refuses a state whose keys have changed."""
+    import json
+    keys = tmp_path / "keys.json"
+    path_keys = [{"time": 0, "position": [0, 1, 5], "target": [0, 0.5, 0]},
+                 {"time": 1, "position": [1, 1, 5], "target": [0, 0.5, 0]}]
+    keys.write_text(json.dumps({"keys": path_keys}))
+    xml = tmp_path / "room.xml"
+    xml.write_text(slow_scene(1, res=8))
+    rig = f"path:{keys},frames=2,fps=2"
+    scene = mvpt.load_file(xml, rig=rig)
+    assert scene.source_files[-1] == str(keys)
+    text = slow_scene(1, res=8)
+    sensor = text[text.index("<sensor"):text.index("</sensor>") + len("</sensor>")]
+    element = text.replace(sensor, f'<mvpt:rig type="path" file="keys.json" frames="2" fps="2">{sensor}</mvpt:rig>')
+    element = element.replace('<scene version="3.0.0">', '<scene version="3.0.0" xmlns:mvpt="urn:mvpt">', 1)
+    (tmp_path / "element.xml").write_text(element)
+    assert mvpt.load_file(tmp_path / "element.xml").source_files[1] == str(keys)
+    state = tmp_path / "s.mvpt-state"
+    mvpt.render(scene, spp=2, seed=1, state=state)
+    path_keys[1]["position"] = [2, 1, 5]
+    keys.write_text(json.dumps({"keys": path_keys}))
+    with pytest.raises(mvpt.StateError, match="keys.json has changed"):
+        mvpt.render(mvpt.load_file(xml, rig=rig), spp=2, seed=1, resume=state)

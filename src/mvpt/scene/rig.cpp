@@ -180,12 +180,15 @@ fs::path find_key_file(const RigParams &p, const std::vector<fs::path> &dirs) {
     p.fail("file", "'" + f.string() + "' not found" + (f.is_absolute() || looked.empty() ? "" : " (looked in " + looked + ")"));
 }
 
-std::vector<RigView> path(const RigParams &p, const RigBase &base, const std::vector<fs::path> &dirs) {
+std::vector<RigView> path(const RigParams &p, const RigBase &base, const std::vector<fs::path> &dirs,
+                          std::vector<fs::path> *files) {
     int frames = p.count("frames");
     double fps = p.number("fps", 24.0), shutter = p.number("shutter", 0.5);
     if (!(fps > 0)) p.fail("fps", "must be > 0 frames per second, got " + p.string("fps"));
     if (!(shutter >= 0)) p.fail("shutter", "must be >= 0 (a fraction of the frame time), got " + p.string("shutter"));
-    CameraPath cam_path = CameraPath::read(find_key_file(p, dirs));
+    const fs::path key_file = find_key_file(p, dirs);
+    CameraPath cam_path = CameraPath::read(key_file);
+    if (files) files->push_back(fs::absolute(key_file).lexically_normal());
     if (p.has("interpolation") && !parse_path_interpolation(p.string("interpolation"), &cam_path.interpolation))
         p.fail("interpolation", "must be linear or smooth, got '" + p.string("interpolation") + "'");
     (void) base; // the path replaces the base pose; its film, sampler and lens carry over
@@ -247,7 +250,8 @@ RigSpec RigSpec::parse(const std::string &text) {
     return spec;
 }
 
-std::vector<RigView> generate_rig(const RigSpec &spec, const RigBase &base, const std::vector<fs::path> &search_dirs) {
+std::vector<RigView> generate_rig(const RigSpec &spec, const RigBase &base, const std::vector<fs::path> &search_dirs,
+                                  std::vector<fs::path> *files) {
     std::vector<RigView> views;
     if (spec.type == "stereo") views = stereo(RigParams(spec, {"ipd", "focus_distance"}), base);
     else if (spec.type == "linear") views = linear(RigParams(spec, {"n", "baseline", "focus_distance"}), base);
@@ -255,7 +259,7 @@ std::vector<RigView> generate_rig(const RigSpec &spec, const RigBase &base, cons
         views = grid(RigParams(spec, {"size", "cols", "rows", "spacing", "focus_distance"}), base);
     else if (spec.type == "orbit") views = orbit(RigParams(spec, {"n", "radius", "arc"}), base);
     else if (spec.type == "path")
-        views = path(RigParams(spec, {"file", "frames", "fps", "shutter", "interpolation"}), base, search_dirs);
+        views = path(RigParams(spec, {"file", "frames", "fps", "shutter", "interpolation"}), base, search_dirs, files);
     else {
         std::string hint = did_you_mean(spec.type, kRigTypes);
         throw SceneError(spec.loc, spec.prefix() + "unknown rig type '" + spec.type + "'" +

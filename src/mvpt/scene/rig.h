@@ -70,18 +70,23 @@ struct RigView {
     float shutter_open = 0.f, shutter_close = 0.f;
 };
 
-/// Expand `spec` around `base`; relative key files are looked up in `search_dirs` in order.
-/// Bad parameters throw SceneError at the parameter (zero views, NaN spacing, unknown type, ...).
+/// Expand `spec` around `base`; relative key files are looked up in `search_dirs` in order,
+/// and the file read is appended to `files` (a scene's identity). Bad parameters throw
+/// SceneError at the parameter (zero views, NaN spacing, unknown type, ...).
 std::vector<RigView> generate_rig(const RigSpec &spec, const RigBase &base,
-                                  const std::vector<std::filesystem::path> &search_dirs);
+                                  const std::vector<std::filesystem::path> &search_dirs,
+                                  std::vector<std::filesystem::path> *files = nullptr);
 
 /// The sensors of a <mvpt:rig> element (its one child <sensor> is the base camera); `scene`
-/// holds the top-level elements read so far (a <ref>'d film is looked up there).
+/// holds the top-level elements read so far (a <ref>'d film is looked up there). A key file
+/// it reads is appended to `files`.
 std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene,
-                                        const std::vector<std::filesystem::path> &search_dirs);
+                                        const std::vector<std::filesystem::path> &search_dirs,
+                                        std::vector<std::filesystem::path> *files = nullptr);
 
 /// The `--rig` option: replace the scene's top-level sensors by the rig generated from the
-/// first one. Relative key files resolve against the working directory, then the scene's.
+/// first one. Relative key files resolve against the working directory, then the scene's; the
+/// file read joins the root's source_files.
 void apply_rig_option(XmlNode &root, const std::string &spec);
 
 /// True for the element names that denote a rig (the prefix `mvpt:`; see rig_xml.cpp).

@@ -153,7 +153,8 @@ XmlNode view_sensor(const XmlNode &base, const RigView &view, const XmlNode &at,
 
 } // namespace
 
-std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene, const std::vector<fs::path> &search_dirs) {
+std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene, const std::vector<fs::path> &search_dirs,
+                                        std::vector<fs::path> *files) {
     RigSpec spec;
     spec.where = "<" + rig.tag + ">";
     spec.loc = rig.loc;
@@ -172,7 +173,7 @@ std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene
     }
     if (!base) throw SceneError(rig.loc, spec.where + " needs a <sensor> inside it: the base camera of the rig");
     std::vector<XmlNode> out;
-    for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where, scene), search_dirs))
+    for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where, scene), search_dirs, files))
         out.push_back(view_sensor(*base, v, rig, out.empty()));
     return out;
 }
@@ -188,7 +189,7 @@ void apply_rig_option(XmlNode &root, const std::string &text) {
     for (auto &d : root.search_dirs) dirs.push_back(d);
     const XmlNode base = root.children[first];
     std::vector<XmlNode> views;
-    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs))
+    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs, &root.source_files))
         views.push_back(view_sensor(base, v, base, views.empty()));
     std::vector<XmlNode> children;
     for (size_t i = 0; i < root.children.size(); ++i) {

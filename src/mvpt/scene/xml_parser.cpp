@@ -278,7 +278,7 @@ private:
                 std::vector<fs::path> dirs = {dir};
                 dirs.insert(dirs.end(), m_path_dirs.begin(), m_path_dirs.end());
                 dirs.push_back(m_root_dir);
-                for (XmlNode &s : expand_rig_element(n, out, dirs)) out.children.push_back(std::move(s));
+                for (XmlNode &s : expand_rig_element(n, out, dirs, &m_files)) out.children.push_back(std::move(s));
                 continue;
             }
             out.children.push_back(std::move(n));
