@@ -45,7 +45,11 @@ SCENES = [  # (name, path under the shared scenes, defines)
     ("cbox-rgb", "m3data-cbox/cbox-rgb.xml", {"max_depth": 8}),
     ("matpreview", "m3data-matpreview/matpreview.xml", {}),
     ("veach-mis", "bitterli-veach-mis/scene.xml", {"integrator": "path"}),
+    # Participating media (volpath), on request: --scenes staircase2 sss
+    ("staircase2", "bitterli-staircase2/scene.xml", {}),
+    ("sss", "m3data-testsuite/docs/scenes/medium_homogeneous_sss.xml", {}),
 ]
+DEFAULT_SCENES = ["cbox-rgb", "matpreview", "veach-mis"]
 
 
 def shared_dir(arg: str | None) -> Path:
@@ -122,7 +126,7 @@ def main(argv=None) -> int:
     ap.add_argument("--res", type=int, default=256, help="larger film side (default 256)")
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--rounds", type=int, default=5)
-    ap.add_argument("--scenes", nargs="*", default=[s[0] for s in SCENES])
+    ap.add_argument("--scenes", nargs="*", default=DEFAULT_SCENES, help=f"of {[s[0] for s in SCENES]}")
     ap.add_argument("--renderers", nargs="*", default=["mvpt", "scalar_rgb", "llvm_ad_rgb"])
     ap.add_argument("--shared", default=None, help="the shared scenes folder")
     args = ap.parse_args(argv)

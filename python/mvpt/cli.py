@@ -16,38 +16,13 @@ import time
 from importlib import resources
 from pathlib import Path
 
-from . import __version__, api
+from . import __version__, api, cli_common
 from . import state as state_file
 from ._core import SceneError
 from . import displays, reports_cli, state_cli
-from .output import staged_outputs, write_outputs
-
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-
-# The signal that stopped the render (SIGINT, SIGTERM or SIGHUP): the exit code is 128 + its
-# number; None until one came.
-_stopped_by = None
-
-
-def _on_signal(signum, frame):
-    """Ctrl-C, SIGTERM (batch schedulers, `kill`) and SIGHUP (a closed terminal) stop the render
-    with the outputs of the passes finished and a state to resume from. Only the first stops it:
-    later ones (people press Ctrl-C twice) must not abandon what it is saving."""
-    global _stopped_by
-    if _stopped_by is None:
-        _stopped_by = signal.Signals(signum)
-        raise KeyboardInterrupt
-    print(f"\nmvpt: {signal.Signals(signum).name}: finishing what was started", file=sys.stderr)
-
-
-def _exit_code() -> int:
-    """The exit code of a render stopped by a signal (Ctrl-C when none was recorded)."""
-    return 128 + int(_stopped_by or signal.SIGINT)
-
-
-def _error(msg: str) -> None:
-    print(f"mvpt: error: {msg}", file=sys.stderr)
-
+from .cli_common import EXIT_ERROR, EXIT_OK, EXIT_USAGE, write_all
+from .cli_common import count as _count, define as _define, error as _error, seconds as _seconds, seed as _seed
+from .summary import print_summary
 
 class _Parser(argparse.ArgumentParser):
     """argparse that reports bad input as one `mvpt: error: ...` line (exit code 2)."""
@@ -55,40 +30,6 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         _error(message)
         raise SystemExit(EXIT_USAGE)
-
-
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got '{text}'")
-    if not 0 <= v < 2**31:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer below 2^31, got {v}")
-    return v
-
-
-def _seconds(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'")
-    if not (v >= 0 and math.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"expected a non-negative number of seconds, got {text}")
-    return v
-
-
-def _seed(text: str) -> int:
-    v = _count(text)
-    if v >= 2**32:
-        raise argparse.ArgumentTypeError(f"expected a seed below 2^32, got {v}")
-    return v
-
-
-def _define(text: str) -> tuple:
-    name, eq, value = text.partition("=")
-    if not eq or not name.strip():
-        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got '{text}'")
-    return name.strip(), value
 
 
 def _hms(seconds: float) -> str:
@@ -136,68 +77,6 @@ class ProgressBar:
             self._draw(p)
         self.stream.write("\n")
         self.stream.flush()
-
-
-def _table(rows: list, header: list, align: str) -> str:
-    """Plain-text table; `align` has one of '<' or '>' per column."""
-    cells = [header] + [[str(c) for c in r] for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
-    lines = ["  ".join(f"{c:{a}{w}}" for c, a, w in zip(r, align, widths)).rstrip() for r in cells]
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines) + "\n"
-
-
-def _si(x: float) -> str:
-    for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
-        if abs(x) >= scale:
-            return f"{x / scale:.2f} {unit}"
-    return f"{x:.0f}"
-
-
-def print_summary(result, stream=None) -> None:
-    """The table printed after a render: one row per view, then the totals."""
-    stream = stream if stream is not None else sys.stdout
-    s = result.stats
-    rows = []
-    for vid, v in s["views"].items():
-        m = v["mean"]
-        rows.append([vid, f"{v['width']}x{v['height']}", f"{v['spp']:.1f}", f"{v['samples']:,}",
-                     f"{m[0]:.4f}", f"{m[1]:.4f}", f"{m[2]:.4f}", f"{v['nonfinite_samples']:,}"])
-    stream.write(_table(rows, ["view", "size", "spp", "samples", "mean R", "mean G", "mean B", "non-finite"],
-                        "<>>>>>>>"))
-    r = s["rays"]
-    state = "cancelled after" if s.get("cancelled") else "done in"
-    stream.write(f"{state} {s['passes']} passes, {s['wall_time']:.2f} s (longest pass {s['max_pass_seconds']:.3f} s), "
-                 f"{s['threads']} threads, integrator '{s['integrator']}', method {s.get('method', 'pt')}\n")
-    stream.write(f"samples: {s['samples']:,} ({_si(s['samples_per_second'])}/s)   "
-                 f"rays: {r['total']:,} ({_si(s['rays_per_second'])}/s; camera {r['camera']:,}, "
-                 f"intersect {r['intersect']:,}, shadow {r['shadow']:,})\n")
-    if s.get("method") == "mvpt":
-        print_multiview_summary(s, stream)
-    for note in s.get("notes", []):
-        stream.write(f"note: {note}\n")
-    if s.get("nonfinite_samples"):
-        f = s.get("first_nonfinite") or {}
-        stream.write(f"warning: {s['nonfinite_samples']:,} non-finite samples were dropped (first: view "
-                     f"{f.get('view_id')}, pixel ({f.get('x')}, {f.get('y')}), sample {f.get('sample')})\n")
-
-
-_TESTS = ("time", "orientation", "image", "bsdf", "visibility", "selection")
-
-
-def print_multiview_summary(s: dict, stream) -> None:
-    """Per-view statistics of multi-view path tracing (design doc §9): native samples,
-    contributions received, mean sharing set size |S|, rays per native sample, and the share
-    of shifts rejected by each validity test."""
-    rows = []
-    for vid, v in s["views"].items():
-        m = v["multiview"]
-        tried = max(1, m["shifts_tried"])
-        rows.append([vid, f"{m['native_samples']:,}", f"{m['contributions']:,}", f"{m['mean_sharing']:.2f}",
-                     f"{m['rays_per_native_sample']:.1f}"] +
-                    [f"{100.0 * m['rejected'][t] / tried:.1f}%" for t in _TESTS])
-    stream.write(f"multi-view path tracing ({s['estimator']}): rejected shifts by test, in % of those tried\n")
-    stream.write(_table(rows, ["view", "native", "received", "|S|", "rays/native"] + list(_TESTS), "<>>>>>>>>>>"))
 
 
 def _failed(bar: "ProgressBar", e: Exception) -> int:
@@ -264,7 +143,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
         if not resume:
             state.unlink(missing_ok=True)
         print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
-        return _exit_code()
+        return cli_common.exit_code()
     if not cancelled and not keep_state:
         state.unlink(missing_ok=True)  # the render is complete: a state was not asked for
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
@@ -279,42 +158,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
     if cancelled:
         print(f"mvpt: interrupted; wrote the passes finished so far and their state; continue with: "
               f"mvpt render --resume {args.output}", file=sys.stderr)
-        return _exit_code()
+        return cli_common.exit_code()
     return EXIT_OK
-
-
-def write_all(result, args, stem: str, settings: dict):
-    """The per-view files, the JSON and the displays asked for in args.output, as one set
-    (output.staged_outputs); their paths, or None after printing the error. Ctrl-C, SIGTERM and
-    SIGHUP while writing do not interrupt it: they are reported, and the exit code says so."""
-    global _stopped_by
-    deferred = []
-
-    def finish_first(signum, frame):
-        if not deferred:
-            print(f"\nmvpt: {signal.Signals(signum).name}: finishing writing the outputs", file=sys.stderr)
-        deferred.append(signum)
-
-    in_main = threading.current_thread() is threading.main_thread()
-    previous = {s: signal.signal(s, finish_first) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)} \
-        if in_main else {}
-    staging = None
-    try:
-        with staged_outputs(args.output) as (staging, paths):
-            paths += write_outputs(result, staging, stem, aovs=bool(args.aovs), settings=settings)
-            if displays.wants_displays(args):
-                paths += displays.write_displays(result, args, staging, stem)
-    except (OSError, RuntimeError, ValueError, ImportError) as e:
-        _error(str(e).replace(f"{staging}/", f"{args.output}/") if staging else str(e))
-        return None
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-    if deferred:
-        _stopped_by = _stopped_by or signal.Signals(deferred[0])
-        print(f"mvpt: wrote the outputs ({len(paths)} files to {args.output})", file=sys.stderr)
-        raise KeyboardInterrupt
-    return paths
 
 
 def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
@@ -329,7 +174,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     except KeyboardInterrupt:
         bar.finish(done=False)
         print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
-        return _exit_code()
+        return cli_common.exit_code()
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
         return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
@@ -346,7 +191,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
               f"wrote {len(paths)} files to {args.output}")
     if cancelled:
         print("mvpt: interrupted; wrote the ranges finished so far", file=sys.stderr)
-        return _exit_code()
+        return cli_common.exit_code()
     return EXIT_OK
 
 
@@ -413,11 +258,10 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:
         return int(e.code) if isinstance(e.code, int) else EXIT_USAGE
-    global _stopped_by
-    _stopped_by = None
+    cli_common.reset_stop()
     in_main_thread = threading.current_thread() is threading.main_thread()
     stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-    previous = {s: signal.signal(s, _on_signal) for s in stops} if in_main_thread else {}
+    previous = {s: signal.signal(s, cli_common.on_signal) for s in stops} if in_main_thread else {}
     try:
         if args.command == "render":
             if args.resume is not None:
@@ -434,7 +278,7 @@ def main(argv=None) -> int:
             return _render(demo, args, "demo")
     except KeyboardInterrupt:
         print("\nmvpt: interrupted", file=sys.stderr)
-        return _exit_code()
+        return cli_common.exit_code()
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler if handler is not None else signal.SIG_DFL)

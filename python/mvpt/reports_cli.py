@@ -6,13 +6,10 @@ import sys
 from pathlib import Path
 
 from ._core import SceneError
+from .cli_common import EXIT_ERROR, EXIT_OK
+from .cli_common import count as _count, define as _define, error as _error, seed as _seed
 
 COMMANDS = ("compare", "bench-equal-time")
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-
-
-def _error(msg: str) -> None:
-    print(f"mvpt: error: {msg}", file=sys.stderr)
 
 
 def _positive_seconds(text: str) -> float:
@@ -37,7 +34,6 @@ def _fractions(text: str) -> tuple:
 
 def add_commands(sub) -> None:
     """Register the subcommands on cli.py's subparsers."""
-    from .cli import _count, _define, _seed
 
     p = sub.add_parser("compare", help="RMSE, relMSE and FLIP of runs against a reference, per view and overall",
                        description="Runs are output directories of `mvpt render`, their <stem>.json, multi-view "

@@ -3,24 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from . import api
 from . import state as state_file
 from ._core import SceneError, StateError
-
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+from .cli_common import EXIT_ERROR, EXIT_OK, EXIT_USAGE, write_all
+from .cli_common import error as _error
+from .summary import print_summary
 
 # The options that make a render's image: `--resume` takes them from the state file.
 IMAGE_OPTIONS = ("define", "spp", "time", "seed", "method", "rig", "views", "passes")
 # What a resume or a merge reuses of the first run's command line (outputs included).
 RECORDED_OPTIONS = IMAGE_OPTIONS + ("aovs", "multiview_exr", "stereo", "quilt", "contact_sheet", "gif", "mp4",
                                     "fps", "exposure")
-
-
-def _error(msg: str) -> None:
-    print(f"mvpt: error: {msg}", file=sys.stderr)
 
 
 def pass_range(text: str) -> tuple:
@@ -105,7 +101,6 @@ def add_merge_command(sub) -> None:
 def merge(args) -> int:
     """`mvpt merge STATE... -o OUT`: the images of the states' render as if one process had
     rendered all their passes, with the first state's outputs (and the merged state) in OUT."""
-    from .cli import print_summary, write_all
     try:
         paths = [find_state(p) for p in args.states]
         record = _record(paths[0])

@@ -1,0 +1,112 @@
+"""What the command line's subcommands share: exit codes, the error line, argument types, the
+signal that stopped a render, and writing a render's outputs as one set."""
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+import sys
+import threading
+
+from . import displays
+from .output import staged_outputs, write_outputs
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+
+# The signal that stopped the render (SIGINT, SIGTERM or SIGHUP): the exit code is 128 + its
+# number; None until one came.
+stopped_by = None
+
+
+def on_signal(signum, frame):
+    """Ctrl-C, SIGTERM (batch schedulers, `kill`) and SIGHUP (a closed terminal) stop the render
+    with the outputs of the passes finished and a state to resume from. Only the first stops it:
+    later ones (people press Ctrl-C twice) must not abandon what it is saving."""
+    global stopped_by
+    if stopped_by is None:
+        stopped_by = signal.Signals(signum)
+        raise KeyboardInterrupt
+    print(f"\nmvpt: {signal.Signals(signum).name}: finishing what was started", file=sys.stderr)
+
+
+def exit_code() -> int:
+    """The exit code of a render stopped by a signal (Ctrl-C when none was recorded)."""
+    return 128 + int(stopped_by or signal.SIGINT)
+
+
+def error(msg: str) -> None:
+    print(f"mvpt: error: {msg}", file=sys.stderr)
+
+
+def count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got '{text}'")
+    if not 0 <= v < 2**31:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer below 2^31, got {v}")
+    return v
+
+
+def seconds(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got '{text}'")
+    if not (v >= 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected a non-negative number of seconds, got {text}")
+    return v
+
+
+def seed(text: str) -> int:
+    v = count(text)
+    if v >= 2**32:
+        raise argparse.ArgumentTypeError(f"expected a seed below 2^32, got {v}")
+    return v
+
+
+def define(text: str) -> tuple:
+    name, eq, value = text.partition("=")
+    if not eq or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got '{text}'")
+    return name.strip(), value
+
+
+def write_all(result, args, stem: str, settings: dict):
+    """The per-view files, the JSON and the displays asked for in args.output, as one set
+    (output.staged_outputs); their paths, or None after printing the error. Ctrl-C, SIGTERM and
+    SIGHUP while writing do not interrupt it: they are reported, and the exit code says so."""
+    global stopped_by
+    deferred = []
+
+    def finish_first(signum, frame):
+        if not deferred:
+            print(f"\nmvpt: {signal.Signals(signum).name}: finishing writing the outputs", file=sys.stderr)
+        deferred.append(signum)
+
+    in_main = threading.current_thread() is threading.main_thread()
+    previous = {s: signal.signal(s, finish_first) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)} \
+        if in_main else {}
+    staging = None
+    try:
+        with staged_outputs(args.output) as (staging, paths):
+            paths += write_outputs(result, staging, stem, aovs=bool(args.aovs), settings=settings)
+            if displays.wants_displays(args):
+                paths += displays.write_displays(result, args, staging, stem)
+    except (OSError, RuntimeError, ValueError, ImportError) as e:
+        error(str(e).replace(f"{staging}/", f"{args.output}/") if staging else str(e))
+        return None
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    if deferred:
+        stopped_by = stopped_by or signal.Signals(deferred[0])
+        print(f"mvpt: wrote the outputs ({len(paths)} files to {args.output})", file=sys.stderr)
+        raise KeyboardInterrupt
+    return paths
+
+
+def reset_stop() -> None:
+    """Forget the signal of an earlier command (main() runs more than once in one process)."""
+    global stopped_by
+    stopped_by = None
