@@ -280,6 +280,8 @@ def main(argv=None) -> int:
         print("\nmvpt: interrupted", file=sys.stderr)
         return cli_common.exit_code()
     finally:
+        # A signal from here on (the work is done) must not raise into the restoring loop.
+        cli_common.finishing = True
         for s, handler in previous.items():
             signal.signal(s, handler if handler is not None else signal.SIG_DFL)
 

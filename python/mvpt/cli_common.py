@@ -16,6 +16,9 @@ EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 # The signal that stopped the render (SIGINT, SIGTERM or SIGHUP): the exit code is 128 + its
 # number; None until one came.
 stopped_by = None
+# True once the command's work is over and it is restoring the signal handlers: a signal then
+# stops nothing (and must not raise into that code).
+finishing = False
 
 
 def on_signal(signum, frame):
@@ -23,7 +26,7 @@ def on_signal(signum, frame):
     with the outputs of the passes finished and a state to resume from. Only the first stops it:
     later ones (people press Ctrl-C twice) must not abandon what it is saving."""
     global stopped_by
-    if stopped_by is None:
+    if stopped_by is None and not finishing:
         stopped_by = signal.Signals(signum)
         raise KeyboardInterrupt
     print(f"\nmvpt: {signal.Signals(signum).name}: finishing what was started", file=sys.stderr)
@@ -108,5 +111,5 @@ def write_all(result, args, stem: str, settings: dict):
 
 def reset_stop() -> None:
     """Forget the signal of an earlier command (main() runs more than once in one process)."""
-    global stopped_by
-    stopped_by = None
+    global stopped_by, finishing
+    stopped_by, finishing = None, False
