@@ -93,11 +93,14 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
             throughput *= 1.f / q;
         }
 
-        SurfaceInteraction si;
-        ++counters.rays;
-        const bool hit = scene.intersect(ray, si);
         float u_flight = sampler.next_1d();
         RandomStream rs = sampler.next_stream();
+        SurfaceInteraction si;
+        ++counters.rays;
+        // In a medium, surfaces beyond where the flight surely ends need not be found.
+        Ray query = ray;
+        if (medium) query.tmax = std::min(query.tmax, medium->free_flight_bound(u_flight));
+        const bool hit = scene.intersect(query, si);
 
         // ---------------- Free flight through the medium ----------------
         if (medium) {

@@ -34,6 +34,10 @@ public:
     /// surface at `t_surface` (may be infinite); `u` picks the channel and the distance,
     /// `rs` serves estimators that need more numbers.
     virtual MediumSample sample(const Ray &ray, float t_surface, float u, RandomStream &rs) const = 0;
+    /// A distance past which `sample` with this `u` surely does not scatter, known before the
+    /// next surface is (homogeneous media: the distance it draws): the surface query can stop
+    /// there, which in dense media is most of its cost. Infinite when unknown.
+    virtual float free_flight_bound(float u) const { (void)u; return Infinity; }
     /// Transmittance along `ray` over [0, t) (an unbiased estimate where it is not analytic).
     virtual Spectrum transmittance(const Ray &ray, float t, RandomStream &rs) const = 0;
 

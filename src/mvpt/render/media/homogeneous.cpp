@@ -38,12 +38,10 @@ public:
         m_sigma_t = sigma_t * scale;
     }
 
+    float free_flight_bound(float u) const override { return distance(u); }
+
     MediumSample sample(const Ray &ray, float t_surface, float u, RandomStream &) const override {
-        // Channel c = floor(3u); the rest of u draws t ~ sigma_c exp(-sigma_c t).
-        float u3 = u * 3.f;
-        int c = std::min(int(u3), 2);
-        float uc = std::min(u3 - float(c), OneMinusEpsilon);
-        float t = m_sigma_t[c] > 0.f ? -std::log1p(-uc) / m_sigma_t[c] : Infinity;
+        const float t = distance(u);
         MediumSample ms;
         ms.scattered = t < t_surface;
         ms.t = ms.scattered ? t : t_surface;
@@ -59,6 +57,14 @@ public:
     Spectrum transmittance(const Ray &, float t, RandomStream &) const override { return exp_tr(t); }
 
 private:
+    /// Channel c = floor(3u); the rest of u draws t ~ sigma_c exp(-sigma_c t).
+    float distance(float u) const {
+        float u3 = u * 3.f;
+        int c = std::min(int(u3), 2);
+        float uc = std::min(u3 - float(c), OneMinusEpsilon);
+        return m_sigma_t[c] > 0.f ? -std::log1p(-uc) / m_sigma_t[c] : Infinity;
+    }
+
     /// exp(-sigma_t t) per channel; an infinite t gives 0 where sigma_t > 0 and 1 where it is 0.
     Spectrum exp_tr(float t) const {
         Spectrum r;
