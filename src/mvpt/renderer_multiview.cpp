@@ -5,6 +5,7 @@
 
 #include "integrators/mv_adaptive.h"
 #include "integrators/mvpath.h"
+#include "integrators/volpath.h"
 #include "render/camera.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -80,9 +81,11 @@ bool run_in_chunks(tbb::task_arena &arena, size_t tiles, int threads, double sam
 std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scene) {
     if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) return {&mv->path(), mv->config()};
     if (auto *pt = dynamic_cast<const PathIntegrator *>(&scene.integrator())) return {pt, MvConfig{}};
-    if (scene.integrator().name() == "volpath")
-        throw std::runtime_error("multi-view path tracing does not render participating media yet (the scene's "
-                                 "integrator is 'volpath'): render it with --method pt");
+    if (auto *vp = dynamic_cast<const VolPathIntegrator *>(&scene.integrator())) {
+        if (!scene.has_media()) return {&vp->surfaces(), MvConfig{}}; // volpath without media is path
+        throw std::runtime_error("multi-view path tracing does not render participating media yet (the scene has "
+                                 "them): render it with --method pt");
+    }
     throw std::runtime_error("multi-view path tracing needs a 'path' or 'mvpath' integrator, the scene has '" +
                              scene.integrator().name() + "'");
 }

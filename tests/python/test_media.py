@@ -272,3 +272,16 @@ def test_bad_vol_files(tmp_path, case, match):
         data[48 + 8:48 + 12] = np.float32(np.nan).tobytes()
     path.write_bytes(bytes(data))
     _error(fog_scene(heterogeneous(path, "")), match)
+
+
+def test_volpath_without_media_is_path():
+    """A scene without media renders with `volpath` as with `path` (the wavefront path tracer,
+    bit for bit), and multi-view path tracing accepts it (Bitterli's scenes name volpath)."""
+    xml = fog_scene(homogeneous('<float name="sigma_t" value="2"/>'))
+    xml = xml.replace('<medium type="homogeneous" name="interior"><float name="sigma_t" value="2"/></medium>', "")
+    vol, path = mvpt.load_string(xml), mvpt.load_string(xml.replace('type="volpath"', 'type="path"'))
+    ra, rb = mvpt.render(vol, spp=2, seed=4), mvpt.render(path, spp=2, seed=4)
+    for vid in ra.view_ids:
+        assert np.array_equal(ra.images[vid], rb.images[vid])
+    rm = mvpt.render(vol, spp=2, seed=4, method="mvpt")
+    assert rm.stats["method"] == "mvpt"

@@ -65,6 +65,12 @@ Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const 
     return weight * float(lights.size()) * transmittance(scene, shadow, medium, rs, counters);
 }
 
+void VolPathIntegrator::li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
+                                 RayCounters &counters, const Medium *medium) const {
+    if (!scene.has_media()) return m_surfaces.li_batch(scene, rays, samplers, out, n, counters);
+    for (size_t i = 0; i < n; ++i) out[i] = li_in(scene, rays[i], medium, samplers[i], counters);
+}
+
 Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler,
                                   RayCounters &counters) const {
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);

@@ -19,14 +19,16 @@ inline constexpr uint32_t VolDimsPerStep = 8;
 
 class VolPathIntegrator final : public Integrator {
 public:
-    explicit VolPathIntegrator(const PathConfig &cfg) : m_cfg(cfg) {}
+    explicit VolPathIntegrator(const PathConfig &cfg) : m_cfg(cfg), m_surfaces(cfg) {}
     Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override {
         return li_in(scene, ray, nullptr, sampler, counters);
     }
+    /// A scene without media is traced by the path tracer's wavefront (`surfaces`): the same
+    /// image in expectation, as in Mitsuba, at its speed.
     void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
-                  RayCounters &counters, const Medium *medium = nullptr) const override {
-        for (size_t i = 0; i < n; ++i) out[i] = li_in(scene, rays[i], medium, samplers[i], counters);
-    }
+                  RayCounters &counters, const Medium *medium = nullptr) const override;
+    /// The path tracer of the same depths, for scenes without media (and multi-view path tracing).
+    const PathIntegrator &surfaces() const { return m_surfaces; }
     /// Radiance along a camera ray that starts in `medium` (null: vacuum).
     Spectrum li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler, RayCounters &counters) const;
     std::string name() const override { return "volpath"; }
@@ -39,6 +41,7 @@ private:
                             float time, Sampler &sampler, RayCounters &counters, LightSample &ls) const;
 
     PathConfig m_cfg;
+    PathIntegrator m_surfaces;
 };
 
 } // namespace mvpt
