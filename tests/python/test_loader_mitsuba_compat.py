@@ -148,3 +148,14 @@ def test_first_default_wins_over_an_included_files(tmp_path):
                 '<shape type="obj"><string name="filename" value="icosphere.obj"/></shape>', ""))
     assert mvpt.load_string(main, tmp_path).integrator == "volpath"
     assert mvpt.load_string(main, tmp_path, integrator="path").integrator == "path"
+
+
+@pytest.mark.parametrize("params,match", [
+    ('<integer name="shading_samples" value="2"/><integer name="bsdf_samples" value="1"/>', "not both"),
+    ('<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="0"/>', "at least one"),
+    ('<integer name="emitter_samples" value="-1"/>', "emitter_samples")])
+def test_direct_integrator_parameters(params, match):
+    with pytest.raises(mvpt.SceneError, match=match):
+        mvpt.load_string(scene_xml(f'<integrator type="direct">{params}</integrator>'), SCENES)
+    assert mvpt.load_string(scene_xml('<integrator type="direct"><integer name="shading_samples" value="2"/>'
+                                      '</integrator>'), SCENES).integrator == "direct"

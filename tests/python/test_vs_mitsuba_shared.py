@@ -15,18 +15,16 @@ any other error fails. Wavelength-sampled <spectrum> values are converted to RGB
 Mitsuba's RGB variants do (src/mvpt/core/spectrum_rgb.h).
 
 Out of scope, not listed below (reason):
-  m3data-testsuite/tests/scenes: floating_sphere/test_directional_direct,
-    mesh_attributes/*_direct, spot_light/test_spot_direct, texture_interp/*_direct
-    (direct integrator); orthographic_sensor (orthographic sensor); projector/* (projector
-    emitter, direct); various_emitters/*_ptracer (ptracer integrator).
+  m3data-testsuite/tests/scenes: mesh_attributes/*_direct (mesh_attribute textures);
+    orthographic_sensor (orthographic sensor); projector/* (projector emitter);
+    various_emitters/*_ptracer (ptracer integrator).
   m3data-testsuite/docs/scenes: bsdf_polarizer_*, bsdf_pplastic*, *_stokes*,
     integrator_stokes_cbox (polarisation / stokes); emitter_projector_* (projector);
-    integrator_aov (aov); integrator_direct_* (direct);
+    integrator_aov (aov);
     sensor_orthographic* (orthographic); shape_bsplinecurve_*, shape_linearcurve_*
     (curves); shape_sdfgrid* (sdf); texture_mesh_attribute_* (mesh_attribute textures);
     variants_cbox_* (variant demo; spectral).
-  m3tut-cbox/simple.xml (direct integrator). m06-living-room (Mitsuba 0.6 format) has a test
-  of its own at the end.
+  m06-living-room (Mitsuba 0.6 format) has a test of its own at the end.
 """
 import sys
 from pathlib import Path
@@ -65,6 +63,7 @@ CASES = [
     case("m3data-cbox/cbox-rgb.xml", spp=512),
     case("m3data-cbox/cbox.xml"),
     case("m3tut-cbox/cbox.xml", {"conductor", "dielectric", "sphere"}, spp=512),
+    case("m3tut-cbox/simple.xml", {"direct", "ply", "point"}),
     case("m3data-matpreview/matpreview.xml", MATPREVIEW | {"plastic"}, {"max_depth": 8}, max_res=64),
     case("bitterli-cornell-box/scene.xml", {"twosided"}, BITTERLI, spp=512),
     case("bitterli-veach-mis/scene.xml", {"twosided", "roughconductor", "sphere"}, BITTERLI, max_res=64, spp=1024),
@@ -74,6 +73,9 @@ CASES = [
     case("bitterli-staircase2/scene.xml", {"twosided", "principled", "roughplastic", "roughconductor", "dielectric",
                                            "bitmap", "disk", "homogeneous", "volpath"}, spp=256),
     # -- Mitsuba's regression scenes: vs Mitsuba and vs the stored references ---------------
+    case(TS + "spot_light/test_spot_direct.xml", {"direct", "spot", "constant"}),
+    case(TS + "texture_interp/test_texture_interp_direct.xml", {"direct", "bitmap"}),
+    case(TS + "floating_sphere/test_directional_direct.xml", {"direct", "directional", "sphere"}),
     *[case(TS + f"bsdf_spheres/test_{n}_path.xml", req, refs=True, max_res=None) for n, req in [
         ("arealight", {"bitmap", "conductor", "dielectric", "mask", "plastic", "roughconductor", "roughdielectric",
                        "roughplastic", "twosided"}),
@@ -145,6 +147,8 @@ CASES = [
     case(DOCS + "emitter_spot_texture.xml", {"bitmap", "checkerboard", "constant", "plastic", "serialized", "sphere",
                                              "spot"}),
     *[case(DOCS + f"integrator_depth_{n}.xml") for n in ["1", "2", "3", "inf"]],
+    *[case(DOCS + f"integrator_direct_{n}.xml", {"direct", "sphere", "roughconductor"}, spp=1024) for n in
+      ["both", "bsdf", "lum"]],
     *[case(DOCS + f"sampler_{n}.xml", {"checkerboard", "serialized", "sphere", s}) for n, s in [
         ("independent_16spp", "independent"), ("independent_25spp", "independent"),
         ("ldsampler_16spp", "ldsampler"), ("multijitter_16spp", "multijitter"),

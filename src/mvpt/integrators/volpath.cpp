@@ -80,7 +80,6 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
 
     Spectrum result(0.f), throughput(1.f);
     float eta = 1.f;
-    bool valid = !m_cfg.hide_emitters && scene.environment() != nullptr;
     uint32_t depth = 0; // scattering events so far (crossing a null surface is none)
     // The last scattering event and the density of the direction it sampled (MIS on emitters
     // hit); `prev_delta`: that density is a delta (or the camera's), so the hit counts in full.
@@ -113,7 +112,6 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
             MediumSample ms = medium->sample(ray, hit ? si.t : Infinity, u_flight, rs);
             throughput *= ms.weight;
             if (ms.scattered) {
-                valid = true;
                 if (++depth >= max_depth || throughput.is_black()) break;
                 const Point3f p = ray.at(ms.t);
                 const Vec3f wi = -ray.d;
@@ -161,7 +159,6 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
         float u_lobe = sampler.next_1d();
         auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, sampler.next_2d());
         const bool scattered = !(bs.sampled_type & BsdfNull); // a failed sample counts too, as in Mitsuba
-        valid |= scattered;
         if (bsdf_weight.is_black()) break;
         const Vec3f wo = si.to_world(bs.wo);
         throughput *= bsdf_weight;
@@ -173,7 +170,8 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
         if (si.shape->is_medium_transition()) medium = si.shape->target_medium(wo, si.n);
         ray = si.spawn_ray(wo);
     }
-    return valid ? result : Spectrum(0.f);
+    // (Mitsuba's volpath keeps the radiance of paths it calls invalid: validity is only alpha.)
+    return result;
 }
 
 MVPT_REGISTER_PLUGIN("integrator", "volpath", [](const Properties &props, const LoadContext &) {
