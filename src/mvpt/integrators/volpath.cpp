@@ -65,6 +65,11 @@ Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const 
     return weight * float(lights.size()) * transmittance(scene, shadow, medium, rs, counters);
 }
 
+Spectrum VolPathIntegrator::li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const {
+    if (!scene.has_media()) return m_surfaces.li(scene, ray, sampler, counters);
+    return li_in(scene, ray, nullptr, sampler, counters);
+}
+
 void VolPathIntegrator::li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
                                  RayCounters &counters, const Medium *medium) const {
     if (!scene.has_media()) return m_surfaces.li_batch(scene, rays, samplers, out, n, counters);

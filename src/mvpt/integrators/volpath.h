@@ -20,11 +20,9 @@ inline constexpr uint32_t VolDimsPerStep = 8;
 class VolPathIntegrator final : public Integrator {
 public:
     explicit VolPathIntegrator(const PathConfig &cfg) : m_cfg(cfg), m_surfaces(cfg) {}
-    Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override {
-        return li_in(scene, ray, nullptr, sampler, counters);
-    }
-    /// A scene without media is traced by the path tracer's wavefront (`surfaces`): the same
-    /// image in expectation, as in Mitsuba, at its speed.
+    /// A scene without media is traced by the path tracer (`surfaces`): the same image in
+    /// expectation, as in Mitsuba, at its wavefront's speed.
+    Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override;
     void li_batch(const Scene &scene, const Ray *rays, Sampler *samplers, Spectrum *out, size_t n,
                   RayCounters &counters, const Medium *medium = nullptr) const override;
     /// The path tracer of the same depths, for scenes without media (and multi-view path tracing).
