@@ -147,7 +147,8 @@ private:
     void render_multiview(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress);
     /// Multi-view path tracing: the method's context, accumulators and native-sample maps of
     /// every view; returns where each view's contributions land.
-    std::vector<SplatFootprint> prepare_multiview(const PathIntegrator *path, const MvConfig &cfg, bool adaptive);
+    std::vector<SplatFootprint> prepare_multiview(const PathIntegrator *path, const VolPathIntegrator *volpath,
+                                                  const MvConfig &cfg, bool adaptive);
     /// Multi-view path tracing: 16x16 tiles of every view's sample window, region by region.
     std::vector<Tile> multiview_tiles() const;
     /// Multi-view path tracing: one pass's sums into every view's accumulators.

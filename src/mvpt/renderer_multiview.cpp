@@ -77,15 +77,19 @@ bool run_in_chunks(tbb::task_arena &arena, size_t tiles, int threads, double sam
     return !abandoned.load();
 }
 
-/// The path tracer and method settings for a multi-view render of `scene`.
-std::pair<const PathIntegrator *, MvConfig> multiview_settings(const Scene &scene) {
-    if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator())) return {&mv->path(), mv->config()};
-    if (auto *pt = dynamic_cast<const PathIntegrator *>(&scene.integrator())) return {pt, MvConfig{}};
-    if (auto *vp = dynamic_cast<const VolPathIntegrator *>(&scene.integrator())) {
-        if (!scene.has_media()) return {&vp->surfaces(), MvConfig{}}; // volpath without media is path
-        throw std::runtime_error("multi-view path tracing does not render participating media yet (the scene has "
-                                 "them): render it with --method pt");
-    }
+/// The path tracers and method settings for a multi-view render of `scene`.
+struct MultiviewSettings {
+    const PathIntegrator *path = nullptr;
+    const VolPathIntegrator *volpath = nullptr; ///< set when the scene's media are rendered (§10)
+    MvConfig cfg;
+};
+
+MultiviewSettings multiview_settings(const Scene &scene) {
+    if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()))
+        return {&mv->path(), nullptr, mv->config()};
+    if (auto *pt = dynamic_cast<const PathIntegrator *>(&scene.integrator())) return {pt, nullptr, MvConfig{}};
+    if (auto *vp = dynamic_cast<const VolPathIntegrator *>(&scene.integrator())) // without media: the path tracer
+        return {&vp->surfaces(), scene.has_media() ? vp : nullptr, MvConfig{}};
     throw std::runtime_error("multi-view path tracing needs a 'path' or 'mvpath' integrator, the scene has '" +
                              scene.integrator().name() + "'");
 }
@@ -275,22 +279,23 @@ bool Renderer::adaptive_maps(const MvConfig &cfg) const {
 }
 
 std::vector<SplatFootprint> Renderer::prepare_multiview_render(MvConfig &cfg) {
-    const auto [path, config] = multiview_settings(m_scene);
-    cfg = config;
+    const MultiviewSettings settings = multiview_settings(m_scene);
+    cfg = settings.cfg;
     m_stats.method = "mvpt";
     m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
                                                               : (cfg.mis_selected_only ? "weighted-selected" : "weighted");
     m_mv_stats_before.assign(m_views.size(), MvViewStats{});
-    return prepare_multiview(path, cfg, adaptive_maps(cfg));
+    return prepare_multiview(settings.path, settings.volpath, cfg, adaptive_maps(cfg));
 }
 
-std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *path, const MvConfig &cfg,
-                                                        bool adaptive) {
+std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *path, const VolPathIntegrator *volpath,
+                                                        const MvConfig &cfg, bool adaptive) {
     const auto &cams = m_scene.cameras();
     // The method's context: views by slot, their seeds, the maps of the current pass.
     m_mv = MvContext{};
     m_mv.scene = &m_scene;
     m_mv.path = path;
+    m_mv.volpath = volpath;
     m_mv.cfg = cfg;
     // Moving shapes or lights: a shared sample keeps its time (§3 test 1).
     m_mv.scene_moves = m_scene.is_animated();
@@ -317,7 +322,8 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     }
     m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
     m_mv.rig.reset();
-    if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2) {
+    // (Through media every camera segment is walked for its transmittance: no cells.)
+    if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2 && !volpath) {
         // Lens points of every view: the corners of the square around each lens disk.
         std::vector<Point3f> lens;
         for (const MvView &v : m_mv.views)

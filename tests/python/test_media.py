@@ -223,10 +223,15 @@ def test_path_integrator_ignores_media_and_says_so():
     assert np.array_equal(ra.images["0"], rb.images["0"])
 
 
-def test_multiview_refuses_media():
-    s = mvpt.load_string(fog_scene(homogeneous('<float name="sigma_t" value="2"/>')))
-    with pytest.raises(RuntimeError, match="participating media.*--method pt"):
-        mvpt.render(s, spp=1, method="mvpt")
+def test_mvpath_ignores_media_and_says_so():
+    """`mvpath` is the path tracer's multi-view form: it ignores media as `path` does, and says so;
+    `volpath` renders them with either method (test_mvpt_media.py)."""
+    xml = fog_scene(homogeneous('<float name="sigma_t" value="2"/>'), integrator="mvpath")
+    s = mvpt.load_string(xml)
+    assert any("'mvpath' integrator ignores" in n and "volpath" in n for n in s.notes)
+    no_medium = mvpt.load_string(xml.replace('<medium type="homogeneous" name="interior"><float name="sigma_t" value="2"/></medium>', ""))
+    ra, rb = mvpt.render(s, spp=2, seed=1), mvpt.render(no_medium, spp=2, seed=1)
+    assert np.array_equal(ra.images["0"], rb.images["0"])
 
 
 # ---------------------------------------------------------------- bad input

@@ -1,7 +1,10 @@
 #include "mv_sample.h"
 
 #include "mv_candidates.h"
+#include "mv_media.h"
 #include "mv_mixture.h"
+#include "transmittance.h"
+#include "volpath.h"
 
 #include "../core/sampler_batch.h"
 #include "../core/warp.h"
@@ -272,7 +275,8 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
     const Bsdf &bsdf = *si.shape->bsdf;
     gather_shifts(ctx, slot, pixel, geo.film, y, bsdf, si, sc, nullptr);
     RayCounters counters;
-    trace_visibility(ctx, sc, si, time, false, counters, nullptr);
+    if (ctx.volpath) mv_media_visibility(ctx, sc, si, Spectrum(1.f), false, nullptr, counters, nullptr);
+    else trace_visibility(ctx, sc, si, time, false, counters, nullptr);
     std::vector<int> targets;
     for (size_t i = 0; i < sc.cand.size; ++i)
         if (sc.visible[i]) targets.push_back(int(i));
@@ -284,7 +288,7 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
 void MvPendingSamples::clear() {
     samples.clear();
     entries = 0;
-    rays.clear(), states.clear(), samplers.clear();
+    rays.clear(), states.clear(), samplers.clear(), media.clear();
     shadow_rays.clear();
 }
 
@@ -366,7 +370,14 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     ++counters.camera_rays;
     ++counters.rays;
     SurfaceInteraction &si = prim.si[i_prim];
-    const bool hit = prim.hit[i_prim] != 0;
+    bool hit = prim.hit[i_prim] != 0;
+    // Through media (§10) the shared vertex is the first surface that is not null.
+    MvMediaVertex media_y;
+    if (ctx.volpath) {
+        media_y = mv_media_first_vertex(ctx, slot_l, ray, sampler, counters);
+        hit = media_y.found;
+        if (hit) si = media_y.si;
+    }
     // The next sample's rig cells start loading (trace_visibility consults them unless only
     // the selected views are traced).
     if (ctx.rig && !ctx.cfg.mis_selected_only && i_prim + 1 < prim.size() && prim.hit[i_prim + 1]) {
@@ -384,12 +395,18 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         st_l.rays += counters.rays + counters.shadow_rays - rays_before;
     };
     const Light *env = scene.environment();
+    // Where no view can share the sample through media, it is the volumetric path tracer's.
+    const bool unshared = !hit || !si.shape->bsdf->has_smooth() || max_depth <= 1 || ctx.views.size() < 2;
+    if (ctx.volpath && unshared) {
+        native_only(ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters));
+        return;
+    }
     if (!hit) {
         native_only(env && !pc.hide_emitters ? env->eval_environment(ray.d) : Spectrum(0.f));
         return;
     }
     const Bsdf &bsdf = *si.shape->bsdf;
-    if (!bsdf.has_smooth() || max_depth <= 1 || ctx.views.size() < 2) {
+    if (unshared) {
         // Purely specular (or null) first vertex, or no bounce at all: test 4 of §3 fails for
         // every view, the path is the ordinary path tracer's.
         PathState state;
@@ -427,7 +444,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         }
     // The balance estimator needs the visibility of every candidate (it enters D); the
     // published variant only that of the selected ones.
-    trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
+    if (ctx.volpath)
+        mv_media_visibility(ctx, sc, si, media_y.tr, ctx.cfg.mis_selected_only, &sampler, counters, &st_l);
+    else
+        trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
     auto &sharing = sc.sharing;
     grow(sharing, m);
@@ -472,9 +492,17 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee, pdf.data());
             const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
             if (max_over_views(f_nee, ns) > 0.f) { // some view reflects light this way
-                nee_shadow = int32_t(pending.shadow_rays.size());
-                pending.shadow_rays.push_back(std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p));
-                ++counters.shadow_rays;
+                const Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+                if (ctx.volpath) { // the transmittance to the light, now
+                    sampler.set_dimension(DimSharedShadow);
+                    RandomStream rs = sampler.next_stream();
+                    weight *= shadow_transmittance(scene, shadow, mv_medium_towards(si, ls.d, media_y.medium), rs,
+                                                   counters);
+                } else { // a shadow ray, traced with the tile's others
+                    nee_shadow = int32_t(pending.shadow_rays.size());
+                    pending.shadow_rays.push_back(shadow);
+                    ++counters.shadow_rays;
+                }
                 nee_weight = weight * (ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns)));
             }
         }
@@ -488,7 +516,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     MixtureSample mix =
         sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
-    bool valid_after = valid || !(bs.sampled_type & BsdfNull);
+    // (Validity is the path tracer's rule: the volumetric one keeps every path, as Mitsuba's.)
+    bool valid_after = valid || !(bs.sampled_type & BsdfNull) || ctx.volpath;
     MvPendingSamples::Sample rec;
     rec.key = key;
     rec.valid = valid_after;
@@ -517,7 +546,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             state.prev_bsdf_delta = mix.delta;
             state.valid = valid_after;
             rec.suffix = int32_t(pending.rays.size());
-            pending.rays.push_back(si.spawn_ray(si.to_world(bs.wo)));
+            const Vec3f wo = si.to_world(bs.wo);
+            pending.rays.push_back(si.spawn_ray(wo));
+            if (ctx.volpath) pending.media.push_back(mv_medium_towards(si, wo, media_y.medium));
             pending.states.push_back(state);
             pending.samplers.push_back(sampler);
         }
@@ -535,6 +566,16 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     rec.b_scale = b_scale;
     if (mix.delta) rec.delta_bounce = mix.weight * b_scale;
     rec.e = le_y * (1.f / n_l);
+    if (ctx.volpath) { // each view's camera segment (§10): its transmittance, and l's in-scattering
+        for (size_t i = 0; i < ns; ++i) {
+            const Spectrum &tr = sc.tr[sharing[i]];
+            f_nee[i] *= tr, fs[i] *= tr;
+        }
+        if (mix.delta) rec.delta_bounce *= sc.tr[sharing[mix.view]];
+        const Spectrum in_scattered =
+            ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters, VolPathPart::ScatteredInMedium);
+        rec.e = (le_y * media_y.tr + in_scattered) * (1.f / n_l);
+    }
     rec.hash = sampler.sample_hash();
     int *const slot_out = pending.slot.data() + first;
     uint32_t *const pixel_out = pending.pixel.data() + first;

@@ -19,7 +19,9 @@
 
 namespace mvpt {
 
+class Medium;
 class Scene;
+class VolPathIntegrator;
 
 /// Sampler dimensions of the multi-view decisions at y, far above the path's per-vertex
 /// blocks: the choice of the view whose lobe samples the bounce, and one selection draw
@@ -47,6 +49,8 @@ struct MvViewStats {
 struct MvContext {
     const Scene *scene = nullptr;
     const PathIntegrator *path = nullptr;
+    /// The volumetric path tracer when the scene's media are rendered (§10), else null.
+    const VolPathIntegrator *volpath = nullptr;
     MvConfig cfg;
     std::vector<MvView> views;                 ///< the rendered views, by slot
     std::vector<SampleWindow> windows;         ///< where each view takes native samples, by slot
@@ -89,6 +93,7 @@ struct MvScratch {
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
     std::vector<float> view_pdf;
+    std::vector<Spectrum> tr; ///< candidates' camera-segment transmittance (media, §10)
 };
 
 /// The camera samples of a tile's native samples (§2) and their first hits: the camera rays
@@ -150,6 +155,7 @@ struct MvPendingSamples {
     std::vector<Ray> rays;
     std::vector<PathState> states;
     std::vector<Sampler> samplers;
+    std::vector<const Medium *> media; ///< the medium each suffix starts in (scenes with media)
     std::vector<Spectrum> radiance;
     std::vector<uint8_t> valid;
     /// The shared NEE's shadow rays, traced as packets with the suffixes; results.

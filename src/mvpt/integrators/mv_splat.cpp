@@ -1,6 +1,7 @@
 // The end of a tile's native samples (§7): their suffixes traced as one wavefront, their
 // shared NEE's shadow rays as packets, and each sharing view's contribution W·L splatted.
 #include "mv_sample.h"
+#include "volpath.h"
 
 #include "../core/multi_isa.h"
 #include "../scene/scene.h"
@@ -92,7 +93,13 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
     pending.radiance.resize(n_suffix);
     pending.valid.resize(n_suffix);
     const uint64_t rays_before = counters.rays + counters.shadow_rays;
-    if (n_suffix > 0)
+    if (ctx.volpath) // through media: one path at a time
+        for (size_t i = 0; i < n_suffix; ++i) {
+            pending.radiance[i] = ctx.volpath->trace(*ctx.scene, pending.rays[i], pending.media[i], pending.states[i],
+                                                     pending.samplers[i], counters);
+            pending.valid[i] = 1;
+        }
+    else if (n_suffix > 0)
         ctx.path->trace_batch(*ctx.scene, pending.rays.data(), pending.states.data(), pending.samplers.data(),
                               pending.radiance.data(), pending.valid.data(), n_suffix, counters);
     stats[slot].rays += counters.rays + counters.shadow_rays - rays_before;
@@ -104,7 +111,7 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
     for (const MvPendingSamples::Sample &rec : pending.samples) {
         const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
         const bool bounce = !suffix.is_black();
-        const MvSplatTerms t{rec.nee_weight, suffix, rec.b_scale, rec.nee && rec.shadow >= 0 && !pending.shadow_blocked[rec.shadow],
+        const MvSplatTerms t{rec.nee_weight, suffix, rec.b_scale, rec.nee && (rec.shadow < 0 || !pending.shadow_blocked[rec.shadow]),
                             bounce && rec.delta_view < 0, rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
         const uint32_t first = rec.first, n = rec.count;
         const Spectrum *f_nee = pending.f_nee.data() + first, *f_bounce = pending.f_bounce.data() + first;

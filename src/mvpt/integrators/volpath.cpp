@@ -6,41 +6,11 @@
 #include "../render/shape.h"
 #include "../scene/plugin.h"
 #include "../scene/scene.h"
+#include "transmittance.h"
 
 #include <climits>
 
 namespace mvpt {
-
-namespace {
-
-/// Longest chain of null surfaces a shadow ray crosses before it counts as blocked.
-constexpr int MaxNullCrossings = 256;
-
-/// Transmittance along `ray` (unit direction, over [0, ray.tmax)) through media and null
-/// surfaces, starting in `medium`; zero once a surface that is not null blocks it.
-Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, RandomStream &rs, RayCounters &counters) {
-    Spectrum tr(1.f);
-    const Point3f target = ray.at(ray.tmax);
-    const bool finite = std::isfinite(ray.tmax);
-    for (int crossing = 0; crossing < MaxNullCrossings; ++crossing) {
-        SurfaceInteraction si;
-        ++counters.shadow_rays;
-        const bool hit = scene.intersect(ray, si);
-        if (medium) tr *= medium->transmittance(ray, hit ? si.t : ray.tmax, rs);
-        if (!hit) return tr;
-        tr *= si.shape->bsdf->null_transmission(si);
-        if (tr.is_black()) return tr;
-        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
-        si.time = ray.time;
-        Point3f o = si.offset_p(ray.d);
-        float rest = finite ? dot(target - o, ray.d) : Infinity;
-        if (!(rest > 0.f)) return tr;
-        ray = Ray{o, ray.d, 0.f, rest, ray.time};
-    }
-    return Spectrum(0.f);
-}
-
-} // namespace
 
 Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const SurfaceInteraction *si,
                                            const Medium *medium, float time, Sampler &sampler, RayCounters &counters,
@@ -62,7 +32,7 @@ Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const 
     } else {
         shadow = Ray{p, ls.d, 0.f, std::isinf(ls.dist) ? Infinity : ls.dist * (1.f - ShadowEpsilon), time};
     }
-    return weight * float(lights.size()) * transmittance(scene, shadow, medium, rs, counters);
+    return weight * float(lights.size()) * shadow_transmittance(scene, shadow, medium, rs, counters);
 }
 
 Spectrum VolPathIntegrator::li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const {
@@ -77,23 +47,32 @@ void VolPathIntegrator::li_batch(const Scene &scene, const Ray *rays, Sampler *s
 }
 
 Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler,
-                                  RayCounters &counters) const {
-    const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
-    const BsdfContext ctx;
+                                  RayCounters &counters, VolPathPart part) const {
     // Start at the near plane: media fill the segment the camera sees.
     ray.o = ray.at(ray.tmin), ray.tmax -= ray.tmin, ray.tmin = 0.f;
+    PathState start;
+    start.prev_p = ray.o;
+    return trace(scene, ray, medium, start, sampler, counters, part);
+}
 
-    Spectrum result(0.f), throughput(1.f);
-    float eta = 1.f;
-    uint32_t depth = 0; // scattering events so far (crossing a null surface is none)
+Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *medium, const PathState &start,
+                                  Sampler &sampler, RayCounters &counters, VolPathPart part) const {
+    const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
+    const BsdfContext ctx;
+    const bool scattered_only = part == VolPathPart::ScatteredInMedium;
+    const uint32_t dim0 = scattered_only ? DimInScatter : DimCameraEnd;
+
+    Spectrum result(0.f), throughput = start.throughput;
+    float eta = start.eta;
+    uint32_t depth = start.depth; // scattering events so far (crossing a null surface is none)
     // The last scattering event and the density of the direction it sampled (MIS on emitters
     // hit); `prev_delta`: that density is a delta (or the camera's), so the hit counts in full.
-    Point3f prev_p = ray.o;
-    float prev_pdf = 1.f;
-    bool prev_delta = true;
+    Point3f prev_p = start.prev_p;
+    float prev_pdf = start.prev_bsdf_pdf;
+    bool prev_delta = start.prev_bsdf_delta;
 
-    for (uint32_t step = 0;; ++step) {
-        sampler.set_dimension(DimCameraEnd + step * VolDimsPerStep);
+    for (uint32_t step = start.depth;; ++step) {
+        sampler.set_dimension(dim0 + step * VolDimsPerStep);
         // ---------------- Russian roulette, as Mitsuba's volpath: before each step ----------------
         float u_rr = sampler.next_1d();
         if (throughput.is_black() || depth >= max_depth) break;
@@ -129,13 +108,16 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
                         result += throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), f));
                     }
                 }
-                sampler.set_dimension(DimCameraEnd + step * VolDimsPerStep + 6);
+                sampler.set_dimension(dim0 + step * VolDimsPerStep + 6);
                 Vec3f wo = phase.sample(wi, sampler.next_2d());
                 prev_p = p, prev_pdf = phase.eval(wi, wo), prev_delta = !medium->sample_emitters();
                 ray = Ray{p, wo, 0.f, Infinity, ray.time};
                 continue;
             }
         }
+
+        // The part without scattering ends at the first surface that is not null.
+        if (scattered_only && depth == 0 && (!hit || si.shape->bsdf->flags() != BsdfNull)) break;
 
         // ---------------- Emission (hit by BSDF or phase sampling, MIS against NEE) ----------------
         const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
@@ -160,7 +142,7 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
         }
 
         // ---------------- BSDF sampling ----------------
-        sampler.set_dimension(DimCameraEnd + step * VolDimsPerStep + 6);
+        sampler.set_dimension(dim0 + step * VolDimsPerStep + 6);
         float u_lobe = sampler.next_1d();
         auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, sampler.next_2d());
         const bool scattered = !(bs.sampled_type & BsdfNull); // a failed sample counts too, as in Mitsuba

@@ -16,6 +16,18 @@ struct LightSample;
 /// Sample dimensions per step of a volumetric path: roulette, free flight and its stream,
 /// emitter choice, point and the shadow ray's stream, lobe, direction (phase: at the lobe's).
 inline constexpr uint32_t VolDimsPerStep = 8;
+/// Where the steps of VolPathPart::ScatteredInMedium start: clear of the blocks of a path
+/// that continues from a surface, and of multi-view path tracing's draws at its shared vertex.
+inline constexpr uint32_t DimInScatter = 1u << 24;
+
+/// Which part of a volumetric path's radiance `VolPathIntegrator::trace` estimates.
+enum class VolPathPart {
+    All,
+    /// Only paths that scatter in a medium before the first surface that is not null (the
+    /// in-scattering along a camera segment; multi-view path tracing shares the rest, §10).
+    /// Emitters on the null surfaces crossed before it count too.
+    ScatteredInMedium,
+};
 
 class VolPathIntegrator final : public Integrator {
 public:
@@ -27,8 +39,14 @@ public:
                   RayCounters &counters, const Medium *medium = nullptr) const override;
     /// The path tracer of the same depths, for scenes without media (and multi-view path tracing).
     const PathIntegrator &surfaces() const { return m_surfaces; }
-    /// Radiance along a camera ray that starts in `medium` (null: vacuum).
-    Spectrum li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler, RayCounters &counters) const;
+    /// Radiance along a camera ray that starts in `medium` (null: vacuum), from its near plane.
+    Spectrum li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler, RayCounters &counters,
+                   VolPathPart part = VolPathPart::All) const;
+    /// Radiance carried back along `ray` (from its origin, in `medium`) by the path that
+    /// continues from `start` (its depth, eta, throughput and the previous vertex's sampling
+    /// density; `start.valid` is not used). Its steps' sampler blocks start at its depth.
+    Spectrum trace(const Scene &scene, Ray ray, const Medium *medium, const PathState &start, Sampler &sampler,
+                   RayCounters &counters, VolPathPart part = VolPathPart::All) const;
     std::string name() const override { return "volpath"; }
 
 private:

@@ -99,9 +99,10 @@ void Scene::build(const SceneTree &tree) {
     rtcCommitScene(m_scene);
     for (auto &shape : m_shapes) m_has_media |= shape->is_medium_transition();
     for (auto &cam : m_cameras) m_has_media |= cam->medium != nullptr;
-    if (m_has_media && m_integrator->name() == "path")
-        m_notes.push_back("the scene has participating media, which the 'path' integrator ignores (as Mitsuba 3's "
-                          "does): use 'volpath' to render them");
+    if (m_has_media && (m_integrator->name() == "path" || m_integrator->name() == "mvpath"))
+        m_notes.push_back("the scene has participating media, which the '" + m_integrator->name() +
+                          "' integrator ignores (as Mitsuba 3's 'path' does): use 'volpath' to render them (with "
+                          "either method)");
 
     Point3f center = m_bounds.valid() ? m_bounds.center() : Point3f(0.f);
     float radius = m_bounds.valid() ? norm(m_bounds.max - center) : 1.f;

@@ -1,0 +1,68 @@
+#include "mv_media.h"
+
+#include "transmittance.h"
+
+#include "../render/camera.h"
+#include "../render/shape.h"
+#include "../scene/scene.h"
+
+namespace mvpt {
+
+MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &ray, Sampler &sampler,
+                                    RayCounters &counters) {
+    const MvView &v = ctx.views[slot];
+    sampler.set_dimension(DimCameraSegmentBase + v.scene_index);
+    RandomStream rs = sampler.next_stream();
+    // From the near plane, as the volumetric path tracer's camera rays.
+    Ray r{ray.at(ray.tmin), ray.d, 0.f, ray.tmax - ray.tmin, ray.time};
+    SegmentWalk w = walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters);
+    MvMediaVertex out;
+    out.found = w.stopped && w.si.is_valid();
+    out.si = w.si;
+    out.tr = w.tr;
+    out.medium = w.medium;
+    return out;
+}
+
+void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, Spectrum tr_native,
+                         bool selected_only, Sampler *sampler, RayCounters &counters, MvViewStats *st_l) {
+    const MvCandidates &c = sc.cand;
+    const size_t m = c.size;
+    sc.tr.resize(std::max<size_t>(m, 1));
+    sc.tr[0] = tr_native;
+    for (size_t i = 1; i < m; ++i) {
+        sc.tr[i] = Spectrum(1.f);
+        if (selected_only && !sc.selected[i]) {
+            sc.visible[i] = 0;
+            if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
+            continue;
+        }
+        const MvView &v = ctx.views[c.slot[i]];
+        // The segment from k's near plane (vis from y towards its lens point) to just before y.
+        const Vec3f to_lens = c.lens_point(i) - si.p;
+        const float dist = norm(to_lens), vis = c.vis[i];
+        RandomStream rs(0);
+        if (sampler) {
+            sampler->set_dimension(DimCameraSegmentBase + v.scene_index);
+            rs = sampler->next_stream();
+        }
+        bool visible = true;
+        if (vis > 0.f && dist > 0.f && std::isfinite(dist)) {
+            const Vec3f d = to_lens / dist;
+            Ray r{si.p + d * vis, -d, 0.f, vis * (1.f - ShadowEpsilon), si.time};
+            SegmentWalk w = walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters);
+            visible = !w.stopped;
+            sc.tr[i] = w.tr;
+        }
+        sc.visible[i] = visible;
+        if (!st_l) continue;
+        if (!visible) ++st_l->rejected[int(ShiftTest::Visibility)];
+        else if (!selected_only && !sc.selected[i]) ++st_l->rejected[int(ShiftTest::Selection)];
+    }
+}
+
+const Medium *mv_medium_towards(const SurfaceInteraction &si, Vec3f d, const Medium *arrival) {
+    return si.shape->is_medium_transition() ? si.shape->target_medium(d, si.n) : arrival;
+}
+
+} // namespace mvpt

@@ -1,0 +1,44 @@
+// Multi-view path tracing through participating media (docs/multiview-path-tracing.md §10):
+// the shared vertex is the first surface a camera ray meets that is not null; each view's
+// contribution is multiplied by the transmittance of its own camera segment, and the
+// in-scattering along the native camera segment is the native view's own radiance.
+#pragma once
+
+#include "mv_sample.h"
+
+namespace mvpt {
+
+class Medium;
+
+/// The dimension (plus the view's scene index) whose stream estimates the transmittance of
+/// a view's camera segment to the shared vertex.
+inline constexpr uint32_t DimCameraSegmentBase = 1u << 22;
+/// The dimension of the shared next-event estimate's stream (the transmittance to the light):
+/// in the shared vertex's block, after the path tracer's draws there.
+inline constexpr uint32_t DimSharedShadow = DimCameraEnd + 5;
+
+/// The first surface along a native camera ray that is not null.
+struct MvMediaVertex {
+    bool found = false;     ///< false: the ray leaves the scene (or crosses too many null surfaces)
+    SurfaceInteraction si;
+    Spectrum tr{1.f};       ///< the transmittance from the near plane to it
+    const Medium *medium = nullptr; ///< the medium the ray is in when it arrives
+};
+
+/// Walks view `slot`'s camera `ray` through media and null surfaces from its near plane.
+MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &ray, Sampler &sampler,
+                                    RayCounters &counters);
+
+/// Test 5 of §3 through media: candidate i sees the shared vertex `si` when no surface that is
+/// not null lies on its camera segment (from its near plane); fills sc.visible and, for the
+/// visible ones, the segment's transmittance sc.tr[i] (sc.tr[0], the native view's, is
+/// `tr_native`). With `selected_only`, unselected candidates are not traced. `sampler` (or
+/// null: a fixed stream, for the densities alone) gives each view's transmittance stream.
+void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, Spectrum tr_native,
+                         bool selected_only, Sampler *sampler, RayCounters &counters, MvViewStats *st_l);
+
+/// The medium a ray leaving the shared vertex `si` in world direction `d` enters: the shape's
+/// when it bounds media, else `arrival`, the one the camera ray was in.
+const Medium *mv_medium_towards(const SurfaceInteraction &si, Vec3f d, const Medium *arrival);
+
+} // namespace mvpt

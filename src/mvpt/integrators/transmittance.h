@@ -1,0 +1,49 @@
+// Segments through participating media and null surfaces (docs/media.md): the transmittance
+// of a volumetric path's shadow rays, and the camera segments that multi-view path tracing
+// shares a surface vertex along (docs/multiview-path-tracing.md §10).
+#pragma once
+
+#include "../core/sampler.h"
+#include "../render/interaction.h"
+#include "integrator.h"
+
+namespace mvpt {
+
+class Medium;
+class Scene;
+
+/// Which surfaces a segment passes.
+enum class NullRule {
+    /// Those that let light through (null_transmission > 0; a mask keeps 1 - opacity): shadow rays.
+    Transmission,
+    /// Only surfaces whose BSDF is `null`: camera segments of multi-view path tracing, whose
+    /// shared vertex is the first surface where a path could scatter (§10).
+    PureNull,
+};
+
+/// Where a walk along a segment ended.
+struct SegmentWalk {
+    /// A surface the rule does not pass lies on the segment (`si`), or the walk crossed too
+    /// many null surfaces (then `si` is invalid).
+    bool stopped = false;
+    SurfaceInteraction si;
+    /// Transmittance from the start to where the walk ended (an unbiased estimate in
+    /// heterogeneous media); zero when stopped under NullRule::Transmission.
+    Spectrum tr{1.f};
+    /// The medium the segment is in where the walk ended.
+    const Medium *medium = nullptr;
+};
+
+/// Walks `ray` (unit direction) over [0, ray.tmax) from its origin, starting in `medium`,
+/// through the surfaces `rule` passes.
+SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, NullRule rule, RandomStream &rs,
+                         RayCounters &counters);
+
+/// Transmittance along a shadow ray (NullRule::Transmission): zero when blocked.
+inline Spectrum shadow_transmittance(const Scene &scene, const Ray &ray, const Medium *medium, RandomStream &rs,
+                                     RayCounters &counters) {
+    SegmentWalk w = walk_segment(scene, ray, medium, NullRule::Transmission, rs, counters);
+    return w.stopped ? Spectrum(0.f) : w.tr;
+}
+
+} // namespace mvpt
