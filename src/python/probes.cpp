@@ -4,6 +4,7 @@
 #include "mvpt/integrators/mv_mixture.h"
 #include "mvpt/integrators/mv_selection.h"
 #include "mvpt/render/bsdf.h"
+#include "mvpt/render/medium.h"
 #include "mvpt/render/phase.h"
 #include "mvpt/scene/xml_parser.h"
 
@@ -209,9 +210,39 @@ struct PhaseProbe {
     }
 };
 
+/// A medium from a `<medium>` snippet: its forced-scattering draws along the +z axis.
+struct MediumProbe {
+    std::shared_ptr<Medium> medium;
+
+    explicit MediumProbe(const std::string &xml) {
+        medium = std::static_pointer_cast<Medium>(object_from_xml(xml, "medium", "."));
+    }
+
+    /// n draws of sample_within over [0, t_end): rows (t, weight r, g, b); t = inf where no
+    /// scattering was drawn. Raises where the medium cannot force scattering.
+    OutArray sample_within(float t_end, size_t n, uint32_t seed) {
+        OutArray out = out_array(n, 4);
+        Sampler s(SamplerKind::Independent, seed);
+        const Ray ray{Point3f(0.f), Vec3f(0.f, 0.f, 1.f), 0.f, t_end, 0.f};
+        for (size_t i = 0; i < n; ++i) {
+            s.start(0, 0, 0, uint32_t(i));
+            MediumSample ms;
+            if (!medium->sample_within(ray, t_end, s.next_1d(), ms))
+                throw std::invalid_argument("this medium cannot force scattering");
+            float *row = out.data() + 4 * i;
+            row[0] = ms.scattered ? ms.t : INFINITY;
+            for (int c = 0; c < 3; ++c) row[1 + c] = ms.scattered ? ms.weight[c] : 0.f;
+        }
+        return out;
+    }
+};
+
 } // namespace
 
 void bind_probes(nb::module_ &m) {
+    nb::class_<MediumProbe>(m, "MediumProbe")
+        .def(nb::init<const std::string &>(), "xml"_a)
+        .def("sample_within", &MediumProbe::sample_within, "t_end"_a, "n"_a, "seed"_a = 0);
     nb::class_<PhaseProbe>(m, "PhaseProbe")
         .def(nb::init<const std::string &>(), "xml"_a)
         .def("sample", &PhaseProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0)

@@ -57,6 +57,31 @@ def test_henyey_greenstein_values():
     assert probe.eval(*wi, -wi[None]).item() == pytest.approx((1 + g) / (4 * np.pi * (1 - g) ** 2), rel=1e-5)
 
 
+# ---------------------------------------------------------------- forced scattering
+
+def test_forced_scattering_distances_and_weights():
+    """Medium::sample_within (the in-scattering of multi-view path tracing, design §10): the
+    distances follow the channel mixture of exponentials truncated to [0, t_end)
+    (Kolmogorov-Smirnov), a channel without extinction never scatters (its third of the draws
+    scatters nowhere), and each channel's mean weight is the albedo times its probability of
+    scattering before t_end (z-test; exactly zero without extinction)."""
+    sigma, albedo, t_end, n = np.array([2.0, 0.5, 0.0]), 0.7, 1.3, 200_000
+    probe = _core.MediumProbe('<medium type="homogeneous"><rgb name="sigma_t" value="2, 0.5, 0"/>'
+                              f'<float name="albedo" value="{albedo}"/></medium>')
+    r = probe.sample_within(t_end, n, 4).astype(np.float64)
+    scattered = np.isfinite(r[:, 0])
+    assert abs(scattered.mean() - 2 / 3) < 4 * np.sqrt(2 / 9 / n)
+    t = r[scattered, 0]
+    assert t.min() >= 0 and t.max() < t_end
+    mass = 1 - np.exp(-sigma[:2] * t_end)
+    p = stats.kstest(t, lambda x: np.mean([(1 - np.exp(-s * x)) / m for s, m in zip(sigma[:2], mass)], axis=0)).pvalue
+    assert p > 1e-3, p
+    expected = albedo * (1 - np.exp(-sigma * t_end))
+    mean, se = r[:, 1:].mean(0), r[:, 1:].std(0) / np.sqrt(n)
+    assert np.all(np.abs(mean - expected) <= 4 * se), (mean, expected, se)
+    assert np.all(r[:, 3] == 0)
+
+
 # ---------------------------------------------------------------- furnace tests
 
 def furnace_scene(medium, sensor_inside=False):

@@ -1,6 +1,6 @@
 #include "mv_media.h"
 
-#include "transmittance.h"
+#include "volpath.h"
 
 #include "../render/camera.h"
 #include "../render/shape.h"
@@ -17,11 +17,28 @@ MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &r
     Ray r{ray.at(ray.tmin), ray.d, 0.f, ray.tmax - ray.tmin, ray.time};
     SegmentWalk w = walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters);
     MvMediaVertex out;
+    out.walk = w;
+    out.near = r;
     out.found = w.stopped && w.si.is_valid();
     out.si = w.si;
     out.tr = w.tr;
     out.medium = w.medium;
     return out;
+}
+
+Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const MvMediaVertex &y, Sampler &sampler,
+                          RayCounters &counters) {
+    const SegmentWalk &w = y.walk;
+    if (w.medium_pieces == 0 && !w.crossed_emitter) return Spectrum(0.f); // nothing on the segment
+    if (w.medium_pieces == 1 && !w.crossed_emitter) {
+        // Vacuum and null surfaces elsewhere on the segment: the piece's start is reached.
+        const Ray piece{y.near.at(w.piece_t0), y.near.d, 0.f, w.piece_t1 - w.piece_t0, y.near.time};
+        bool drawn = false;
+        Spectrum L = ctx.volpath->in_scattering(*ctx.scene, piece, *w.piece_medium, sampler, counters, drawn);
+        if (drawn) return L;
+    }
+    return ctx.volpath->li_in(*ctx.scene, ray, ctx.views[slot].camera->medium.get(), sampler, counters,
+                              VolPathPart::ScatteredInMedium);
 }
 
 void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, Spectrum tr_native,

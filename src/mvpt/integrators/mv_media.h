@@ -5,6 +5,7 @@
 #pragma once
 
 #include "mv_sample.h"
+#include "transmittance.h"
 
 namespace mvpt {
 
@@ -23,11 +24,19 @@ struct MvMediaVertex {
     SurfaceInteraction si;
     Spectrum tr{1.f};       ///< the transmittance from the near plane to it
     const Medium *medium = nullptr; ///< the medium the ray is in when it arrives
+    SegmentWalk walk;               ///< the walk from the near plane (its media pieces)
+    Ray near;                       ///< the walked ray: the camera ray from its near plane
 };
 
 /// Walks view `slot`'s camera `ray` through media and null surfaces from its near plane.
 MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &ray, Sampler &sampler,
                                     RayCounters &counters);
+
+/// The native view's in-scattering along its camera segment to the shared vertex y (§10):
+/// a forced scattering where the segment has one piece in a medium that can draw it, else
+/// the volumetric path tracer's ScatteredInMedium part.
+Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const MvMediaVertex &y, Sampler &sampler,
+                          RayCounters &counters);
 
 /// Test 5 of §3 through media: candidate i sees the shared vertex `si` when no surface that is
 /// not null lies on its camera segment (from its near plane); fills sc.visible and, for the

@@ -572,8 +572,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             f_nee[i] *= tr, fs[i] *= tr;
         }
         if (mix.delta) rec.delta_bounce *= sc.tr[sharing[mix.view]];
-        const Spectrum in_scattered =
-            ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters, VolPathPart::ScatteredInMedium);
+        const Spectrum in_scattered = mv_in_scattering(ctx, slot_l, ray, media_y, sampler, counters);
         rec.e = (le_y * media_y.tr + in_scattered) * (1.f / n_l);
     }
     rec.hash = sampler.sample_hash();

@@ -15,13 +15,19 @@ constexpr int MaxNullCrossings = 256;
 SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, NullRule rule, RandomStream &rs,
                          RayCounters &counters) {
     SegmentWalk w;
-    const Point3f target = ray.at(ray.tmax);
+    const Point3f target = ray.at(ray.tmax), origin = ray.o;
     const bool finite = std::isfinite(ray.tmax);
     for (int crossing = 0; crossing < MaxNullCrossings; ++crossing) {
         SurfaceInteraction si;
         ++counters.shadow_rays;
         const bool hit = scene.intersect(ray, si);
-        if (medium) w.tr *= medium->transmittance(ray, hit ? si.t : ray.tmax, rs);
+        if (medium) {
+            w.tr *= medium->transmittance(ray, hit ? si.t : ray.tmax, rs);
+            ++w.medium_pieces;
+            w.piece_medium = medium;
+            w.piece_t0 = dot(ray.o - origin, ray.d);
+            w.piece_t1 = w.piece_t0 + (hit ? si.t : ray.tmax);
+        }
         w.medium = medium;
         if (!hit) return w;
         const Bsdf &bsdf = *si.shape->bsdf;
@@ -31,6 +37,7 @@ SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, Null
             if (rule == NullRule::Transmission) w.tr = Spectrum(0.f);
             return w;
         }
+        w.crossed_emitter |= si.shape->emitter != nullptr;
         if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
         si.time = ray.time;
         Point3f o = si.offset_p(ray.d);

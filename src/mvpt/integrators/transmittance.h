@@ -32,6 +32,12 @@ struct SegmentWalk {
     Spectrum tr{1.f};
     /// The medium the segment is in where the walk ended.
     const Medium *medium = nullptr;
+    /// The pieces of the segment inside a medium: how many, and the last one's medium and its
+    /// extent [t0, t1) along the walked ray; whether a null surface crossed is an emitter.
+    int medium_pieces = 0;
+    const Medium *piece_medium = nullptr;
+    float piece_t0 = 0.f, piece_t1 = 0.f;
+    bool crossed_emitter = false;
 };
 
 /// Walks `ray` (unit direction) over [0, ray.tmax) from its origin, starting in `medium`,

@@ -35,6 +35,52 @@ Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const 
     return weight * float(lights.size()) * shadow_transmittance(scene, shadow, medium, rs, counters);
 }
 
+Spectrum VolPathIntegrator::scatter_in_medium(const Scene &scene, const Medium &medium, const Spectrum &throughput,
+                                              uint32_t block, Sampler &sampler, RayCounters &counters, Ray &ray,
+                                              float &pdf, bool &delta) const {
+    const Point3f p = ray.o;
+    const Vec3f wi = -ray.d;
+    const PhaseFunction &phase = medium.phase();
+    Spectrum result(0.f);
+    if (medium.sample_emitters()) {
+        sampler.set_dimension(block + 3);
+        LightSample ls;
+        Spectrum le = sample_emitter(scene, p, nullptr, &medium, ray.time, sampler, counters, ls);
+        if (!le.is_black()) {
+            float f = phase.eval(wi, ls.d);
+            result = throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), f));
+        }
+    }
+    sampler.set_dimension(block + 6);
+    Vec3f wo = phase.sample(wi, sampler.next_2d());
+    pdf = phase.eval(wi, wo), delta = !medium.sample_emitters();
+    ray = Ray{p, wo, 0.f, Infinity, ray.time};
+    return result;
+}
+
+Spectrum VolPathIntegrator::in_scattering(const Scene &scene, const Ray &ray, const Medium &medium, Sampler &sampler,
+                                          RayCounters &counters, bool &drawn) const {
+    drawn = false;
+    if (m_cfg.max_depth >= 0 && m_cfg.max_depth <= 1) { // a scattering would end the path
+        drawn = true;
+        return Spectrum(0.f);
+    }
+    sampler.set_dimension(DimInScatter + 1); // the layout of a step's block (VolDimsPerStep)
+    const float u = sampler.next_1d();
+    MediumSample ms;
+    if (!medium.sample_within(ray, ray.tmax, u, ms)) return Spectrum(0.f);
+    drawn = true;
+    if (!ms.scattered || ms.weight.is_black()) return Spectrum(0.f);
+    PathState state;
+    state.depth = 1;
+    state.throughput = ms.weight;
+    state.prev_p = ray.at(ms.t);
+    Ray next{state.prev_p, ray.d, 0.f, Infinity, ray.time};
+    Spectrum result = scatter_in_medium(scene, medium, state.throughput, DimInScatter, sampler, counters, next,
+                                        state.prev_bsdf_pdf, state.prev_bsdf_delta);
+    return result + trace(scene, next, &medium, state, sampler, counters, VolPathPart::ScatteredInMedium);
+}
+
 Spectrum VolPathIntegrator::li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const {
     if (!scene.has_media()) return m_surfaces.li(scene, ray, sampler, counters);
     return li_in(scene, ray, nullptr, sampler, counters);
@@ -97,21 +143,10 @@ Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *med
             throughput *= ms.weight;
             if (ms.scattered) {
                 if (++depth >= max_depth || throughput.is_black()) break;
-                const Point3f p = ray.at(ms.t);
-                const Vec3f wi = -ray.d;
-                const PhaseFunction &phase = medium->phase();
-                if (medium->sample_emitters()) {
-                    LightSample ls;
-                    Spectrum le = sample_emitter(scene, p, nullptr, medium, ray.time, sampler, counters, ls);
-                    if (!le.is_black()) {
-                        float f = phase.eval(wi, ls.d);
-                        result += throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), f));
-                    }
-                }
-                sampler.set_dimension(dim0 + step * VolDimsPerStep + 6);
-                Vec3f wo = phase.sample(wi, sampler.next_2d());
-                prev_p = p, prev_pdf = phase.eval(wi, wo), prev_delta = !medium->sample_emitters();
-                ray = Ray{p, wo, 0.f, Infinity, ray.time};
+                ray = Ray{ray.at(ms.t), ray.d, 0.f, Infinity, ray.time};
+                prev_p = ray.o;
+                result += scatter_in_medium(scene, *medium, throughput, dim0 + step * VolDimsPerStep, sampler, counters,
+                                            ray, prev_pdf, prev_delta);
                 continue;
             }
         }

@@ -49,7 +49,22 @@ public:
                    RayCounters &counters, VolPathPart part = VolPathPart::All) const;
     std::string name() const override { return "volpath"; }
 
+    /// VolPathPart::ScatteredInMedium along `ray` (from its origin, unit direction) when all of
+    /// [0, ray.tmax) lies in `medium` and it ends at a surface that is not null: one forced
+    /// scattering in it (Medium::sample_within: every call scatters, with a bounded weight,
+    /// where a free flight scatters only with the segment's opacity), and the path from there.
+    /// `drawn` is false where the medium cannot force it (then the result is zero).
+    Spectrum in_scattering(const Scene &scene, const Ray &ray, const Medium &medium, Sampler &sampler,
+                           RayCounters &counters, bool &drawn) const;
+
 private:
+    /// A scattering at `ray.o` in `medium` coming along `ray.d`, with the path's `throughput`:
+    /// next-event estimation (when the medium samples emitters; returned, throughput included)
+    /// and the phase function's sample, into `ray` with its density `pdf` (`delta`: no MIS on
+    /// the emitter it hits). Draws from the step's sampler block `block` (+3..+5, +6).
+    Spectrum scatter_in_medium(const Scene &scene, const Medium &medium, const Spectrum &throughput, uint32_t block,
+                               Sampler &sampler, RayCounters &counters, Ray &ray, float &pdf, bool &delta) const;
+
     /// One emitter sample seen from `p` (a surface point `si`, or a point in a medium when
     /// `si` is null): the emitter's radiance over its density times the transmittance to it,
     /// with the light sample for the MIS weight; zero when blocked.

@@ -40,6 +40,14 @@ public:
     virtual float free_flight_bound(float u) const { (void)u; return Infinity; }
     /// Transmittance along `ray` over [0, t) (an unbiased estimate where it is not analytic).
     virtual Spectrum transmittance(const Ray &ray, float t, RandomStream &rs) const = 0;
+    /// Forced scattering: a distance in [0, t_end) drawn from the free-flight density
+    /// conditioned on scattering there, its weight Tr(t) sigma_s(t) / pdf(t | t < t_end) in
+    /// `out` (scattered false: no scattering is possible). False where the medium cannot
+    /// draw it (its density has no closed form).
+    virtual bool sample_within(const Ray &ray, float t_end, float u, MediumSample &out) const {
+        (void)ray, (void)t_end, (void)u, (void)out;
+        return false;
+    }
 
     const PhaseFunction &phase() const { return *m_phase; }
     /// Mitsuba's `sample_emitters`: next-event estimation at scattering points in this medium.

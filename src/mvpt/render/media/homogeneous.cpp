@@ -56,6 +56,28 @@ public:
 
     Spectrum transmittance(const Ray &, float t, RandomStream &) const override { return exp_tr(t); }
 
+    bool sample_within(const Ray &ray, float t_end, float u, MediumSample &out) const override {
+        // The channel mixture of `sample`, each channel's exponential truncated to [0, t_end):
+        //   p(t) = 1/3 sum_c sigma_c exp(-sigma_c t) / (1 - exp(-sigma_c t_end)).
+        Spectrum mass; // 1 - exp(-sigma_c t_end), exact for thin segments
+        for (int i = 0; i < 3; ++i) mass[i] = -std::expm1(-m_sigma_t[i] * t_end);
+        float u3 = u * 3.f;
+        int c = std::min(int(u3), 2);
+        float uc = std::min(u3 - float(c), OneMinusEpsilon);
+        out = MediumSample{};
+        if (!(mass[c] > 0.f)) return true; // this channel cannot scatter here
+        const float t = std::min(-std::log1p(-uc * mass[c]) / m_sigma_t[c], t_end);
+        const Spectrum tr = exp_tr(t);
+        float pdf = 0.f;
+        for (int i = 0; i < 3; ++i)
+            if (mass[i] > 0.f) pdf += m_sigma_t[i] * tr[i] / mass[i] * (1.f / 3.f);
+        if (!(pdf > 0.f)) return true;
+        out.scattered = true;
+        out.t = t;
+        out.weight = tr * m_sigma_t * m_albedo->eval(ray.at(t)) * (1.f / pdf);
+        return true;
+    }
+
 private:
     /// Channel c = floor(3u); the rest of u draws t ~ sigma_c exp(-sigma_c t).
     float distance(float u) const {
