@@ -239,21 +239,13 @@ def test_sigma_a_sigma_s_equal_sigma_t_albedo():
         assert np.array_equal(ra.images[vid], rb.images[vid])
 
 
-def test_path_integrator_ignores_media_and_says_so():
-    xml = fog_scene(homogeneous('<float name="sigma_t" value="2"/>'), integrator="path")
+@pytest.mark.parametrize("integrator", ["path", "mvpath"])
+def test_surface_integrators_ignore_media_and_say_so(integrator):
+    """`path` ignores media as Mitsuba's does, and `mvpath` (its multi-view form) likewise; both
+    say so. `volpath` renders them with either method (test_mvpt_media.py)."""
+    xml = fog_scene(homogeneous('<float name="sigma_t" value="2"/>'), integrator=integrator)
     s = mvpt.load_string(xml)
-    assert any("ignores" in n and "volpath" in n for n in s.notes)
-    no_medium = mvpt.load_string(xml.replace('<medium type="homogeneous" name="interior"><float name="sigma_t" value="2"/></medium>', ""))
-    ra, rb = mvpt.render(s, spp=2, seed=1), mvpt.render(no_medium, spp=2, seed=1)
-    assert np.array_equal(ra.images["0"], rb.images["0"])
-
-
-def test_mvpath_ignores_media_and_says_so():
-    """`mvpath` is the path tracer's multi-view form: it ignores media as `path` does, and says so;
-    `volpath` renders them with either method (test_mvpt_media.py)."""
-    xml = fog_scene(homogeneous('<float name="sigma_t" value="2"/>'), integrator="mvpath")
-    s = mvpt.load_string(xml)
-    assert any("'mvpath' integrator ignores" in n and "volpath" in n for n in s.notes)
+    assert any(f"'{integrator}' integrator ignores" in n and "volpath" in n for n in s.notes)
     no_medium = mvpt.load_string(xml.replace('<medium type="homogeneous" name="interior"><float name="sigma_t" value="2"/></medium>', ""))
     ra, rb = mvpt.render(s, spp=2, seed=1), mvpt.render(no_medium, spp=2, seed=1)
     assert np.array_equal(ra.images["0"], rb.images["0"])
