@@ -128,7 +128,8 @@ def test_cli_rig(tmp_path, capsys):
                                            f"within +-1e30, got {spec.split('=')[-1]}", err
 
 
-EXPECTED_VIEWS = {"cornell-glossy-9": 9, "lightfield-5x5": 25, "stereo": 2, "shot-100": 100, "glossy-ggx-9": 9}
+EXPECTED_VIEWS = {"cornell-glossy-9": 9, "lightfield-5x5": 25, "stereo": 2, "shot-100": 100, "glossy-ggx-9": 9,
+                  "fog-ggx-9": 9}
 
 
 def test_example_scene_list():
