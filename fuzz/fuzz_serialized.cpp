@@ -1,6 +1,6 @@
 // The Mitsuba .serialized mesh reader on arbitrary bytes; the first byte picks the shape index.
 #include "fuzz_input.h"
-#include "mvpt/scene/mesh_data.h"
+#include "mvpt/io/mesh_data.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (size == 0) return 0;

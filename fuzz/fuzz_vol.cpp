@@ -1,6 +1,6 @@
 // The Mitsuba .vol grid reader (gridvolume) on arbitrary bytes.
 #include "fuzz_input.h"
-#include "mvpt/scene/vol_reader.h"
+#include "mvpt/io/vol_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     const auto path = mvpt::fuzz::as_file(data, size, ".vol");

@@ -2,8 +2,8 @@
 // Python polls (GIL released while waiting), NumPy images out, image writers.
 #include "mvpt/io/image_io.h"
 #include "mvpt/io/multiview_exr.h"
-#include "mvpt/render_state.h"
-#include "mvpt/renderer.h"
+#include "mvpt/renderer/render_state.h"
+#include "mvpt/renderer/renderer.h"
 #include "mvpt/scene/scene.h"
 
 #include <nanobind/nanobind.h>

@@ -2,7 +2,7 @@
 // sampled (sample_li) and when hit (eval): checked with a texture that returns
 // its own coordinates, on a rectangle whose uv is ((x+1)/2, (y+1)/2) locally.
 #include "mvpt/render/texture.h"
-#include "mvpt/scene/plugin.h"
+#include "mvpt/core/plugin.h"
 #include "mvpt/scene/scene.h"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // PLY and serialized readers: formats, property handling, and clean failures
 // on truncated or corrupt files.
-#include "mvpt/scene/mesh_data.h"
+#include "mvpt/io/mesh_data.h"
 
 #include <gtest/gtest.h>
 #include <zlib.h>

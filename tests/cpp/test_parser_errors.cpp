@@ -1,6 +1,6 @@
 // The XML front end reports errors at the right file:line:col (the '<' of an element, or
 // the name of the offending attribute) without needing the Python layer.
-#include "mvpt/scene/suggest.h"
+#include "mvpt/core/suggest.h"
 #include "mvpt/scene/xml_parser.h"
 
 #include <gtest/gtest.h>

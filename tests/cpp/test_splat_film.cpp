@@ -1,9 +1,9 @@
 // The fixed-point splats of multi-view path tracing (splat_film.h): exact integer sums whatever
 // the order, the cache size or the number of threads; contributions that are not finite or too
 // large rejected whole, whichever channel holds the bad value.
-#include "mvpt/scene/plugin.h"
+#include "mvpt/core/plugin.h"
 #include "mvpt/core/sampler.h"
-#include "mvpt/splat_film.h"
+#include "mvpt/render/splat_film.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // wrap modes, to_uv, and the checkerboard's scalar lookup.
 #include "mvpt/io/image_io.h"
 #include "mvpt/render/texture.h"
-#include "mvpt/scene/plugin.h"
+#include "mvpt/core/plugin.h"
 
 #include <gtest/gtest.h>
 

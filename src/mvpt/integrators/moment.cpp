@@ -2,8 +2,8 @@
 // integrator's samples. mvpt always estimates the per-pixel variance of every view
 // (RenderResult.variance), so `moment` loads as its single nested integrator; scenes of
 // Mitsuba's test suite, which wrap `path` in `moment`, then load unchanged.
-#include "integrator.h"
-#include "../scene/plugin.h"
+#include "../render/integrator.h"
+#include "../core/plugin.h"
 
 namespace mvpt {
 namespace {

@@ -9,7 +9,7 @@
 #include "mv_shift.h"
 #include "mvpath.h"
 
-#include "../splat_film.h"
+#include "../render/splat_film.h"
 #include "../render/camera_projection.h"
 #include "../scene/rig_visibility.h"
 

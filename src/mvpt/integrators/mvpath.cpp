@@ -16,7 +16,7 @@
 //   </integrator>
 #include "mvpath.h"
 
-#include "../scene/plugin.h"
+#include "../core/plugin.h"
 
 namespace mvpt {
 namespace {

@@ -3,7 +3,7 @@
 #include "../render/bsdf.h"
 #include "../render/light.h"
 #include "../render/shape.h"
-#include "../scene/plugin.h"
+#include "../core/plugin.h"
 #include "../scene/scene.h"
 
 #include <climits>

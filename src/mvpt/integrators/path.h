@@ -2,7 +2,7 @@
 // heuristic), with Mitsuba 3's max_depth / rr_depth / hide_emitters semantics.
 #pragma once
 
-#include "integrator.h"
+#include "../render/integrator.h"
 
 namespace mvpt {
 

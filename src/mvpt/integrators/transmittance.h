@@ -5,7 +5,7 @@
 
 #include "../core/sampler.h"
 #include "../render/interaction.h"
-#include "integrator.h"
+#include "../render/integrator.h"
 
 namespace mvpt {
 

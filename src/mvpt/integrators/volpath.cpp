@@ -4,7 +4,7 @@
 #include "../render/light.h"
 #include "../render/medium.h"
 #include "../render/shape.h"
-#include "../scene/plugin.h"
+#include "../core/plugin.h"
 #include "../scene/scene.h"
 #include "transmittance.h"
 

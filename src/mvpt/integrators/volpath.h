@@ -5,7 +5,7 @@
 // surfaces that are not null, and in media), as Mitsuba's does.
 #pragma once
 
-#include "integrator.h"
+#include "../render/integrator.h"
 #include "path.h"
 
 namespace mvpt {

@@ -6,7 +6,7 @@
 #include <tuple>
 
 #include "../core/math.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 #include "interaction.h"
 
 #include <utility>

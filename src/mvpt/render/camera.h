@@ -13,8 +13,8 @@
 
 #include "../core/math.h"
 #include "../core/sampler.h"
-#include "../scene/animation.h"
-#include "../scene/properties.h"
+#include "../core/animation.h"
+#include "../core/properties.h"
 #include "filter.h"
 
 #include <memory>

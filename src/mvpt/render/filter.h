@@ -6,7 +6,7 @@
 #pragma once
 
 #include "../core/math.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 
 #include <algorithm>
 #include <vector>

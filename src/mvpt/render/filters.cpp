@@ -1,5 +1,5 @@
 // Reconstruction filters: box, tent, gaussian (Mitsuba's parameters).
-#include "../scene/plugin.h"
+#include "../core/plugin.h"
 #include "filter.h"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // int_ior / ext_ior (values from Hecht, Optics, 4th ed.: 0-20 C, ~589 nm).
 #pragma once
 
-#include "../scene/properties.h"
+#include "../core/properties.h"
 
 #include <cctype>
 #include <string>

@@ -1,6 +1,6 @@
 #include "medium.h"
 
-#include "../scene/plugin.h"
+#include "../core/plugin.h"
 
 namespace mvpt {
 

@@ -11,7 +11,7 @@
 
 #include "../core/math.h"
 #include "../core/sampler.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 #include "phase.h"
 
 #include <memory>

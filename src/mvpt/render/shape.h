@@ -3,7 +3,7 @@
 #pragma once
 
 #include "../core/math.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 #include "interaction.h"
 
 #include <embree3/rtcore.h>

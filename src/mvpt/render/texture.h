@@ -2,7 +2,7 @@
 #pragma once
 
 #include "../core/math.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 
 namespace mvpt {
 
@@ -28,5 +28,14 @@ public:
 private:
     Color3f m_value;
 };
+
+/// Texture-valued parameter `name` of `props`: an `<rgb>`/`<float>`/`<spectrum>` constant (see
+/// Properties::get_color) or a nested/referenced texture.
+std::shared_ptr<Texture> get_texture(const Properties &props, const std::string &name, Color3f def,
+                                     SpectrumUse use = SpectrumUse::Reflectance);
+inline std::shared_ptr<Texture> get_texture(const Properties &props, const std::string &name, float def,
+                                            SpectrumUse use = SpectrumUse::Reflectance) {
+    return get_texture(props, name, Color3f(def), use);
+}
 
 } // namespace mvpt

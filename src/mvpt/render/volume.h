@@ -4,7 +4,7 @@
 
 #include "../core/math.h"
 #include "../core/spectrum_rgb.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 #include "shape.h"
 
 #include <memory>

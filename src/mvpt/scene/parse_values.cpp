@@ -1,6 +1,6 @@
 #include "parse_values.h"
 
-#include "suggest.h"
+#include "../core/suggest.h"
 #include "xml_parser.h"
 
 #include <algorithm>

@@ -1,8 +1,8 @@
 // Value elements of scene files (<float>, <rgb>, <transform>, ...) -> Properties.
 #pragma once
 
-#include "plugin.h"
-#include "properties.h"
+#include "../core/plugin.h"
+#include "../core/properties.h"
 #include "xml_parser.h"
 
 #include <initializer_list>

@@ -3,7 +3,7 @@
 
 #include "camera_path.h"
 #include "parse_values.h"
-#include "suggest.h"
+#include "../core/suggest.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "scene.h"
 
-#include "plugin.h"
+#include "../core/plugin.h"
 #include "ray_packet.h"
 #include "rig.h"
 

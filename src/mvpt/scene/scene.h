@@ -1,7 +1,7 @@
 // The scene: shapes in an Embree BVH, lights, cameras (views), integrator.
 #pragma once
 
-#include "../integrators/integrator.h"
+#include "../render/integrator.h"
 #include "../render/camera.h"
 #include "../render/light.h"
 #include "../render/shape.h"

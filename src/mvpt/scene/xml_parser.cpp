@@ -2,9 +2,9 @@
 
 #include "legacy_upgrade.h"
 #include "parse_values.h"
-#include "plugin.h"
+#include "../core/plugin.h"
 #include "rig.h"
-#include "suggest.h"
+#include "../core/suggest.h"
 
 #include <pugixml.hpp>
 

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "../core/error.h"
-#include "properties.h"
+#include "../core/properties.h"
 
 #include <filesystem>
 #include <map>

@@ -2,7 +2,7 @@
 // (Mitsuba 3's `blendbsdf`). Sampling picks one nested BSDF with probability
 // 1 - w or w, then reports the mixture density and weight the way Mitsuba 3.9
 // does (see `sample`).
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../texture.h"
 
@@ -15,7 +15,7 @@ public:
         if (children.size() != 2) props.fail("", "blendbsdf needs exactly two nested bsdfs");
         for (int i = 0; i < 2; ++i) m_bsdf[i] = std::static_pointer_cast<Bsdf>(children[i]->object);
         if (!props.has_texture("weight")) props.fail("weight", "blendbsdf needs a 'weight' (float or texture)");
-        m_weight = props.get_texture("weight", 0.5f);
+        m_weight = get_texture(props, "weight", 0.5f);
         m_flags = m_bsdf[0]->flags() | m_bsdf[1]->flags();
     }
 

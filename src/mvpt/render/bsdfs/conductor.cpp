@@ -1,6 +1,6 @@
 // Smooth conductor: a perfect mirror with the conductor Fresnel reflectance
 // (Mitsuba 3's `conductor`). One-sided: black from below.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../texture.h"
@@ -11,7 +11,7 @@ namespace mvpt {
 class SmoothConductor final : public Bsdf {
 public:
     explicit SmoothConductor(const Properties &props) {
-        m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+        m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         m_ior = read_conductor_ior(props);
         m_flags = BsdfDeltaReflection;
     }

@@ -2,7 +2,7 @@
 // (Mitsuba 3's rules; default material "none": eta = 0, k = 1, a perfect mirror).
 #pragma once
 
-#include "../../scene/properties.h"
+#include "../../core/properties.h"
 #include "../texture.h"
 #include "conductor_presets.h"
 
@@ -21,8 +21,8 @@ inline ConductorIor read_conductor_ior(const Properties &props) {
     std::string material = props.get_string("material", "none");
     if (props.has_texture("eta") || material == "none") {
         if (material != "none") props.fail("material", "specify either (eta, k) or material, not both");
-        r.eta = props.get_texture("eta", 0.f, SpectrumUse::Unbounded);
-        r.k = props.get_texture("k", 1.f, SpectrumUse::Unbounded);
+        r.eta = get_texture(props, "eta", 0.f, SpectrumUse::Unbounded);
+        r.k = get_texture(props, "k", 1.f, SpectrumUse::Unbounded);
         return r;
     }
     const ConductorPreset *p = find_conductor_preset(material);

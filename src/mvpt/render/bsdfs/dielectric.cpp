@@ -1,6 +1,6 @@
 // Smooth dielectric interface: Fresnel-weighted choice between mirror
 // reflection and Snell refraction (Mitsuba 3's `dielectric`). Two-sided.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../ior.h"
@@ -14,9 +14,9 @@ public:
         float int_ior = read_ior(props, "int_ior", "bk7"), ext_ior = read_ior(props, "ext_ior", "air");
         m_eta = int_ior / ext_ior;
         if (props.has_texture("specular_reflectance"))
-            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+            m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         if (props.has_texture("specular_transmittance"))
-            m_specular_transmittance = props.get_texture("specular_transmittance", 1.f);
+            m_specular_transmittance = get_texture(props, "specular_transmittance", 1.f);
         m_flags = BsdfDeltaReflection | BsdfDeltaTransmission;
     }
 

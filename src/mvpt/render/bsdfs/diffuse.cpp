@@ -1,6 +1,6 @@
 // Lambertian reflection with cosine-weighted sampling.
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../texture.h"
 
@@ -9,7 +9,7 @@ namespace mvpt {
 class DiffuseBsdf final : public Bsdf {
 public:
     explicit DiffuseBsdf(const Properties &props) {
-        m_reflectance = props.get_texture("reflectance", 0.5f);
+        m_reflectance = get_texture(props, "reflectance", 0.5f);
         m_constant = m_reflectance->is_constant();
         if (m_constant) m_constant_value = m_reflectance->eval(Vec2f(0.f, 0.f));
         m_is_lambert = true;

@@ -1,7 +1,7 @@
 // Opacity mask: with probability `opacity` the nested BSDF scatters, otherwise
 // light passes straight through as a null event (wo = -wi, weight 1)
 // (Mitsuba 3's `mask`).
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../texture.h"
 
@@ -10,7 +10,7 @@ namespace mvpt {
 class MaskBsdf final : public Bsdf {
 public:
     explicit MaskBsdf(const Properties &props) {
-        m_opacity = props.get_texture("opacity", 0.5f);
+        m_opacity = get_texture(props, "opacity", 0.5f);
         const ChildObject *child = props.child_of_kind("bsdf");
         if (!child) props.fail("", "mask needs a nested bsdf");
         m_nested = std::static_pointer_cast<Bsdf>(child->object);

@@ -3,7 +3,7 @@
 // error cases.
 #pragma once
 
-#include "../../scene/properties.h"
+#include "../../core/properties.h"
 #include "../interaction.h"
 #include "../microfacet.h"
 #include "../texture.h"
@@ -45,10 +45,10 @@ inline MicrofacetParams read_microfacet_params(const Properties &props) {
             props.fail(has_u ? "alpha_u" : "alpha_v", "both 'alpha_u' and 'alpha_v' must be specified");
         if (props.has_texture("alpha"))
             props.fail("alpha", "specify either 'alpha' or 'alpha_u'/'alpha_v', not both");
-        p.alpha_u = props.get_texture("alpha_u", 0.1f, SpectrumUse::Unbounded);
-        p.alpha_v = props.get_texture("alpha_v", 0.1f, SpectrumUse::Unbounded);
+        p.alpha_u = get_texture(props, "alpha_u", 0.1f, SpectrumUse::Unbounded);
+        p.alpha_v = get_texture(props, "alpha_v", 0.1f, SpectrumUse::Unbounded);
     } else {
-        p.alpha_u = p.alpha_v = props.get_texture("alpha", 0.1f, SpectrumUse::Unbounded);
+        p.alpha_u = p.alpha_v = get_texture(props, "alpha", 0.1f, SpectrumUse::Unbounded);
     }
     return p;
 }

@@ -1,6 +1,6 @@
 // The `null` BSDF: an invisible surface that light passes straight through (wo = -wi,
 // weight 1), used to bound participating media without refraction (Mitsuba 3's `null`).
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 
 namespace mvpt {

@@ -3,7 +3,7 @@
 // alpha the angle between wo and the mirror direction of wi [Lafortune and
 // Willems 1994, "Using the modified Phong reflectance model for physically
 // based rendering"]. One-sided.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 
 #include <algorithm>
 #include "../../core/multi_isa.h"
@@ -56,9 +56,9 @@ MVPT_MULTI_ISA void phong_lobes(const Vec3f *__restrict wi, size_t n, Vec3f wo, 
 class PhongBsdf final : public Bsdf {
 public:
     explicit PhongBsdf(const Properties &props) {
-        m_exponent = props.get_texture("exponent", 30.f);
-        m_specular_reflectance = props.get_texture("specular_reflectance", 0.2f);
-        m_diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5f);
+        m_exponent = get_texture(props, "exponent", 30.f);
+        m_specular_reflectance = get_texture(props, "specular_reflectance", 0.2f);
+        m_diffuse_reflectance = get_texture(props, "diffuse_reflectance", 0.5f);
         m_flags = BsdfGlossyReflection | BsdfDiffuseReflection;
         // Constant parameters (the usual case) are evaluated once: pdf and eval are then a few
         // flops and one pow (multi-view path tracing evaluates them for every pair of views).

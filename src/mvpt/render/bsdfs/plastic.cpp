@@ -2,7 +2,7 @@
 // internal reflections between coating and base summed in closed form
 // [Weidlich and Wilkie 2007] (Mitsuba 3's `plastic`). One-sided.
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../ior.h"
@@ -15,9 +15,9 @@ public:
     explicit SmoothPlastic(const Properties &props) {
         float int_ior = read_ior(props, "int_ior", "polypropylene"), ext_ior = read_ior(props, "ext_ior", "air");
         m_eta = int_ior / ext_ior;
-        m_diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5f);
+        m_diffuse_reflectance = get_texture(props, "diffuse_reflectance", 0.5f);
         if (props.has_texture("specular_reflectance"))
-            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+            m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         m_nonlinear = props.get_bool("nonlinear", false);
         m_flags = BsdfDeltaReflection | BsdfDiffuseReflection;
 

@@ -5,7 +5,7 @@
 // probabilities follow Mitsuba 3.9 (src/bsdfs/principled.cpp), so that
 // eval / pdf agree with it value for value.
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../microfacet.h"
@@ -18,8 +18,8 @@ using namespace principled;
 class PrincipledBsdf final : public Bsdf {
 public:
     explicit PrincipledBsdf(const Properties &props) {
-        m_base_color = props.get_texture("base_color", 0.5f);
-        m_roughness = props.get_texture("roughness", 0.5f);
+        m_base_color = get_texture(props, "base_color", 0.5f);
+        m_roughness = get_texture(props, "roughness", 0.5f);
         m_anisotropic = LobeParam(props, "anisotropic", 0.f);
         m_spec_trans = LobeParam(props, "spec_trans", 0.f);
         m_sheen = LobeParam(props, "sheen", 0.f);
@@ -28,7 +28,7 @@ public:
         m_spec_tint = LobeParam(props, "spec_tint", 0.f);
         m_metallic = LobeParam(props, "metallic", 0.f);
         m_clearcoat = LobeParam(props, "clearcoat", 0.f);
-        m_clearcoat_gloss = props.get_texture("clearcoat_gloss", 0.f);
+        m_clearcoat_gloss = get_texture(props, "clearcoat_gloss", 0.f);
         m_spec_srate = props.get_float("main_specular_sampling_rate", 1.f);
         m_clearcoat_srate = props.get_float("clearcoat_sampling_rate", 1.f);
         m_diff_refl_srate = props.get_float("diffuse_reflectance_sampling_rate", 1.f);

@@ -7,7 +7,7 @@
 
 #include "../../core/math.h"
 #include "../../core/warp.h"
-#include "../../scene/properties.h"
+#include "../../core/properties.h"
 #include "../texture.h"
 
 #include <string>
@@ -33,7 +33,7 @@ struct LobeParam {
     LobeParam() = default;
     LobeParam(const Properties &props, const std::string &name, float def)
         : enabled(lobe_enabled(props, name)) {
-        tex = props.get_texture(name, def);
+        tex = get_texture(props, name, def);
     }
     float eval_1(Vec2f uv) const { return enabled ? tex->eval_1(uv) : 0.f; }
 };

@@ -7,7 +7,7 @@
 // mirroring both directions to the front. Formulas, masks and lobe-selection
 // probabilities follow Mitsuba 3.9 (src/bsdfs/principledthin.cpp).
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../microfacet.h"
@@ -20,15 +20,15 @@ using namespace principled;
 class PrincipledThinBsdf final : public Bsdf {
 public:
     explicit PrincipledThinBsdf(const Properties &props) {
-        m_base_color = props.get_texture("base_color", 0.5f);
-        m_roughness = props.get_texture("roughness", 0.5f);
+        m_base_color = get_texture(props, "base_color", 0.5f);
+        m_roughness = get_texture(props, "roughness", 0.5f);
         m_anisotropic = LobeParam(props, "anisotropic", 0.f);
         m_spec_trans = LobeParam(props, "spec_trans", 0.f);
         m_sheen = LobeParam(props, "sheen", 0.f);
         m_sheen_tint = LobeParam(props, "sheen_tint", 0.f);
         m_flatness = LobeParam(props, "flatness", 0.f);
         m_spec_tint = LobeParam(props, "spec_tint", 0.f);
-        m_eta = props.get_texture("eta", 1.5f, SpectrumUse::Unbounded);
+        m_eta = get_texture(props, "eta", 1.5f, SpectrumUse::Unbounded);
         m_diff_trans = LobeParam(props, "diff_trans", 0.f);
         auto rate = [&](const char *name) {
             float r = props.get_float(name, 1.f);

@@ -1,6 +1,6 @@
 // Rough conductor: Cook-Torrance microfacet reflection with the conductor
 // Fresnel term [Walter et al. 2007] (Mitsuba 3's `roughconductor`). One-sided.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../texture.h"
@@ -17,7 +17,7 @@ public:
         m_ior = read_conductor_ior(props);
         m_distr = read_microfacet_params(props);
         if (props.has_texture("specular_reflectance"))
-            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+            m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         m_flags = BsdfGlossyReflection;
         // Constant and isotropic with visible-normal sampling: the wavefront's vector kernels.
         auto constant = [](const std::shared_ptr<Texture> &t) { return !t || t->is_constant(); };

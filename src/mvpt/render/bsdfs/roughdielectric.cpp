@@ -1,7 +1,7 @@
 // Rough dielectric interface: microfacet reflection and refraction
 // [Walter et al. 2007, "Microfacet Models for Refraction through Rough
 // Surfaces"] (Mitsuba 3's `roughdielectric`). Two-sided.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../ior.h"
@@ -14,9 +14,9 @@ class RoughDielectric final : public Bsdf {
 public:
     explicit RoughDielectric(const Properties &props) {
         if (props.has_texture("specular_reflectance"))
-            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+            m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         if (props.has_texture("specular_transmittance"))
-            m_specular_transmittance = props.get_texture("specular_transmittance", 1.f);
+            m_specular_transmittance = get_texture(props, "specular_transmittance", 1.f);
         float int_ior = read_ior(props, "int_ior", "bk7"), ext_ior = read_ior(props, "ext_ior", "air");
         if (int_ior == ext_ior) props.fail("int_ior", "the interior and exterior indices of refraction must differ");
         m_eta = int_ior / ext_ior;

@@ -4,7 +4,7 @@
 // [Weidlich and Wilkie 2007; Mitsuba's tabulation]. One-sided, isotropic.
 #include "../../core/quadrature.h"
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../ior.h"
@@ -105,9 +105,9 @@ public:
         float int_ior = read_ior(props, "int_ior", "polypropylene"), ext_ior = read_ior(props, "ext_ior", "air");
         if (int_ior == ext_ior) props.fail("int_ior", "the interior and exterior indices of refraction must differ");
         m_eta = int_ior / ext_ior;
-        m_diffuse_reflectance = props.get_texture("diffuse_reflectance", 0.5f);
+        m_diffuse_reflectance = get_texture(props, "diffuse_reflectance", 0.5f);
         if (props.has_texture("specular_reflectance"))
-            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+            m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         m_nonlinear = props.get_bool("nonlinear", false);
         read_roughness(props);
         m_flags = BsdfGlossyReflection | BsdfDiffuseReflection;

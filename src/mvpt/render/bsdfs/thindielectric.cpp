@@ -1,7 +1,7 @@
 // Thin dielectric sheet: mirror reflection or straight pass-through, with the
 // reflectance summed over all internal bounces R' = R + T R T + ... = 2R/(1+R)
 // (Mitsuba 3's `thindielectric`). The transmission is a null event (wo = -wi).
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../ior.h"
@@ -15,9 +15,9 @@ public:
         float int_ior = read_ior(props, "int_ior", "bk7"), ext_ior = read_ior(props, "ext_ior", "air");
         m_eta = int_ior / ext_ior;
         if (props.has_texture("specular_reflectance"))
-            m_specular_reflectance = props.get_texture("specular_reflectance", 1.f);
+            m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         if (props.has_texture("specular_transmittance"))
-            m_specular_transmittance = props.get_texture("specular_transmittance", 1.f);
+            m_specular_transmittance = get_texture(props, "specular_transmittance", 1.f);
         m_flags = BsdfDeltaReflection | BsdfNull;
     }
 

@@ -1,7 +1,7 @@
 // Two-sided adapter: applies a one-sided BRDF on both sides, or a second
 // BRDF on the back side, by mirroring directions through the shading plane
 // (Mitsuba 3.9's `twosided`, which decides the side by the shading normal).
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../bsdf.h"
 
 #include <cstring>

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "../../core/math.h"
-#include "../../scene/properties.h"
+#include "../../core/properties.h"
 
 #include <cmath>
 #include <cstdlib>

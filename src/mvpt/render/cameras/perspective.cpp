@@ -2,7 +2,7 @@
 // `thinlens` sensors: camera space has +z forward, +x left, +y up. `to_world` may be
 // keyframed (<animation>): the pose is then evaluated at each ray's time.
 #include "../../core/multi_isa.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../camera.h"
 #include "../camera_projection.h"
 #include "camera_pose.h"

@@ -1,6 +1,6 @@
 #include "sensor_common.h"
 
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../medium.h"
 
 namespace mvpt {

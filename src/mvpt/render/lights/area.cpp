@@ -1,6 +1,6 @@
 // Area emitter (Mitsuba's `area`): radiance, constant or a texture looked up
 // at the surface uv, leaving the front side of its shape.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../light.h"
 #include "../shape.h"
 #include "../shapes/mesh.h"
@@ -11,7 +11,7 @@ namespace mvpt {
 class AreaLight final : public Light {
 public:
     explicit AreaLight(const Properties &props) {
-        m_radiance = props.get_texture("radiance", Color3f(1.f), SpectrumUse::Emission);
+        m_radiance = get_texture(props, "radiance", Color3f(1.f), SpectrumUse::Emission);
         if (m_radiance->is_constant()) {
             Color3f c = m_radiance->mean();
             if (!c.is_finite() || c.r < 0 || c.g < 0 || c.b < 0)

@@ -1,7 +1,7 @@
 // Constant environment emitter (Mitsuba's `constant`): uniform radiance from
 // every direction at infinity, sampled uniformly over the sphere.
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../light.h"
 
 namespace mvpt {

@@ -1,7 +1,7 @@
 // Distant directional emitter (Mitsuba's `directional`): irradiance arriving
 // along one direction (the local +z of to_world, or `direction`), from beyond
 // the scene's bounding sphere.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../light.h"
 
 namespace mvpt {

@@ -11,7 +11,7 @@
 #include "../../core/poly_math.h"
 #include "../../core/warp.h"
 #include "../../io/image_io.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../light.h"
 
 #include <cmath>

@@ -1,6 +1,6 @@
 // Point light (Mitsuba's `point`): isotropic radiant intensity from one
 // position; a delta light, reached only by next-event estimation.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../light.h"
 
 namespace mvpt {

@@ -5,7 +5,7 @@
 // (sigma_s / mean(sigma_t) when real, (majorant - sigma_t) / (majorant - mean(sigma_t)) when
 // null; both at most 3), so every channel stays unbiased [Kutz et al. 2017]. Transmittance by
 // ratio tracking [Novák et al. 2014]. Outside the extinction volume's box the medium is empty.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../medium.h"
 #include "../volume.h"
 

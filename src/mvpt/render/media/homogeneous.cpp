@@ -1,7 +1,7 @@
 // The `homogeneous` medium: a constant sigma_t (or sigma_a + sigma_s) times `scale`, and an
 // albedo that may vary in space (a volume, as in Mitsuba). Free flights are drawn exactly per
 // channel (see medium.h for the channel mixture); transmittance is exp(-sigma_t t).
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../medium.h"
 #include "../volume.h"
 

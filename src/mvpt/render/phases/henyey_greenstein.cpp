@@ -1,6 +1,6 @@
 // The `isotropic` and `hg` phase functions (one family: isotropic is g = 0).
 #include "../../core/warp.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../phase.h"
 
 namespace mvpt {

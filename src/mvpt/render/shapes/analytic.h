@@ -3,7 +3,7 @@
 // packets to `intersect_t_n` (by default `intersect_t` lane by lane).
 #pragma once
 
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../shape.h"
 
 #include <cmath>

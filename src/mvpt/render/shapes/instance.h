@@ -3,8 +3,8 @@
 // `to_world` becomes a motion-blurred instance transform.
 #pragma once
 
-#include "../../scene/animation.h"
-#include "../../scene/plugin.h"
+#include "../../core/animation.h"
+#include "../../core/plugin.h"
 #include "../shape.h"
 
 #include <functional>

@@ -3,8 +3,8 @@
 #pragma once
 
 #include "../../core/distribution.h"
-#include "../../scene/mesh_data.h"
-#include "../../scene/plugin.h"
+#include "../../io/mesh_data.h"
+#include "../../core/plugin.h"
 #include "../shape.h"
 
 namespace mvpt {

@@ -3,7 +3,7 @@
 // centres at (i + 1/2) / width; bilinear or nearest lookup with repeat, mirror
 // or clamp wrapping. The scalar value is the Rec. 709 luminance, as in Mitsuba.
 #include "../../io/image_io.h"
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../texture.h"
 #include "uv_transform.h"
 

@@ -1,6 +1,6 @@
 // Procedural checkerboard (Mitsuba's `checkerboard`): color0 where the
 // fractional parts of u and v are on the same side of 1/2, color1 elsewhere.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../texture.h"
 #include "uv_transform.h"
 
@@ -11,8 +11,8 @@ namespace mvpt {
 class Checkerboard final : public Texture {
 public:
     explicit Checkerboard(const Properties &props) {
-        m_color0 = props.get_texture("color0", 0.4f);
-        m_color1 = props.get_texture("color1", 0.2f);
+        m_color0 = get_texture(props, "color0", 0.4f);
+        m_color1 = get_texture(props, "color1", 0.2f);
         m_to_uv = UvTransform(props.get_transform("to_uv"));
     }
 

@@ -1,5 +1,5 @@
 // `constvolume`: one value everywhere; also what a medium's constant parameters become.
-#include "../../scene/plugin.h"
+#include "../../core/plugin.h"
 #include "../volume.h"
 
 namespace mvpt {

@@ -4,8 +4,8 @@
 // outer voxels, inside the cube or outside it, follow `wrap_mode` (clamp, repeat, mirror), as
 // Mitsuba 3's texture does. (A heterogeneous medium is empty outside its extinction's cube.)
 #include "../../core/transform.h"
-#include "../../scene/plugin.h"
-#include "../../scene/vol_reader.h"
+#include "../../core/plugin.h"
+#include "../../io/vol_reader.h"
 #include "../volume.h"
 
 namespace mvpt {

@@ -3,10 +3,10 @@
 // merged once per pass; adaptive native-sample maps between passes (§8).
 #include "renderer.h"
 
-#include "integrators/mv_adaptive.h"
-#include "integrators/mvpath.h"
-#include "integrators/volpath.h"
-#include "render/camera.h"
+#include "../integrators/mv_adaptive.h"
+#include "../integrators/mvpath.h"
+#include "../integrators/volpath.h"
+#include "../render/camera.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>

@@ -2,10 +2,10 @@
 // location and a "was read" flag: a parameter no plugin reads is an error.
 #pragma once
 
-#include "../core/error.h"
-#include "../core/math.h"
-#include "../core/spectrum_rgb.h"
-#include "../core/transform.h"
+#include "error.h"
+#include "math.h"
+#include "spectrum_rgb.h"
+#include "transform.h"
 #include "animation.h"
 
 #include <map>
@@ -22,8 +22,6 @@ class Object {
 public:
     virtual ~Object() = default;
 };
-
-class Texture;
 
 /// One child object of a scene-file element, with the name it was given (may be empty).
 struct ChildObject {
@@ -71,13 +69,12 @@ public:
     Transform get_transform(const std::string &name, const Transform &def = {}) const;
     /// A transform that may be animated (`<animation>` or a plain `<transform>`).
     AnimatedTransform get_animated_transform(const std::string &name) const;
-    /// Texture-valued parameter: an `<rgb>`/`<float>`/`<spectrum>` constant (see get_color) or a
-    /// nested/referenced texture.
-    std::shared_ptr<Texture> get_texture(const std::string &name, Color3f def,
-                                         SpectrumUse use = SpectrumUse::Reflectance) const;
-    std::shared_ptr<Texture> get_texture(const std::string &name, float def,
-                                         SpectrumUse use = SpectrumUse::Reflectance) const;
+    /// Whether `name` is given, as a value or as a nested/referenced texture (the render
+    /// layer's get_texture reads it).
     bool has_texture(const std::string &name) const;
+    /// The child object given the name `name` (marked read), or nullptr; `name` counts as
+    /// looked up for the "did you mean" hints.
+    const ChildObject *named_child(const std::string &name) const;
 
     /// Child objects (bsdf/emitter/film/...) declared or referenced inside this element.
     void add_child(ChildObject c) { m_children.push_back(std::move(c)); }

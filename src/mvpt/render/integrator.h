@@ -3,7 +3,7 @@
 
 #include "../core/math.h"
 #include "../core/sampler.h"
-#include "../scene/properties.h"
+#include "../core/properties.h"
 
 namespace mvpt {
 

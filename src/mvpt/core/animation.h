@@ -2,7 +2,7 @@
 // interpolate linearly, rotation by quaternion slerp; end poses hold outside.
 #pragma once
 
-#include "../core/transform.h"
+#include "transform.h"
 
 #include <string>
 #include <vector>

@@ -12,8 +12,8 @@
 // in a row) and hands them to the shared sums with one atomic add per channel.
 #pragma once
 
-#include "core/math.h"
-#include "render/filter.h"
+#include "../core/math.h"
+#include "filter.h"
 
 #include <atomic>
 #include <cmath>

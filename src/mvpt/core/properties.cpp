@@ -1,6 +1,5 @@
 #include "properties.h"
 
-#include "../render/texture.h"
 #include "suggest.h"
 
 #include <cmath>
@@ -133,22 +132,14 @@ bool Properties::has_texture(const std::string &name) const {
     return false;
 }
 
-std::shared_ptr<Texture> Properties::get_texture(const std::string &name, Color3f def, SpectrumUse use) const {
+const ChildObject *Properties::named_child(const std::string &name) const {
     m_asked.insert(name);
     for (auto &c : m_children)
         if (c.name == name) {
-            if (c.kind != "texture")
-                fail(name, "parameter '" + name + "' expects a texture, got a " + c.kind);
             c.queried = true;
-            return std::static_pointer_cast<Texture>(c.object);
+            return &c;
         }
-    Color3f v = get_color(name, def, use);
-    if (!v.is_finite()) fail(name, "parameter '" + name + "' is not finite");
-    return std::make_shared<ConstantTexture>(v);
-}
-
-std::shared_ptr<Texture> Properties::get_texture(const std::string &name, float def, SpectrumUse use) const {
-    return get_texture(name, Color3f(def), use);
+    return nullptr;
 }
 
 std::vector<const ChildObject *> Properties::children_of_kind(const std::string &kind) const {

@@ -3,8 +3,8 @@
 // passes so far, and the fold that adds one pass (its fixed-point sums, splat_film.h).
 #pragma once
 
-#include "integrators/mvpath.h"
-#include "splat_film.h"
+#include "../integrators/mvpath.h"
+#include "../render/splat_film.h"
 
 #include <cstdint>
 #include <vector>

@@ -1,11 +1,11 @@
 #include "renderer.h"
 
-#include "core/memory.h"
-#include "core/sampler_batch.h"
+#include "../core/memory.h"
+#include "../core/sampler_batch.h"
 
-#include "core/warp.h"
-#include "integrators/mvpath.h"
-#include "render/camera.h"
+#include "../core/warp.h"
+#include "../integrators/mvpath.h"
+#include "../render/camera.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>

@@ -3,10 +3,10 @@
 // a cancel request (at a pass boundary).
 #pragma once
 
-#include "integrators/integrator.h"
-#include "integrators/mv_sample.h"
+#include "../render/integrator.h"
+#include "../integrators/mv_sample.h"
 #include "mv_film.h"
-#include "scene/scene.h"
+#include "../scene/scene.h"
 
 #include <atomic>
 #include <cstdint>

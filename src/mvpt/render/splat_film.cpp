@@ -1,6 +1,6 @@
 #include "splat_film.h"
 
-#include "core/sampler.h"
+#include "../core/sampler.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 // pass boundary, to be resumed with the same images as a render that was never stopped.
 #include "renderer.h"
 
-#include "render/camera.h"
+#include "../render/camera.h"
 #include "render_state.h"
 
 #include <tbb/task_arena.h>
