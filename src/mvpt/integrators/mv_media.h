@@ -32,9 +32,15 @@ struct MvMediaVertex {
 MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &ray, Sampler &sampler,
                                     RayCounters &counters);
 
-/// The native view's in-scattering along its camera segment to the shared vertex y (§10):
-/// a forced scattering where the segment has one piece in a medium that can draw it, else
-/// the volumetric path tracer's ScatteredInMedium part.
+/// How many estimates of the in-scattering a native sample takes: 1 + InScatterPerOpacity
+/// (1 - T_l(y)) rounded, at most MaxInScatterEstimates.
+inline constexpr float InScatterPerOpacity = 4.f;
+inline constexpr int MaxInScatterEstimates = 5;
+
+/// The native view's in-scattering along its camera segment to the shared vertex y (§10), the
+/// mean of several estimates (more where the segment is more opaque), each a forced
+/// scattering where the segment has one piece in a medium that can draw it, else the
+/// volumetric path tracer's ScatteredInMedium part.
 Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const MvMediaVertex &y, Sampler &sampler,
                           RayCounters &counters);
 

@@ -59,13 +59,13 @@ Spectrum VolPathIntegrator::scatter_in_medium(const Scene &scene, const Medium &
 }
 
 Spectrum VolPathIntegrator::in_scattering(const Scene &scene, const Ray &ray, const Medium &medium, Sampler &sampler,
-                                          RayCounters &counters, bool &drawn) const {
+                                          RayCounters &counters, bool &drawn, uint32_t dims) const {
     drawn = false;
     if (m_cfg.max_depth >= 0 && m_cfg.max_depth <= 1) { // a scattering would end the path
         drawn = true;
         return Spectrum(0.f);
     }
-    sampler.set_dimension(DimInScatter + 1); // the layout of a step's block (VolDimsPerStep)
+    sampler.set_dimension(dims + 1); // the layout of a step's block (VolDimsPerStep)
     const float u = sampler.next_1d();
     MediumSample ms;
     if (!medium.sample_within(ray, ray.tmax, u, ms)) return Spectrum(0.f);
@@ -76,9 +76,9 @@ Spectrum VolPathIntegrator::in_scattering(const Scene &scene, const Ray &ray, co
     state.throughput = ms.weight;
     state.prev_p = ray.at(ms.t);
     Ray next{state.prev_p, ray.d, 0.f, Infinity, ray.time};
-    Spectrum result = scatter_in_medium(scene, medium, state.throughput, DimInScatter, sampler, counters, next,
+    Spectrum result = scatter_in_medium(scene, medium, state.throughput, dims, sampler, counters, next,
                                         state.prev_bsdf_pdf, state.prev_bsdf_delta);
-    return result + trace(scene, next, &medium, state, sampler, counters, VolPathPart::ScatteredInMedium);
+    return result + trace(scene, next, &medium, state, sampler, counters, VolPathPart::ScatteredInMedium, dims);
 }
 
 Spectrum VolPathIntegrator::li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const {
@@ -93,20 +93,20 @@ void VolPathIntegrator::li_batch(const Scene &scene, const Ray *rays, Sampler *s
 }
 
 Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler,
-                                  RayCounters &counters, VolPathPart part) const {
+                                  RayCounters &counters, VolPathPart part, uint32_t dims) const {
     // Start at the near plane: media fill the segment the camera sees.
     ray.o = ray.at(ray.tmin), ray.tmax -= ray.tmin, ray.tmin = 0.f;
     PathState start;
     start.prev_p = ray.o;
-    return trace(scene, ray, medium, start, sampler, counters, part);
+    return trace(scene, ray, medium, start, sampler, counters, part, dims);
 }
 
 Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *medium, const PathState &start,
-                                  Sampler &sampler, RayCounters &counters, VolPathPart part) const {
+                                  Sampler &sampler, RayCounters &counters, VolPathPart part, uint32_t dims) const {
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
     const BsdfContext ctx;
     const bool scattered_only = part == VolPathPart::ScatteredInMedium;
-    const uint32_t dim0 = scattered_only ? DimInScatter : DimCameraEnd;
+    const uint32_t dim0 = dims;
 
     Spectrum result(0.f), throughput = start.throughput;
     float eta = start.eta;

@@ -16,9 +16,10 @@ struct LightSample;
 /// Sample dimensions per step of a volumetric path: roulette, free flight and its stream,
 /// emitter choice, point and the shadow ray's stream, lobe, direction (phase: at the lobe's).
 inline constexpr uint32_t VolDimsPerStep = 8;
-/// Where the steps of VolPathPart::ScatteredInMedium start: clear of the blocks of a path
-/// that continues from a surface, and of multi-view path tracing's draws at its shared vertex.
-inline constexpr uint32_t DimInScatter = 1u << 24;
+/// Where the steps of the estimates of VolPathPart::ScatteredInMedium start (estimate j at
+/// DimInScatter + j DimInScatterStride): clear of the blocks of a path that continues from a
+/// surface, and of multi-view path tracing's draws at its shared vertex.
+inline constexpr uint32_t DimInScatter = 1u << 24, DimInScatterStride = 1u << 20;
 
 /// Which part of a volumetric path's radiance `VolPathIntegrator::trace` estimates.
 enum class VolPathPart {
@@ -40,22 +41,25 @@ public:
     /// The path tracer of the same depths, for scenes without media (and multi-view path tracing).
     const PathIntegrator &surfaces() const { return m_surfaces; }
     /// Radiance along a camera ray that starts in `medium` (null: vacuum), from its near plane.
+    /// `dims`: the first sampler dimension of the path's step blocks.
     Spectrum li_in(const Scene &scene, Ray ray, const Medium *medium, Sampler &sampler, RayCounters &counters,
-                   VolPathPart part = VolPathPart::All) const;
+                   VolPathPart part = VolPathPart::All, uint32_t dims = DimCameraEnd) const;
     /// Radiance carried back along `ray` (from its origin, in `medium`) by the path that
     /// continues from `start` (its depth, eta, throughput and the previous vertex's sampling
-    /// density; `start.valid` is not used). Its steps' sampler blocks start at its depth.
+    /// density; `start.valid` is not used). Its steps' sampler blocks start at `dims` plus its
+    /// depth's block.
     Spectrum trace(const Scene &scene, Ray ray, const Medium *medium, const PathState &start, Sampler &sampler,
-                   RayCounters &counters, VolPathPart part = VolPathPart::All) const;
+                   RayCounters &counters, VolPathPart part = VolPathPart::All, uint32_t dims = DimCameraEnd) const;
     std::string name() const override { return "volpath"; }
 
     /// VolPathPart::ScatteredInMedium along `ray` (from its origin, unit direction) when all of
     /// [0, ray.tmax) lies in `medium` and it ends at a surface that is not null: one forced
     /// scattering in it (Medium::sample_within: every call scatters, with a bounded weight,
     /// where a free flight scatters only with the segment's opacity), and the path from there.
-    /// `drawn` is false where the medium cannot force it (then the result is zero).
+    /// `drawn` is false where the medium cannot force it (then the result is zero). `dims` as
+    /// for `trace`.
     Spectrum in_scattering(const Scene &scene, const Ray &ray, const Medium &medium, Sampler &sampler,
-                           RayCounters &counters, bool &drawn) const;
+                           RayCounters &counters, bool &drawn, uint32_t dims = DimInScatter) const;
 
 private:
     /// A scattering at `ray.o` in `medium` coming along `ray.d`, with the path's `throughput`:
