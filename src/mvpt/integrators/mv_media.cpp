@@ -17,15 +17,7 @@ MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &r
     RandomStream rs = sampler.next_stream();
     // From the near plane, as the volumetric path tracer's camera rays.
     Ray r{ray.at(ray.tmin), ray.d, 0.f, ray.tmax - ray.tmin, ray.time};
-    SegmentWalk w = walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters);
-    MvMediaVertex out;
-    out.walk = w;
-    out.near = r;
-    out.found = w.stopped && w.si.is_valid();
-    out.si = w.si;
-    out.tr = w.tr;
-    out.medium = w.medium;
-    return out;
+    return {walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters), r};
 }
 
 Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const MvMediaVertex &y, Sampler &sampler,
@@ -34,14 +26,15 @@ Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const 
     if (w.medium_pieces == 0 && !w.crossed_emitter) return Spectrum(0.f); // nothing on the segment
     // More estimates where the segment is more opaque: the in-scattering, the native view's own,
     // is then more of its variance (docs/performance.md: 1 + 4 (1 - T), measured on fog).
-    const float opacity = 1.f - (y.tr[0] + y.tr[1] + y.tr[2]) * (1.f / 3.f);
+    const float opacity = 1.f - (w.tr[0] + w.tr[1] + w.tr[2]) * (1.f / 3.f);
     const int estimates = std::clamp(1 + int(InScatterPerOpacity * opacity + 0.5f), 1, MaxInScatterEstimates);
+    // One piece in a medium, vacuum and null surfaces elsewhere: the piece's start is reached.
+    const bool one_piece = w.medium_pieces == 1 && !w.crossed_emitter;
+    const Ray piece{y.near.at(w.piece_t0), y.near.d, 0.f, w.piece_t1 - w.piece_t0, y.near.time};
     Spectrum sum(0.f);
     for (int j = 0; j < estimates; ++j) {
         const uint32_t dims = DimInScatter + uint32_t(j) * DimInScatterStride;
-        if (w.medium_pieces == 1 && !w.crossed_emitter) {
-            // Vacuum and null surfaces elsewhere on the segment: the piece's start is reached.
-            const Ray piece{y.near.at(w.piece_t0), y.near.d, 0.f, w.piece_t1 - w.piece_t0, y.near.time};
+        if (one_piece) {
             bool drawn = false;
             Spectrum L = ctx.volpath->in_scattering(*ctx.scene, piece, *w.piece_medium, sampler, counters, drawn, dims);
             if (drawn) { sum += L; continue; }

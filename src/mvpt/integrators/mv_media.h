@@ -20,12 +20,12 @@ inline constexpr uint32_t DimSharedShadow = DimCameraEnd + 5;
 
 /// The first surface along a native camera ray that is not null.
 struct MvMediaVertex {
-    bool found = false;     ///< false: the ray leaves the scene (or crosses too many null surfaces)
-    SurfaceInteraction si;
-    Spectrum tr{1.f};       ///< the transmittance from the near plane to it
-    const Medium *medium = nullptr; ///< the medium the ray is in when it arrives
-    SegmentWalk walk;               ///< the walk from the near plane (its media pieces)
-    Ray near;                       ///< the walked ray: the camera ray from its near plane
+    /// The walk from the near plane: the vertex (walk.si), the transmittance to it (walk.tr),
+    /// the medium the ray arrives in (walk.medium) and the segment's media pieces.
+    SegmentWalk walk;
+    Ray near; ///< the walked ray: the camera ray from its near plane
+    /// False: the ray leaves the scene (or crosses too many null surfaces).
+    bool found() const { return walk.stopped && walk.si.is_valid(); }
 };
 
 /// Walks view `slot`'s camera `ray` through media and null surfaces from its near plane.

@@ -375,8 +375,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     MvMediaVertex media_y;
     if (ctx.volpath) {
         media_y = mv_media_first_vertex(ctx, slot_l, ray, sampler, counters);
-        hit = media_y.found;
-        if (hit) si = media_y.si;
+        hit = media_y.found();
+        if (hit) si = media_y.walk.si;
     }
     // The next sample's rig cells start loading (trace_visibility consults them unless only
     // the selected views are traced).
@@ -445,7 +445,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     // The balance estimator needs the visibility of every candidate (it enters D); the
     // published variant only that of the selected ones.
     if (ctx.volpath)
-        mv_media_visibility(ctx, sc, si, media_y.tr, ctx.cfg.mis_selected_only, &sampler, counters, &st_l);
+        mv_media_visibility(ctx, sc, si, media_y.walk.tr, ctx.cfg.mis_selected_only, &sampler, counters, &st_l);
     else
         trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
@@ -496,7 +496,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
                 if (ctx.volpath) { // the transmittance to the light, now
                     sampler.set_dimension(DimSharedShadow);
                     RandomStream rs = sampler.next_stream();
-                    weight *= shadow_transmittance(scene, shadow, mv_medium_towards(si, ls.d, media_y.medium), rs,
+                    weight *= shadow_transmittance(scene, shadow, mv_medium_towards(si, ls.d, media_y.walk.medium), rs,
                                                    counters);
                 } else { // a shadow ray, traced with the tile's others
                     nee_shadow = int32_t(pending.shadow_rays.size());
@@ -548,7 +548,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             rec.suffix = int32_t(pending.rays.size());
             const Vec3f wo = si.to_world(bs.wo);
             pending.rays.push_back(si.spawn_ray(wo));
-            if (ctx.volpath) pending.media.push_back(mv_medium_towards(si, wo, media_y.medium));
+            if (ctx.volpath) pending.media.push_back(mv_medium_towards(si, wo, media_y.walk.medium));
             pending.states.push_back(state);
             pending.samplers.push_back(sampler);
         }
@@ -573,7 +573,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         }
         if (mix.delta) rec.delta_bounce *= sc.tr[sharing[mix.view]];
         const Spectrum in_scattered = mv_in_scattering(ctx, slot_l, ray, media_y, sampler, counters);
-        rec.e = (le_y * media_y.tr + in_scattered) * (1.f / n_l);
+        rec.e = (le_y * media_y.walk.tr + in_scattered) * (1.f / n_l);
     }
     rec.hash = sampler.sample_hash();
     int *const slot_out = pending.slot.data() + first;
