@@ -138,6 +138,9 @@ def write_multiview_exr(result, path, stereo: bool = False, aovs: bool = False) 
 
 
 STAGING_PREFIX = ".mvpt-writing-"
+# In a staging directory: the names of its files in the order they move, written (atomically)
+# before the first move. A staging directory that has it holds a set that was complete.
+COMMIT_RECORD = ".commit"
 
 
 def _alive(pid: int) -> bool:
@@ -150,33 +153,53 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def _move_committed(staging: Path, out: Path, names: list) -> list:
+    """Moves the files `names` of `staging` into `out` in that order (those already moved are
+    skipped); their final paths."""
+    for name in names:
+        if (staging / name).exists():
+            os.replace(staging / name, out / name)
+    return [str(out / name) for name in names]
+
+
+def recover_outputs(out_dir) -> None:
+    """Finishes the output sets that processes no longer running (killed while writing) left in
+    `out_dir`: a staging directory with its commit record held a complete set, whose moves are
+    completed; one without held an unfinished set, which is removed, leaving the previous
+    outputs."""
+    for old in Path(out_dir).glob(f"{STAGING_PREFIX}*"):
+        pid = old.name[len(STAGING_PREFIX):].split("-")[0]
+        if not (pid.isdigit() and not _alive(int(pid))):
+            continue
+        record = old / COMMIT_RECORD
+        if record.is_file():
+            _move_committed(old, Path(out_dir), json.loads(record.read_text(encoding="utf-8")))
+        shutil.rmtree(old, ignore_errors=True)
+
+
 @contextlib.contextmanager
 def staged_outputs(out_dir):
     """A staging directory inside `out_dir` for a render's outputs; on success the files
     written there (their paths appended to the yielded list) move into `out_dir`, JSON files
-    last, and the list then holds their final paths. On an exception nothing moves and the
-    staging directory is removed. Staging directories of processes that no longer run (killed
-    while writing) are removed first."""
+    last, and the list then holds their final paths. A commit record written before the first
+    move makes the set atomic even under SIGKILL: recover_outputs, run first here, completes the
+    moves of a killed process that had written it and removes the staging directory of one that
+    had not. On an exception nothing moves and the staging directory is removed."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    for old in out.glob(f"{STAGING_PREFIX}*"):
-        pid = old.name[len(STAGING_PREFIX):].split("-")[0]
-        if pid.isdigit() and not _alive(int(pid)):
-            shutil.rmtree(old, ignore_errors=True)
+    recover_outputs(out)
     staging = out / f"{STAGING_PREFIX}{os.getpid()}-{secrets.token_hex(4)}"
     staging.mkdir()
     written: list = []
     try:
         yield staging, written
-        order = sorted(written, key=lambda p: Path(p).suffix == ".json")
-        for p in order:  # what would stop a move, before anything moves
-            if (out / Path(p).name).is_dir():
-                raise IsADirectoryError(f"cannot write '{out / Path(p).name}': a directory is in the way")
-        moved = []
-        for p in order:
-            final = out / Path(p).name
-            os.replace(p, final)
-            moved.append(str(final))
-        written[:] = moved
+        names = [Path(p).name for p in sorted(written, key=lambda p: Path(p).suffix == ".json")]
+        for name in names:  # what would stop a move, before anything moves
+            if (out / name).is_dir():
+                raise IsADirectoryError(f"cannot write '{out / name}': a directory is in the way")
+        record = staging / (COMMIT_RECORD + ".tmp")
+        record.write_text(json.dumps(names), encoding="utf-8")
+        os.replace(record, staging / COMMIT_RECORD)
+        written[:] = _move_committed(staging, out, names)
     finally:
         shutil.rmtree(staging, ignore_errors=True)

@@ -1,7 +1,8 @@
 """A render's outputs appear as a set: SIGINT, SIGTERM and SIGHUP at random points of a render
 and of its writing leave a consistent set (the JSON describes every image present: the
 previous render's or the new one's); SIGKILL leaves every file whole and, once the JSON is the
-new one, every image new; a write that fails (the file-size limit standing in for a full disk)
+new one, every image new, and once recovered (by the next render there) the previous set or the
+new one whole; a write that fails (the file-size limit standing in for a full disk)
 leaves the previous outputs and no file under a final name."""
 from __future__ import annotations
 
@@ -112,6 +113,49 @@ def test_sigkill_leaves_whole_files(many, tmp_path):
         # A later render removes the killed one's staging directory.
         _previous(out, path)
         assert not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+# Writes a set of four files with staged_outputs and SIGKILLs itself at a chosen move: before the
+# commit record (-1) or before the k-th file's move.
+_KILLED_WHILE_MOVING = """
+import os, signal, sys
+from pathlib import Path
+from mvpt import output
+out, kill_at = Path(sys.argv[1]), int(sys.argv[2])
+real, moved = os.replace, []
+def replace(src, dst):
+    if Path(dst).name == output.COMMIT_RECORD and kill_at == -1:
+        os.kill(os.getpid(), signal.SIGKILL)
+    if Path(dst).parent == out:
+        if len(moved) == kill_at:
+            os.kill(os.getpid(), signal.SIGKILL)
+        moved.append(src)
+    real(src, dst)
+os.replace = replace
+with output.staged_outputs(out) as (staging, written):
+    for name in ("set_a.exr", "set_b.exr", "set_a.png", "set.json"):
+        (staging / name).write_text("new " + name)
+        written.append(str(staging / name))
+"""
+
+
+@pytest.mark.parametrize("kill_at", [-1, 0, 1, 2, 3])
+def test_sigkill_while_moving_leaves_one_set_once_recovered(tmp_path, kill_at):
+    """SIGKILL between the moves into place: the next mvpt that writes there (recover_outputs)
+    finishes a set whose commit record was written and removes one whose record was not, so
+    the directory holds the previous set or the new one, whole."""
+    from mvpt import output
+    out = tmp_path / "out"
+    out.mkdir()
+    names = ("set_a.exr", "set_b.exr", "set_a.png", "set.json")
+    for name in names:
+        (out / name).write_text("old " + name)
+    proc = subprocess.run([sys.executable, "-c", _KILLED_WHILE_MOVING, str(out), str(kill_at)], env=ENV)
+    assert proc.returncode == -signal.SIGKILL
+    output.recover_outputs(out)
+    contents = {(out / name).read_text().split()[0] for name in names}
+    assert contents == ({"old"} if kill_at == -1 else {"new"}), contents
+    assert sorted(p.name for p in out.iterdir()) == sorted(names)  # no staging left
 
 
 def _limit_file_size(limit: int):

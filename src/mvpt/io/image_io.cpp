@@ -135,20 +135,23 @@ ImageRGB read_image(const fs::path &path, bool raw) {
         // Read R, G, B (or a single Y) as 32-bit floats, whatever the stored type.
         try {
             Imf::InputFile file(path.c_str());
-            Imath::Box2i dw = file.header().dataWindow();
+            const Imath::Box2i dw = file.header().dataWindow();
             img.width = dw.max.x - dw.min.x + 1;
             img.height = dw.max.y - dw.min.y + 1;
             const Imf::ChannelList &cl = file.header().channels();
             bool rgb = cl.findChannel("R") && cl.findChannel("G") && cl.findChannel("B");
             if (!rgb && !cl.findChannel("Y")) throw std::runtime_error("no R, G, B or Y channels");
+            if (!file.isComplete()) throw std::runtime_error("the file is truncated (pixel blocks are missing)");
             size_t n = size_t(img.width) * img.height;
+            if (n > MaxImagePixels)
+                throw std::runtime_error(std::to_string(img.width) + " x " + std::to_string(img.height) +
+                                         " pixels, more than the " + std::to_string(MaxImagePixels) + " an image may have");
             img.rgb.assign(3 * n, 0.f);
             Imf::FrameBuffer fb;
-            char *base = (char *)img.rgb.data() - (size_t(dw.min.x) + size_t(dw.min.y) * img.width) * 3 * sizeof(float);
             const char *names[3] = {"R", "G", "B"};
-            for (int c = 0; c < (rgb ? 3 : 1); ++c)
-                fb.insert(rgb ? names[c] : "Y", Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 3 * sizeof(float),
-                                                           3 * sizeof(float) * img.width));
+            for (int c = 0; c < (rgb ? 3 : 1); ++c) // Slice::Make offsets by the data window's origin
+                fb.insert(rgb ? names[c] : "Y", Imf::Slice::Make(Imf::FLOAT, img.rgb.data() + c, dw, 3 * sizeof(float),
+                                                                 3 * sizeof(float) * img.width));
             file.setFrameBuffer(fb);
             file.readPixels(dw.min.y, dw.max.y);
             if (!rgb)
@@ -159,6 +162,9 @@ ImageRGB read_image(const fs::path &path, bool raw) {
         return img;
     }
     int w, h, n;
+    if (stbi_info(path.c_str(), &w, &h, &n) && size_t(w) * size_t(h) > MaxImagePixels)
+        throw std::runtime_error("cannot read image: " + std::to_string(w) + " x " + std::to_string(h) +
+                                 " pixels, more than the " + std::to_string(MaxImagePixels) + " an image may have");
     if (ext == ".hdr") {
         std::ifstream in(path, std::ios::binary);
         const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -26,6 +26,9 @@ struct ImageRGB {
     std::vector<float> rgb;
 };
 ImageRGB read_image(const std::filesystem::path &path, bool raw = false);
+/// The most pixels an image file may have (16384 x 16384, 3 GiB as float RGB): a header that
+/// claims more is refused before anything is allocated.
+inline constexpr size_t MaxImagePixels = size_t(1) << 28;
 
 /// Rename `tmp` onto `path` (same directory), removing `tmp` on failure.
 void commit_file(const std::filesystem::path &tmp, const std::filesystem::path &path);

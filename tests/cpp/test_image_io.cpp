@@ -1,0 +1,78 @@
+// Reading image files: an EXR whose data window does not start at the origin reads its pixels
+// in order; a truncated EXR and a header that claims more than MaxImagePixels are refused.
+#include "mvpt/io/image_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace mvpt;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path test_dir() {
+    fs::path dir = fs::temp_directory_path() / "mvpt_image_io_tests";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// A one-channel ("Y") EXR of w x h pixels whose data window starts at `origin`, pixel i = i.
+void write_y_exr(const fs::path &path, Imath::V2i origin, int w, int h) {
+    const Imath::Box2i dw(origin, origin + Imath::V2i(w - 1, h - 1));
+    Imf::Header header(Imath::Box2i({0, 0}, {w - 1, h - 1}), dw);
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    std::vector<float> y(size_t(w) * h);
+    for (size_t i = 0; i < y.size(); ++i) y[i] = float(i);
+    Imf::FrameBuffer fb;
+    fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, y.data(), dw));
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+}
+
+std::string read_error(const fs::path &path) {
+    try {
+        read_image(path);
+    } catch (const std::exception &e) {
+        return e.what();
+    }
+    return "";
+}
+
+} // namespace
+
+TEST(ImageIo, ExrDataWindowAwayFromTheOrigin) {
+    for (Imath::V2i origin : {Imath::V2i(0, 0), Imath::V2i(-3, -2), Imath::V2i(5, 7)}) {
+        const fs::path p = test_dir() / "window.exr";
+        write_y_exr(p, origin, 4, 3);
+        const ImageRGB img = read_image(p);
+        ASSERT_EQ(img.width, 4);
+        ASSERT_EQ(img.height, 3);
+        for (int i = 0; i < 12; ++i)
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(img.rgb[3 * i + c], float(i)) << "origin " << origin << " pixel " << i;
+    }
+}
+
+TEST(ImageIo, TruncatedExrIsRefused) {
+    const fs::path p = test_dir() / "cut.exr";
+    write_y_exr(p, {0, 0}, 64, 64);
+    fs::resize_file(p, fs::file_size(p) / 2);
+    EXPECT_NE(read_error(p).find("cannot read EXR"), std::string::npos);
+}
+
+TEST(ImageIo, HeaderClaimingTooManyPixelsIsRefused) {
+    // A Radiance header of 20000 x 20000 pixels with no data: refused by its size, before any
+    // allocation, whatever else is wrong with it.
+    const fs::path p = test_dir() / "huge.hdr";
+    std::ofstream(p, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 20000 +X 20000\n";
+    const std::string what = read_error(p);
+    EXPECT_NE(what.find("20000 x 20000 pixels, more than"), std::string::npos) << what;
+}
