@@ -261,3 +261,34 @@ TEST(SplatFilm, FilterDensityIsWhatPathTracingSamples) {
         EXPECT_LE(peak, filter->peak_1d() * 1.0001) << type;
     }
 }
+
+TEST(SplatFilm, ManyViewsShareARegionWithoutDisplacing) {
+    // 81 views of 64 x 64 pixels (a 9 x 9 light field): the native samples of a region of tiles
+    // land in every view on a window of up to 32 x 32 pixels, offset by the view's disparity.
+    // Each view owns a 32 x 32 block of the cache (entries_for(81)) with its pixels on it as on
+    // a torus, so all those windows are held at once: adding the region's contributions three
+    // times over displaces no entry before the flush.
+    constexpr int Views = 81, Size = 64, Window = 32;
+    const std::vector<SplatFootprint> views(Views, SplatFootprint::box(Size, Size));
+    MvPassFilm film(views, false);
+    SplatCache cache(film);
+    EXPECT_EQ(SplatCache::entries_for(Views), size_t(1) << 17);
+    for (int k = 0; k < 3; ++k)
+        for (int v = 0; v < Views; ++v) {
+            const int x0 = 10 + v % 9, y0 = 20 + v / 9; // the view's disparity
+            for (int y = y0; y < y0 + Window; ++y)
+                for (int x = x0; x < x0 + Window; ++x)
+                    ASSERT_TRUE(cache.add(v, uint32_t(y * Size + x), Vec2f(float(x) + 0.5f, float(y) + 0.25f), 0,
+                                          Spectrum(1.f), 1.f));
+        }
+    EXPECT_EQ(cache.displaced(), 0u);
+    cache.flush();
+    for (int v = 0; v < Views; ++v)
+        EXPECT_EQ(film.take(film.offset(v) + uint32_t((20 + v / 9 + 5) * Size + 10 + v % 9 + 7)).count, 3u);
+    // A window wider than a view's block wraps onto itself: entries are displaced (and the
+    // sums stay exact, SplatFilm.IndependentOfCacheSizeAndThreads).
+    SplatCache small(film);
+    for (int k = 0; k < 2; ++k)
+        for (int x = 0; x < 2 * Window; ++x) small.add(0, uint32_t(x), Vec2f(float(x) + 0.5f, 0.5f), 0, Spectrum(1.f), 1.f);
+    EXPECT_EQ(small.displaced(), uint64_t(2 * 2 * Window - Window));
+}

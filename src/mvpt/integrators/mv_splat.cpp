@@ -69,7 +69,7 @@ MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t,
             ++dropped[slots[i]], ++lost;
             continue;
         }
-        SplatEntry &p = cache.at(slots[i], pixels[i]);
+        SplatEntry &p = cache.at(slots[i], pixels[i], films[i]);
         if (_mm_movemask_ps(_mm_cmplt_ps(mag, exact)) == 0xf) {
             const D4 x = D4{f[0], f[1], f[2], f[3]} * scale + magic;
             I4 fixed, sum;

@@ -65,17 +65,31 @@ SplatEntry MvPassFilm::take(uint32_t key) {
 }
 
 SplatCache::SplatCache(MvPassFilm &film, size_t entries)
-    : m_film(&film), m_e_rgb(film.e_channels() == 3), m_entries(entries) {
+    : m_film(&film), m_e_rgb(film.e_channels() == 3), m_entries(entries ? entries : entries_for(film.views())) {
+    entries = m_entries.size();
     if (entries == 0 || (entries & (entries - 1)) != 0) throw std::invalid_argument("splat cache size must be a power of two");
     m_mask = uint32_t(entries - 1);
+    // Each view a block of 2^(bx + by) entries, the largest power of two that fits once per
+    // view, about square (2^bx wide, no wider than the widest window needs). With more views
+    // than blocks of 16 x 16 fit, those blocks overlap, spread by the golden ratio.
+    const size_t views = std::max<size_t>(film.views(), 1);
+    int widest = 1;
+    for (size_t s = 0; s < film.views(); ++s) widest = std::max(widest, film.footprint(int(s)).width);
+    uint32_t block_bits = 8;
+    while (block_bits < 30 && views << (block_bits + 1) <= entries) ++block_bits;
+    m_bits_x = block_bits - block_bits / 2;
+    while (m_bits_x > 4 && (1 << (m_bits_x - 1)) >= widest) --m_bits_x;
+    m_bits_y = block_bits - m_bits_x;
+    const bool apart = views << block_bits <= entries;
     for (size_t s = 0; s < film.views(); ++s) {
+        const SplatFootprint &f = film.footprint(int(s));
         m_offset.push_back(film.offset(int(s)));
-        m_box.push_back(film.footprint(int(s)).is_box());
-        m_tap_key.push_back(film.footprint(int(s)).tap_key);
-        m_peak.push_back(film.footprint(int(s)).peak);
-        // Views start at multiples of the golden ratio of the cache: the same pixel of
-        // different views falls on different entries.
-        m_base.push_back(uint32_t(((uint64_t(s) * 0x9E3779B97F4A7C15ull) >> 32) * entries >> 32));
+        m_box.push_back(f.is_box());
+        m_tap_key.push_back(f.tap_key);
+        m_peak.push_back(f.peak);
+        m_crop.insert(m_crop.end(), {f.crop_x, f.crop_y});
+        m_base.push_back(apart ? uint32_t(s << block_bits)
+                               : uint32_t(((uint64_t(s) * 0x9E3779B97F4A7C15ull) >> 32) * entries >> 32));
     }
 }
 
@@ -113,6 +127,7 @@ void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const floa
     // one uniform number u, keeps a tap when it crosses an integer (probability h / TapThreshold).
     const float u = float(mix_bits(sample + m_tap_key[size_t(slot)]) >> 40) * 0x1p-24f;
     float run = u;
+    const uint32_t wx0 = uint32_t(x0 - f.crop_x), wy0 = uint32_t(y0 - f.crop_y); // in the window
     for (int j = 0; j < ny; ++j) {
         const uint32_t row = uint32_t(y0 + j - f.crop_y) * uint32_t(f.width) + uint32_t(x0 - f.crop_x);
         for (int i = 0; i < nx; ++i) {
@@ -121,12 +136,12 @@ void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const floa
                 const float before = run;
                 run += h * (1.f / TapThreshold);
                 if (floor_int(run) == floor_int(before)) { // not kept (h == 0 never is)
-                    if ((i == hx) & (j == hy)) at(slot, row + uint32_t(i)).count += 1;
+                    if ((i == hx) & (j == hy)) at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j)).count += 1;
                     continue;
                 }
                 h = TapThreshold;
             }
-            SplatEntry &entry = at(slot, row + uint32_t(i));
+            SplatEntry &entry = at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j));
             for (int c = 0; c < 3; ++c) entry.lw[c] += to_fixed(v[c] * h);
             entry.w += to_fixed(v[3] * h);
             if (e)
@@ -137,8 +152,12 @@ void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const floa
 }
 
 void SplatCache::replace(SplatEntry &e, uint32_t key) {
-    if (e.key != UINT32_MAX) m_film->add(e);
-    else m_used.push_back(uint32_t(&e - m_entries.data()));
+    if (e.key != UINT32_MAX) {
+        m_film->add(e);
+        ++m_displaced;
+    } else {
+        m_used.push_back(uint32_t(&e - m_entries.data()));
+    }
     e = SplatEntry{};
     e.key = key;
 }

@@ -110,23 +110,40 @@ private:
 
 /// One thread's write-combining cache in front of an MvPassFilm: direct-mapped, a fixed
 /// number of entries whatever the views and film sizes. An entry displaced by another
-/// view-pixel is added to the film; flush() adds the rest at the end of a pass.
+/// view-pixel is added to the film; flush() adds the rest at the end of a pass. Each view owns
+/// a block of entries, as wide as the widest window (a power of two) and at least 16 rows high,
+/// on which its pixels lie as on a torus, (x mod width, y mod height): a band of 16 rows of a
+/// view's pixels, where a region of tiles shares its samples, then has an entry per pixel,
+/// without conflicts between views (with many views a block is narrower than the window).
 class SplatCache {
 public:
-    static constexpr size_t DefaultEntries = size_t(1) << 15; // 2 MiB
-    explicit SplatCache(MvPassFilm &film, size_t entries = DefaultEntries);
+    /// The entries for `views` views: a block of 32 x 32 per view (a region of tiles and its
+    /// spread across the views), from 2^15 (2 MiB) to 2^17 (8 MiB).
+    static size_t entries_for(size_t views) {
+        size_t n = size_t(1) << 15;
+        while (n < (size_t(1) << 17) && n < views * 1024) n *= 2;
+        return n;
+    }
+    /// A cache of `entries` (a power of two; 0: entries_for the film's views).
+    explicit SplatCache(MvPassFilm &film, size_t entries = 0);
 
     /// Whether a value may be splatted: finite and below SplatMax in magnitude.
     static bool fits(float x) { return std::abs(x) < float(SplatMax); }
     static bool fits(const Spectrum &s) { return fits(s[0]) & fits(s[1]) & fits(s[2]); }
 
-    /// The entry of pixel `pixel` of view `slot`, emptied (its old sums added to the film) if
-    /// it held another view-pixel.
-    SplatEntry &at(int slot, uint32_t pixel) {
+    /// The entry of pixel `pixel` (window index) at (x, y) of the window of view `slot`, emptied
+    /// (its old sums added to the film) if it held another view-pixel.
+    SplatEntry &at(int slot, uint32_t pixel, uint32_t x, uint32_t y) {
         const uint32_t key = m_offset[size_t(slot)] + pixel;
-        SplatEntry &e = m_entries[(m_base[size_t(slot)] + pixel) & m_mask];
+        const uint32_t torus = ((y & ((1u << m_bits_y) - 1)) << m_bits_x) | (x & ((1u << m_bits_x) - 1));
+        SplatEntry &e = m_entries[(m_base[size_t(slot)] + torus) & m_mask];
         if (e.key != key) [[unlikely]] replace(e, key);
         return e;
+    }
+    /// The same for the pixel of view `slot`'s window that holds film position `film`.
+    SplatEntry &at(int slot, uint32_t pixel, Vec2f film) {
+        const int *crop = &m_crop[2 * size_t(slot)];
+        return at(slot, pixel, uint32_t(int(film.x) - crop[0]), uint32_t(int(film.y) - crop[1]));
     }
     /// Add one shared contribution W*L, W at film position `film` (of the pixel with window
     /// index `pixel`, which the box filter uses) of the native sample whose Sampler::sample_hash
@@ -134,7 +151,7 @@ public:
     bool add(int slot, uint32_t pixel, Vec2f film, uint64_t sample, const Spectrum &lw, float w) {
         const float v[4] = {lw[0], lw[1], lw[2], w};
         if (!fits(v, m_peak[size_t(slot)])) return false;
-        if (m_box[size_t(slot)]) add_fitting(at(slot, pixel), v[0], v[1], v[2], v[3]);
+        if (m_box[size_t(slot)]) add_fitting(at(slot, pixel, film), v[0], v[1], v[2], v[3]);
         else add_footprint(slot, film, sample, v, nullptr);
         return true;
     }
@@ -147,7 +164,7 @@ public:
         const float e_kept[3] = {m_e_rgb ? e[0] : (e[0] + e[1] + e[2]) * (1.f / 3.f), e[1], e[2]};
         if (!fits(e_kept, m_e_rgb ? 3 : 1, m_peak[size_t(slot)])) return false;
         if (m_box[size_t(slot)]) {
-            SplatEntry &entry = at(slot, pixel);
+            SplatEntry &entry = at(slot, pixel, film);
             add_fitting(entry, v[0], v[1], v[2], v[3]);
             for (int c = 0; c < (m_e_rgb ? 3 : 1); ++c) entry.e[c] += to_fixed(e_kept[c]);
         } else {
@@ -181,6 +198,9 @@ public:
     void add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e);
     /// The weight below which a footprint's taps are played by Russian roulette.
     static constexpr float TapThreshold = 0.0625f;
+    /// How many entries were displaced by another view-pixel (added to the film before the
+    /// end of the pass) since the cache was made.
+    uint64_t displaced() const { return m_displaced; }
     /// Adds every entry to the film and empties the cache (the end of a pass).
     void flush();
     /// Empties the cache without adding anything (a pass that is abandoned).
@@ -196,9 +216,12 @@ private:
     std::vector<uint8_t> m_box;     ///< each view's filter is a box
     std::vector<uint64_t> m_tap_key; ///< each view's SplatFootprint::tap_key
     std::vector<float> m_peak;      ///< each view's largest filter weight
-    std::vector<uint32_t> m_base;   ///< where each view's pixels start in the cache (spread apart)
+    std::vector<int> m_crop;        ///< each view's crop window origin (x, y)
+    std::vector<uint32_t> m_base;   ///< where each view's block of entries starts
     std::vector<SplatEntry> m_entries;
     uint32_t m_mask;
+    uint64_t m_displaced = 0;
+    uint32_t m_bits_x, m_bits_y; ///< a view's block: 2^bits_x entries wide, 2^bits_y high
 };
 
 /// A native sample as reports name it, ordered as path tracing orders its samples for replay:

@@ -96,7 +96,7 @@ double Renderer::estimate_peak_bytes() const {
         per_pixel = std::max(film + double(MvPassFilm::bytes_per_pixel(cfg.estimator == MvEstimator::Weighted)),
                              developed + 2 * sizeof(float));
         // The splat cache, and the queues of a tile's native samples (up to 16 per pixel).
-        per_thread = double(SplatCache::DefaultEntries * sizeof(SplatEntry)) + (6 << 20);
+        per_thread = double(SplatCache::entries_for(m_views.size()) * sizeof(SplatEntry)) + (6 << 20);
     }
     const int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     return resident_bytes() + view_pixels * per_pixel + threads * per_thread;
