@@ -129,7 +129,7 @@ def test_cli_rig(tmp_path, capsys):
 
 
 EXPECTED_VIEWS = {"cornell-glossy-9": 9, "lightfield-5x5": 25, "stereo": 2, "shot-100": 100, "glossy-ggx-9": 9,
-                  "fog-ggx-9": 9}
+                  "fog-ggx-9": 9, "fog-lightfield-5x5": 25}
 
 
 def test_example_scene_list():

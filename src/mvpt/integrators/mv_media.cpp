@@ -25,7 +25,7 @@ Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const 
     const SegmentWalk &w = y.walk;
     if (w.medium_pieces == 0 && !w.crossed_emitter) return Spectrum(0.f); // nothing on the segment
     // More estimates where the segment is more opaque: the in-scattering, the native view's own,
-    // is then more of its variance (docs/performance.md: 1 + 4 (1 - T), measured on fog).
+    // is then more of its variance (docs/performance.md: 1 + 8 (1 - T), measured on two fog scenes).
     const float opacity = 1.f - (w.tr[0] + w.tr[1] + w.tr[2]) * (1.f / 3.f);
     const int estimates = std::clamp(1 + int(InScatterPerOpacity * opacity + 0.5f), 1, MaxInScatterEstimates);
     // One piece in a medium, vacuum and null surfaces elsewhere: the piece's start is reached.

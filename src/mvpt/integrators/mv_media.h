@@ -34,8 +34,8 @@ MvMediaVertex mv_media_first_vertex(const MvContext &ctx, int slot, const Ray &r
 
 /// How many estimates of the in-scattering a native sample takes: 1 + InScatterPerOpacity
 /// (1 - T_l(y)) rounded, at most MaxInScatterEstimates.
-inline constexpr float InScatterPerOpacity = 4.f;
-inline constexpr int MaxInScatterEstimates = 5;
+inline constexpr float InScatterPerOpacity = 8.f;
+inline constexpr int MaxInScatterEstimates = 9;
 
 /// The native view's in-scattering along its camera segment to the shared vertex y (§10), the
 /// mean of several estimates (more where the segment is more opaque), each a forced
