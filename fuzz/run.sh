@@ -7,7 +7,7 @@
 #                                             seed, the corpus in build/fuzz/corpus/ kept and grown
 #   bash fuzz/run.sh --fixed [TARGET ...]     what CI runs: a fixed seed and a fixed number of
 #                                             executions per target (about a minute each) from the
-#                                             seeds alone, so its verdict is the same on every run
+#                                             seeds alone (nearly the same inputs on every run)
 # A longer hunt: bash fuzz/run.sh 3600 fuzz_obj   (docs/testing.md, "Fuzzing").
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -59,7 +59,7 @@ jobs=${FUZZ_JOBS:-$(nproc)}
 fuzz_one() {
   local t=$1 corpus=build/fuzz/corpus/$1 findings=build/fuzz/findings/$1 log=build/fuzz/$1.log verdict budget
   budget=(-max_total_time="$seconds")
-  if [ $fixed = 1 ]; then  # a fresh corpus, so that the run depends on the repository alone
+  if [ $fixed = 1 ]; then  # a fresh corpus: the run starts from the repository alone
     corpus=build/fuzz/corpus-fixed/$t
     rm -rf "$corpus"
     budget=(-seed=1 -runs="${fixed_runs[$t]}" -max_total_time=300)
