@@ -7,6 +7,8 @@
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 
+#include "test_dirs.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -16,13 +18,6 @@ using namespace mvpt;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path test_dir() {
-    fs::path dir = fs::temp_directory_path() / "mvpt_image_io_tests";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
 
 /// A one-channel ("Y") EXR of w x h pixels whose data window starts at `origin`, pixel i = i.
 void write_y_exr(const fs::path &path, Imath::V2i origin, int w, int h) {
@@ -51,7 +46,7 @@ std::string read_error(const fs::path &path) {
 
 TEST(ImageIo, ExrDataWindowAwayFromTheOrigin) {
     for (Imath::V2i origin : {Imath::V2i(0, 0), Imath::V2i(-3, -2), Imath::V2i(5, 7)}) {
-        const fs::path p = test_dir() / "window.exr";
+        const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "window.exr";
         write_y_exr(p, origin, 4, 3);
         const ImageRGB img = read_image(p);
         ASSERT_EQ(img.width, 4);
@@ -62,7 +57,7 @@ TEST(ImageIo, ExrDataWindowAwayFromTheOrigin) {
 }
 
 TEST(ImageIo, TruncatedExrIsRefused) {
-    const fs::path p = test_dir() / "cut.exr";
+    const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "cut.exr";
     write_y_exr(p, {0, 0}, 64, 64);
     fs::resize_file(p, fs::file_size(p) / 2);
     EXPECT_NE(read_error(p).find("cannot read EXR"), std::string::npos);
@@ -71,7 +66,7 @@ TEST(ImageIo, TruncatedExrIsRefused) {
 TEST(ImageIo, HeaderClaimingTooManyPixelsIsRefused) {
     // A Radiance header of 20000 x 20000 pixels with no data: refused by its size, before any
     // allocation, whatever else is wrong with it.
-    const fs::path p = test_dir() / "huge.hdr";
+    const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "huge.hdr";
     std::ofstream(p, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 20000 +X 20000\n";
     const std::string what = read_error(p);
     EXPECT_NE(what.find("20000 x 20000 pixels, more than"), std::string::npos) << what;

@@ -6,6 +6,8 @@
 #include <ImfHeader.h>
 #include <ImfStandardAttributes.h>
 
+#include "test_dirs.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -14,13 +16,6 @@ using namespace mvpt;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path test_dir() {
-    fs::path dir = fs::temp_directory_path() / "mvpt_multiview_exr_tests";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
 
 ExrView ramp(const std::string &name, int w, int h, float offset) {
     ExrView v{name, w, h, {{"R", {}}, {"G", {}}, {"B", {}}}};
@@ -32,7 +27,7 @@ ExrView ramp(const std::string &name, int w, int h, float offset) {
 } // namespace
 
 TEST(MultiviewExr, PartsRoundTripWithViewAttributes) {
-    fs::path p = test_dir() / "views.exr";
+    fs::path p = fresh_test_dir("mvpt_multiview_exr_tests") / "views.exr";
     std::vector<ExrView> views = {ramp("left", 5, 3, 0.f), ramp("right", 4, 6, 100.f), ramp("center", 2, 2, 7.f)};
     write_multiview_exr(p, views);
 
@@ -64,7 +59,7 @@ TEST(MultiviewExr, PartsRoundTripWithViewAttributes) {
 }
 
 TEST(MultiviewExr, SinglePartFilesReadAsOneView) {
-    fs::path p = test_dir() / "single.exr";
+    fs::path p = fresh_test_dir("mvpt_multiview_exr_tests") / "single.exr";
     write_exr(p, 2, 1, {{"R", {1, 2}}, {"G", {3, 4}}, {"B", {5, 6}}});
     std::vector<ExrView> back = read_multiview_exr(p);
     ASSERT_EQ(back.size(), 1u);
@@ -74,7 +69,7 @@ TEST(MultiviewExr, SinglePartFilesReadAsOneView) {
 }
 
 TEST(MultiviewExr, BadViewsFailCleanly) {
-    fs::path dir = test_dir();
+    fs::path dir = fresh_test_dir("mvpt_multiview_exr_tests");
     EXPECT_THROW(write_multiview_exr(dir / "empty.exr", {}), std::runtime_error);
     EXPECT_THROW(write_multiview_exr(dir / "dup.exr", {ramp("a", 1, 1, 0), ramp("a", 1, 1, 0)}), std::runtime_error);
     ExrView bad = ramp("b", 2, 2, 0);

@@ -129,7 +129,7 @@ void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const floa
     float run = u;
     const uint32_t wx0 = uint32_t(x0 - f.crop_x), wy0 = uint32_t(y0 - f.crop_y); // in the window
     for (int j = 0; j < ny; ++j) {
-        const uint32_t row = uint32_t(y0 + j - f.crop_y) * uint32_t(f.width) + uint32_t(x0 - f.crop_x);
+        const uint32_t row = (wy0 + uint32_t(j)) * uint32_t(f.width) + wx0;
         for (int i = 0; i < nx; ++i) {
             float h = wx[i] * wy[j];
             if (h < TapThreshold) {
