@@ -278,7 +278,7 @@ def test_hg_asymmetry_out_of_range():
 
 @pytest.mark.parametrize("case,match", [
     ("truncated", r"bytes of data \(expected"), ("magic", "not a .vol file"), ("channels", "channels"),
-    ("resolution", "resolution"), ("nan", "not finite")])
+    ("resolution", "resolution"), ("nan", "not finite"), ("wrapping_resolution", r"more than 2\^30 values")])
 def test_bad_vol_files(tmp_path, case, match):
     path = write_vol(tmp_path / "g.vol", blob_grid(4))
     data = bytearray(path.read_bytes())
@@ -290,6 +290,9 @@ def test_bad_vol_files(tmp_path, case, match):
         data[20:24] = (2).to_bytes(4, "little")
     elif case == "resolution":
         data[8:12] = (-4).to_bytes(4, "little", signed=True)
+    elif case == "wrapping_resolution":  # 2^30 x 2^30 x 2^4 values wrap to 0: a header alone
+        data = data[:48]
+        data[8:20] = np.array([2**30, 2**30, 2**4], dtype="<i4").tobytes()
     elif case == "nan":
         data[48 + 8:48 + 12] = np.float32(np.nan).tobytes()
     path.write_bytes(bytes(data))

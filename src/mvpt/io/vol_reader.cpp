@@ -47,8 +47,10 @@ VolumeGrid read_vol(const std::filesystem::path &path, const FileLoc &loc) {
     float box[6];
     for (int i = 0; i < 6; ++i) box[i] = load_le<float>(p + 20 + 4 * i);
     g.box_min = Point3f(box[0], box[1], box[2]), g.box_max = Point3f(box[3], box[4], box[5]);
-    const uint64_t count = uint64_t(g.nx) * uint64_t(g.ny) * uint64_t(g.nz) * uint64_t(g.channels);
-    if (count > MaxValues) fail("more than 2^30 values");
+    // Each partial product checked: the full product of three 31-bit counts can wrap past 2^64.
+    uint64_t count = uint64_t(g.nx) * uint64_t(g.ny);
+    if (count > MaxValues || (count *= uint64_t(g.nz)) > MaxValues || (count *= uint64_t(g.channels)) > MaxValues)
+        fail("more than 2^30 values");
     if (data.size() != HeaderBytes + 4 * count)
         fail(std::to_string(data.size() - HeaderBytes) + " bytes of data (expected " + std::to_string(4 * count) +
              " for the resolution and channels in its header)");
