@@ -11,7 +11,7 @@ many pairs B was faster, and whether the two builds' image hashes agree (a pure 
 must leave them equal). Differences of a percent or two are within the noise of a loaded
 2-core machine at 15 pairs: confirm them with instruction counts (profile_paths.py's docstring).
 
-    python bench/ab_profile.py --module SITE_A SITE_B /tmp/cbox.xml BASE --spp 16
+    python bench/ab_profile.py --module SITE_A SITE_B /tmp/cbox.xml BASE --spp 16 [--method mvpt]
 
 does the same with two builds of the Python module (each SITE a folder holding an `mvpt`
 package, as scripts/dev-build.sh makes under build/dev/site): one `mvpt.render` per process,
@@ -32,7 +32,7 @@ CPU = re.compile(r"\(([0-9.]+) s CPU\)")
 HASH = re.compile(r"image hash ([0-9a-f]+)")
 
 
-def run(binary: str, xml: str, base: str, spp: int) -> tuple[float, str]:
+def run(binary: str, xml: str, base: str, spp: int, method: str = "scene") -> tuple[float, str]:
     """One render of `binary`: its CPU seconds and image hash."""
     out = subprocess.run([binary, xml, base, str(spp), "1"], check=True, capture_output=True, text=True).stdout
     cpu, digest = CPU.search(out), HASH.search(out)
@@ -46,20 +46,20 @@ MODULE_RUN = r"""
 import hashlib, sys, time
 import numpy as np
 import mvpt
-xml, base, spp = sys.argv[1], sys.argv[2], int(sys.argv[3])
+xml, base, spp, method = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 scene = mvpt.load_string(open(xml).read(), base)
 t0 = time.process_time()
-r = mvpt.render(scene, spp=spp, seed=1, threads=1)
+r = mvpt.render(scene, spp=spp, seed=1, threads=1, method=method)
 cpu = time.process_time() - t0
 img = np.ascontiguousarray(np.asarray(r.images[r.view_ids[0]], np.float32))
 print(f"({cpu:.4f} s CPU), image hash {hashlib.sha256(img.tobytes()).hexdigest()[:16]}")
 """
 
 
-def run_module(site: str, xml: str, base: str, spp: int) -> tuple[float, str]:
+def run_module(site: str, xml: str, base: str, spp: int, method: str = "scene") -> tuple[float, str]:
     """One render through the module under `site`: its CPU seconds and image hash."""
     env = dict(os.environ, PYTHONPATH=site, OPENBLAS_NUM_THREADS="1")
-    out = subprocess.run([sys.executable, "-c", MODULE_RUN, xml, base, str(spp)], check=True, capture_output=True,
+    out = subprocess.run([sys.executable, "-c", MODULE_RUN, xml, base, str(spp), method], check=True, capture_output=True,
                          text=True, env=env).stdout
     cpu, digest = CPU.search(out), HASH.search(out)
     if not cpu or not digest:
@@ -76,13 +76,15 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--pairs", type=int, default=15)
     ap.add_argument("--module", action="store_true", help="A and B are folders holding builds of the Python module")
+    ap.add_argument("--method", default="scene", choices=["scene", "pt", "mvpt"],
+                    help="with --module: the render method (default: the scene's integrator)")
     args = ap.parse_args(argv)
     render = run_module if args.module else run
 
     a_cpu, b_cpu, hashes = [], [], set()
     for _ in range(args.pairs):
         for binary, times in ((args.a, a_cpu), (args.b, b_cpu)):
-            t, digest = render(binary, args.xml, args.base, args.spp)
+            t, digest = render(binary, args.xml, args.base, args.spp, args.method)
             times.append(t)
             hashes.add((binary, digest))
     ratios = [b / a for a, b in zip(a_cpu, b_cpu)]

@@ -31,14 +31,14 @@ inline Vec2f sincos_turn(float u) {
 /// Concentric map to the unit disk [Shirley & Chiu 1997]; density 1/pi.
 inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
     float x = 2.f * u.x - 1.f, y = 2.f * u.y - 1.f;
-    if (x == 0.f && y == 0.f) return {0.f, 0.f};
+    const bool centre = (x == 0.f) & (y == 0.f); // selected, not branched on: vector loops use this
     // phi = pi/4 (y/x) when |x| > |y|, else pi/2 - pi/4 (x/y) = pi/2 + a with
     // a = -pi/4 (x/y), whose cosine is -sin a and sine cos a. Both quotients are computed
     // and one selected (the comparison is unpredictable); the discarded one may be infinite.
     bool x_major = std::abs(x) > std::abs(y);
     float r = select(x_major, x, y);
     Vec2f sc = sincos_quarter_turn((Pi / 4.f) * select(x_major, y / x, -(x / y)));
-    return {r * select(x_major, sc.y, -sc.x), r * select(x_major, sc.x, sc.y)};
+    return {select(centre, 0.f, r * select(x_major, sc.y, -sc.x)), select(centre, 0.f, r * select(x_major, sc.x, sc.y))};
 }
 
 /// Cosine-weighted hemisphere around +z; density cos(theta)/pi.

@@ -78,6 +78,10 @@ struct RoughConductorInfo {
 
 class Bsdf : public Object {
 public:
+    /// Either direction below the surface (local frame): a one-sided lobe is zero there, and a
+    /// single call returns early rather than evaluate it.
+    static bool below(Vec3f wi, Vec3f wo) { return wi.z <= 0.f || wo.z <= 0.f; }
+
     /// Sample `wo` given `wi`; returns the sample and its weight f*|cos wo|/pdf
     /// (zero weight when sampling failed).
     virtual std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,

@@ -14,30 +14,22 @@ struct FresnelDielectric {
 };
 
 /// Dielectric reflectance for incident cosine `cos_theta_i` (negative: from
-/// inside) and relative IOR `eta` = n_inside / n_outside [Walter et al. 2007].
-inline FresnelDielectric fresnel_dielectric(float cos_theta_i, float eta) {
+/// inside) and relative IOR `eta` = n_inside / n_outside [Walter et al. 2007]. Branch-free
+/// (total internal reflection and eta = 1 are selected), so loops over views vectorise.
+[[gnu::always_inline]] inline FresnelDielectric fresnel_dielectric(float cos_theta_i, float eta) {
     FresnelDielectric r;
-    if (eta == 1.f) {
-        r.F = 0.f;
-        r.cos_theta_t = -cos_theta_i;
-        return r;
-    }
-    bool outside = cos_theta_i >= 0.f;
-    float rcp_eta = 1.f / eta;
-    r.eta_it = outside ? eta : rcp_eta;
-    r.eta_ti = outside ? rcp_eta : eta;
-    float cos_t_sqr = 1.f - r.eta_ti * r.eta_ti * (1.f - cos_theta_i * cos_theta_i);
-    float cos_i = std::abs(cos_theta_i);
-    if (cos_t_sqr <= 0.f) { // total internal reflection
-        r.F = 1.f;
-        r.cos_theta_t = 0.f;
-        return r;
-    }
-    float cos_t = std::sqrt(cos_t_sqr);
-    float a_s = (r.eta_ti * cos_i - cos_t) / (r.eta_ti * cos_i + cos_t);
-    float a_p = (cos_i - r.eta_ti * cos_t) / (cos_i + r.eta_ti * cos_t);
-    r.F = 0.5f * (a_s * a_s + a_p * a_p);
-    r.cos_theta_t = outside ? -cos_t : cos_t;
+    const bool outside = cos_theta_i >= 0.f, index_matched = eta == 1.f;
+    const float rcp_eta = 1.f / eta;
+    r.eta_it = select(outside, eta, rcp_eta);
+    r.eta_ti = select(outside, rcp_eta, eta);
+    const float cos_t_sqr = 1.f - r.eta_ti * r.eta_ti * (1.f - cos_theta_i * cos_theta_i);
+    const float cos_i = std::abs(cos_theta_i);
+    const bool total_internal = cos_t_sqr <= 0.f;
+    const float cos_t = std::sqrt(select(total_internal, 0.f, cos_t_sqr));
+    const float a_s = (r.eta_ti * cos_i - cos_t) / (r.eta_ti * cos_i + cos_t);
+    const float a_p = (cos_i - r.eta_ti * cos_t) / (cos_i + r.eta_ti * cos_t);
+    r.F = select(index_matched, 0.f, select(total_internal, 1.f, 0.5f * (a_s * a_s + a_p * a_p)));
+    r.cos_theta_t = select(index_matched, -cos_theta_i, select(total_internal, 0.f, select(outside, -cos_t, cos_t)));
     return r;
 }
 

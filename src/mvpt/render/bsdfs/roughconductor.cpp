@@ -1,15 +1,33 @@
 // Rough conductor: Cook-Torrance microfacet reflection with the conductor
 // Fresnel term [Walter et al. 2007] (Mitsuba 3's `roughconductor`). One-sided.
+#include "roughconductor.h"
+
+#include "../../core/multi_isa.h"
 #include "../../core/plugin.h"
 #include "../bsdf.h"
-#include "../fresnel.h"
+#include "../bsdf_views.h"
 #include "../texture.h"
 #include "conductor_ior.h"
 #include "microfacet_params.h"
 
-#include <tuple>
-
 namespace mvpt {
+
+/// rough_conductor_lobe<true, true> for the directions wi[0..n) and one wo: one vector loop.
+MVPT_MULTI_ISA void rough_conductor_lobe_views(const RoughConductorLocal &l, bool beckmann, const Vec3f *wi, size_t n,
+                                               Vec3f wo, Spectrum *f, float *pdf) {
+    for (size_t c0 = 0; c0 < n; c0 += ViewBlock::Size) {
+        ViewBlock b;
+        const size_t m = b.load(wi + c0, n - c0);
+        Spectrum fc;
+        float pc;
+        // One loop per distribution, without a lambda: it would not be compiled for this clone's ISA.
+        if (beckmann)
+            for (size_t c = 0; c < ViewBlock::Size; ++c) rough_conductor_lobe<true, true>(l, true, b.wi(c), wo, fc, pc), b.set(c, fc, pc);
+        else
+            for (size_t c = 0; c < ViewBlock::Size; ++c) rough_conductor_lobe<true, true>(l, false, b.wi(c), wo, fc, pc), b.set(c, fc, pc);
+        b.store(f + c0, pdf + c0, m);
+    }
+}
 
 class RoughConductor final : public Bsdf {
 public:
@@ -41,84 +59,67 @@ public:
         // Filled in place (one named result): returning a copied pair is slower.
         std::pair<BsdfSample, Spectrum> result;
         BsdfSample &bs = result.first;
-        float cos_theta_i = Frame::cos_theta(wi);
-        if (cos_theta_i <= 0.f) return result;
-        MicrofacetDistribution distr = m_distr.at(si);
+        if (Frame::cos_theta(wi) <= 0.f) return result;
+        const RoughConductorLocal l = at(si, true);
         float pdf_m = 0.f;
-        Vec3f m = distr.sample(wi, u2, &pdf_m);
-        bs.wo = reflect(wi, m);
+        const Vec3f m = MicrofacetDistribution(m_distr.type, l.alpha_u, l.alpha_v, l.sample_visible).sample(wi, u2, &pdf_m);
+        const RoughConductorSample s = rough_conductor_reflect(l, beckmann(), wi, m, pdf_m);
+        bs.wo = s.wo;
         bs.sampled_type = BsdfGlossyReflection;
-        if (pdf_m == 0.f || Frame::cos_theta(bs.wo) <= 0.f) return result;
-        // Jacobian of the half-vector mapping dm/dwo = 1 / (4 |wo.m|) [Walter et al. 2007, eq. 14].
-        bs.pdf = pdf_m / (4.f * dot(bs.wo, m));
-        float weight;
-        if (distr.sample_visible()) weight = distr.smith_g1(bs.wo, m);
-        else weight = distr.G(wi, bs.wo, m) * dot(wi, m) / (cos_theta_i * Frame::cos_theta(m));
-        Spectrum F = fresnel_conductor(dot(wi, m), m_ior.eta->eval(si.uv), m_ior.k->eval(si.uv));
-        Spectrum &w = result.second;
-        w = F * weight;
-        if (m_specular_reflectance) w *= m_specular_reflectance->eval(si.uv);
+        if (!s.ok) return result;
+        bs.pdf = s.pdf;
+        result.second = s.weight;
         return result;
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        return lobe<true, false>(at(si), wi, wo).first;
+        Spectrum f;
+        float pdf;
+        if (below(wi, wo)) return f;
+        const RoughConductorLocal l = at(si, true);
+        with_distribution(beckmann(), [&](auto b) { rough_conductor_lobe<true, false>(l, b, wi, wo, f, pdf); });
+        return f;
     }
 
     float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        return lobe<false, true>(Local{m_distr.at(si), {}, {}, {}}, wi, wo).second; // no textures but alpha
+        Spectrum f;
+        float pdf = 0.f;
+        if (below(wi, wo)) return pdf;
+        const RoughConductorLocal l = at(si, false);
+        with_distribution(beckmann(), [&](auto b) { rough_conductor_lobe<false, true>(l, b, wi, wo, f, pdf); });
+        return pdf;
     }
 
     std::pair<Spectrum, float> eval_pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi,
                                         Vec3f wo) const override {
-        return lobe<true, true>(at(si), wi, wo);
+        std::pair<Spectrum, float> out{Spectrum(0.f), 0.f};
+        if (below(wi, wo)) return out;
+        const RoughConductorLocal l = at(si, true);
+        with_distribution(beckmann(), [&](auto b) { rough_conductor_lobe<true, true>(l, b, wi, wo, out.first, out.second); });
+        return out;
     }
 
-    /// The textures and the distribution once for all the views.
+    /// The textures once for all the views, and one vector loop over them.
     void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
                         Spectrum *f, float *pdf) const override {
-        const Local local = at(si);
-        for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = lobe<true, true>(local, wi[c], wo);
+        rough_conductor_lobe_views(at(si, true), beckmann(), wi, n, wo, f, pdf);
     }
 
     float roughness(const SurfaceInteraction &si) const override { return m_distr.mean_alpha(si); }
 
 private:
-    /// What the lobe needs of the textures at a hit.
-    struct Local {
-        MicrofacetDistribution distr;
-        Spectrum eta, k, specular;
-    };
-    Local at(const SurfaceInteraction &si) const {
-        return {m_distr.at(si), m_ior.eta->eval(si.uv), m_ior.k->eval(si.uv),
-                m_specular_reflectance ? m_specular_reflectance->eval(si.uv) : Spectrum(1.f)};
-    }
-
-    /// f cos(theta_o) (if `F`) and the density of `sample` (if `P`) at (wi, wo), sharing the half
-    /// vector, D and G1(wi).
-    template <bool F, bool P> std::pair<Spectrum, float> lobe(const Local &l, Vec3f wi, Vec3f wo) const {
-        std::pair<Spectrum, float> out{Spectrum(0.f), 0.f};
-        const float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return out;
-        const Vec3f h = normalize(wi + wo);
-        const MicrofacetDistribution &distr = l.distr;
-        const float D = distr.eval(h);
-        const bool visible = distr.sample_visible();
-        const float g1_i = F || visible ? distr.smith_g1(wi, h) : 0.f;
-        if constexpr (F) {
-            if (D != 0.f) {
-                // f cos(theta_o) = F D G / (4 cos(theta_i)) [Walter et al. 2007, eq. 20].
-                const float value = D * (g1_i * distr.smith_g1(wo, h)) / (4.f * cos_theta_i);
-                Spectrum r = fresnel_conductor(dot(wi, h), l.eta, l.k) * value;
-                if (m_specular_reflectance) r *= l.specular;
-                out.first = r;
-            }
+    bool beckmann() const { return m_distr.type == MicrofacetType::Beckmann; }
+    /// The lobe's parameters at a hit (the colours only `with_colours`).
+    RoughConductorLocal at(const SurfaceInteraction &si, bool with_colours) const {
+        const MicrofacetDistribution distr = m_distr.at(si);
+        RoughConductorLocal l;
+        l.alpha_u = distr.alpha_u(), l.alpha_v = distr.alpha_v();
+        l.sample_visible = distr.sample_visible();
+        if (with_colours) {
+            l.eta = m_ior.eta->eval(si.uv), l.k = m_ior.k->eval(si.uv);
+            if (m_specular_reflectance) l.specular = m_specular_reflectance->eval(si.uv);
         }
-        if constexpr (P) {
-            if (dot(wi, h) > 0.f && dot(wo, h) > 0.f)
-                out.second = visible ? D * g1_i / (4.f * cos_theta_i) : distr.pdf(wi, h) / (4.f * dot(wo, h));
-        }
-        return out;
+        return l;
     }
 
     ConductorIor m_ior;

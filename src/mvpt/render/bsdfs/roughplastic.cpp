@@ -2,10 +2,12 @@
 // `roughplastic`): microfacet reflection plus a diffuse term attenuated by the
 // coating's precomputed rough transmittance and internal reflectance
 // [Weidlich and Wilkie 2007; Mitsuba's tabulation]. One-sided, isotropic.
+#include "../../core/multi_isa.h"
 #include "../../core/quadrature.h"
 #include "../../core/warp.h"
 #include "../../core/plugin.h"
 #include "../bsdf.h"
+#include "../bsdf_views.h"
 #include "../fresnel.h"
 #include "../ior.h"
 #include "../microfacet.h"
@@ -97,7 +99,77 @@ std::shared_ptr<const CoatingTables> coating_tables(MicrofacetType type, float a
     return cache.emplace(key, t).first->second;
 }
 
+/// What the rough plastic's lobe needs at a hit: the coating's constants and tables, and the
+/// textures' values there.
+struct RoughPlasticLocal {
+    float alpha = 0.1f, eta = 1.5f, inv_eta_2 = 1.f, specular_sampling_weight = 0.5f;
+    bool sample_visible = true;
+    const float *transmittance = nullptr; ///< CoatingTables::external_transmittance
+    Spectrum specular{1.f};               ///< the specular reflectance (1 when absent)
+    /// The diffuse reflectance over 1 - (its product with) the internal reflectance.
+    Spectrum diffuse_scaled{0.f};
+};
+
+/// The coating's transmittance towards cos_theta (in [0, 1]), linear in its table.
+[[gnu::always_inline]] inline float coating_transmittance(const float *t, float cos_theta) {
+    const float x = cos_theta * float(TransmittanceRes - 1);
+    const int idx = std::clamp(int(x), 0, TransmittanceRes - 2);
+    return lerp(x - float(idx), t[idx], t[idx + 1]);
+}
+
+/// The probability of sampling the coating's lobe given its transmittance t_i towards wi.
+[[gnu::always_inline]] inline float specular_probability(const RoughPlasticLocal &l, float t_i) {
+    const float ps = (1.f - t_i) * l.specular_sampling_weight, pd = t_i * (1.f - l.specular_sampling_weight);
+    return ps / (ps + pd);
+}
+
+/// f cos(theta_o) (if `Fv`): the coating's microfacet reflection plus the diffuse base seen
+/// through it; and the density of RoughPlastic::sample producing wo (if `Pv`), sharing the
+/// half vector, D, G1(wi) and the coating's transmittance towards wi. Zero below the surface;
+/// branch-free, so the loop over views vectorises. Beckmann's distribution where `beckmann`, else GGX.
+template <bool Fv, bool Pv>
+[[gnu::always_inline]] inline void rough_plastic_lobe(const RoughPlasticLocal &l, bool beckmann, Vec3f wi, Vec3f wo,
+                                                      Spectrum &f, float &pdf) {
+    const float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+    const bool above = !(cos_theta_i <= 0.f) & !(cos_theta_o <= 0.f);
+    const Vec3f h = normalize(wo + wi);
+    const float D = microfacet_d(h, l.alpha, l.alpha, beckmann);
+    const float t_i = coating_transmittance(l.transmittance, cos_theta_i);
+    const float g1_i = microfacet_g1(wi, h, l.alpha, l.alpha, beckmann);
+    if constexpr (Fv) {
+        const float fr = fresnel_dielectric(dot(wi, h), l.eta).F;
+        const float value = fr * D * (g1_i * microfacet_g1(wo, h, l.alpha, l.alpha, beckmann)) / (4.f * cos_theta_i);
+        const float base = InvPi * l.inv_eta_2 * cos_theta_o * t_i * coating_transmittance(l.transmittance, cos_theta_o);
+        f.r = select(above, value * l.specular.r + l.diffuse_scaled.r * base, 0.f);
+        f.g = select(above, value * l.specular.g + l.diffuse_scaled.g * base, 0.f);
+        f.b = select(above, value * l.specular.b + l.diffuse_scaled.b * base, 0.f);
+    }
+    if constexpr (Pv) {
+        const float prob_specular = specular_probability(l, t_i);
+        const float p_spec = select(l.sample_visible, D * g1_i / (4.f * cos_theta_i), D * h.z / (4.f * dot(wo, h)));
+        const float p = prob_specular * p_spec + (1.f - prob_specular) * (cos_theta_o * InvPi);
+        pdf = select(above, p, 0.f);
+    }
+}
+
 } // namespace
+
+/// rough_plastic_lobe<true, true> for the directions wi[0..n) and one wo: one vector loop.
+MVPT_MULTI_ISA void rough_plastic_lobe_views(const RoughPlasticLocal &l, bool beckmann, const Vec3f *wi, size_t n,
+                                             Vec3f wo, Spectrum *f, float *pdf) {
+    for (size_t c0 = 0; c0 < n; c0 += ViewBlock::Size) {
+        ViewBlock b;
+        const size_t m = b.load(wi + c0, n - c0);
+        Spectrum fc;
+        float pc;
+        // One loop per distribution, without a lambda: it would not be compiled for this clone's ISA.
+        if (beckmann)
+            for (size_t c = 0; c < ViewBlock::Size; ++c) rough_plastic_lobe<true, true>(l, true, b.wi(c), wo, fc, pc), b.set(c, fc, pc);
+        else
+            for (size_t c = 0; c < ViewBlock::Size; ++c) rough_plastic_lobe<true, true>(l, false, b.wi(c), wo, fc, pc), b.set(c, fc, pc);
+        b.store(f + c0, pdf + c0, m);
+    }
+}
 
 class RoughPlastic final : public Bsdf {
 public:
@@ -133,71 +205,66 @@ public:
             bs.wo = warp::square_to_cosine_hemisphere(u2);
             bs.sampled_type = BsdfDiffuseReflection;
         }
-        const auto [f, pdf] = lobe<true, true>(at(si), wi, bs.wo);
+        const auto [f, pdf] = eval_pdf(ctx, si, wi, bs.wo);
         bs.pdf = pdf;
         if (!(bs.pdf > 0.f)) return {bs, {}};
         return {bs, f / bs.pdf};
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        return lobe<true, false>(at(si), wi, wo).first;
+        Spectrum f;
+        float pdf;
+        if (below(wi, wo)) return f;
+        const RoughPlasticLocal l = at(si);
+        with_distribution(beckmann(), [&](auto b) { rough_plastic_lobe<true, false>(l, b, wi, wo, f, pdf); });
+        return f;
     }
 
-    float pdf(const BsdfContext &, const SurfaceInteraction &, Vec3f wi, Vec3f wo) const override {
-        return lobe<false, true>(Local{}, wi, wo).second;
+    float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        Spectrum f;
+        float pdf = 0.f;
+        if (below(wi, wo)) return pdf;
+        const RoughPlasticLocal l = constants();
+        with_distribution(beckmann(), [&](auto b) { rough_plastic_lobe<false, true>(l, b, wi, wo, f, pdf); });
+        return pdf;
     }
 
     std::pair<Spectrum, float> eval_pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi,
                                         Vec3f wo) const override {
-        return lobe<true, true>(at(si), wi, wo);
+        std::pair<Spectrum, float> out{Spectrum(0.f), 0.f};
+        if (below(wi, wo)) return out;
+        const RoughPlasticLocal l = at(si);
+        with_distribution(beckmann(), [&](auto b) { rough_plastic_lobe<true, true>(l, b, wi, wo, out.first, out.second); });
+        return out;
     }
 
-    /// The textures once for all the views.
+    /// The textures once for all the views, and one vector loop over them.
     void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
                         Spectrum *f, float *pdf) const override {
-        const Local local = at(si);
-        for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = lobe<true, true>(local, wi[c], wo);
+        rough_plastic_lobe_views(at(si), beckmann(), wi, n, wo, f, pdf);
     }
 
     float roughness(const SurfaceInteraction &) const override { return m_alpha; }
 
 private:
-    /// What the lobe needs of the textures at a hit.
-    struct Local {
-        Spectrum diffuse{0.f}, specular{1.f};
-    };
-    Local at(const SurfaceInteraction &si) const {
-        return {m_diffuse_reflectance->eval(si.uv),
-                m_specular_reflectance ? m_specular_reflectance->eval(si.uv) : Spectrum(1.f)};
+    /// The lobe's parameters that do not vary over the surface.
+    RoughPlasticLocal constants() const {
+        RoughPlasticLocal l;
+        l.alpha = distribution().alpha_u(), l.eta = m_eta, l.inv_eta_2 = m_inv_eta_2;
+        l.specular_sampling_weight = m_specular_sampling_weight;
+        l.sample_visible = m_sample_visible;
+        l.transmittance = m_coating->external_transmittance.data();
+        return l;
     }
-
-    /// f cos(theta_o) (if `F`) and the density of `sample` (if `P`) at (wi, wo), sharing the half
-    /// vector, D, G1(wi) and the coating's transmittance towards wi.
-    template <bool F, bool P> std::pair<Spectrum, float> lobe(const Local &l, Vec3f wi, Vec3f wo) const {
-        std::pair<Spectrum, float> out{Spectrum(0.f), 0.f};
-        const float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return out;
-        const MicrofacetDistribution distr = distribution();
-        const Vec3f h = normalize(wo + wi);
-        const float D = distr.eval(h), t_i = transmittance(cos_theta_i);
-        const bool visible = distr.sample_visible();
-        const float g1_i = F || visible ? distr.smith_g1(wi, h) : 0.f;
-        if constexpr (F) {
-            // The coating's microfacet reflection, then the diffuse base seen through it.
-            const float fr = fresnel_dielectric(dot(wi, h), m_eta).F;
-            Spectrum value(fr * D * (g1_i * distr.smith_g1(wo, h)) / (4.f * cos_theta_i));
-            if (m_specular_reflectance) value *= l.specular;
-            const float t_o = transmittance(cos_theta_o);
-            const Spectrum denom = m_nonlinear ? Spectrum(1.f) - l.diffuse * m_coating->internal_reflectance
-                                               : Spectrum(1.f - m_coating->internal_reflectance);
-            out.first = value + l.diffuse / denom * (InvPi * m_inv_eta_2 * cos_theta_o * t_i * t_o);
-        }
-        if constexpr (P) {
-            const float prob_specular = specular_probability_from(t_i);
-            const float p_spec = visible ? D * g1_i / (4.f * cos_theta_i) : distr.pdf(wi, h) / (4.f * dot(wo, h));
-            out.second = prob_specular * p_spec + (1.f - prob_specular) * warp::square_to_cosine_hemisphere_pdf(wo);
-        }
-        return out;
+    /// The lobe's parameters at a hit.
+    RoughPlasticLocal at(const SurfaceInteraction &si) const {
+        RoughPlasticLocal l = constants();
+        const Spectrum diffuse = m_diffuse_reflectance->eval(si.uv);
+        const Spectrum denom = m_nonlinear ? Spectrum(1.f) - diffuse * m_coating->internal_reflectance
+                                           : Spectrum(1.f - m_coating->internal_reflectance);
+        l.diffuse_scaled = diffuse / denom;
+        if (m_specular_reflectance) l.specular = m_specular_reflectance->eval(si.uv);
+        return l;
     }
 
     /// `alpha` (float, default 0.1), or equal `alpha_u`/`alpha_v`; anisotropy is rejected as by Mitsuba.
@@ -221,21 +288,13 @@ private:
             m_alpha = props.get_float("alpha", 0.1f);
         }
     }
+    bool beckmann() const { return m_type == MicrofacetType::Beckmann; }
     MicrofacetDistribution distribution() const {
         return MicrofacetDistribution(m_type, m_alpha, m_alpha, m_sample_visible);
     }
-    float specular_probability(float cos_theta_i) const { return specular_probability_from(transmittance(cos_theta_i)); }
-    /// The probability of sampling the coating's lobe given its transmittance t_i towards wi.
-    float specular_probability_from(float t_i) const {
-        float ps = (1.f - t_i) * m_specular_sampling_weight, pd = t_i * (1.f - m_specular_sampling_weight);
-        return ps / (ps + pd);
-    }
-    /// Linear interpolation in the transmittance table.
-    float transmittance(float cos_theta) const {
-        float x = cos_theta * float(TransmittanceRes - 1);
-        int idx = std::min(int(x), TransmittanceRes - 2);
-        const auto &t = m_coating->external_transmittance;
-        return lerp(x - float(idx), t[idx], t[idx + 1]);
+    float specular_probability(float cos_theta_i) const {
+        const RoughPlasticLocal l = constants();
+        return mvpt::specular_probability(l, coating_transmittance(l.transmittance, cos_theta_i));
     }
 
     MicrofacetType m_type;
