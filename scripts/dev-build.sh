@@ -12,5 +12,5 @@ cmake --build "$b" >&2
 mkdir -p "$b/site/mvpt"
 find "$b/site/mvpt" -maxdepth 1 -type l -delete
 ln -sf "$root"/python/mvpt/* "$b/site/mvpt/"
-ln -sf "$b"/_core*.so "$b/site/mvpt/"
+ln -sf "$b"/_core*.so "$b"/_probes*.so "$b/site/mvpt/"
 echo "export PYTHONPATH=$b/site"

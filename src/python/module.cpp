@@ -24,10 +24,6 @@ namespace nb = nanobind;
 using namespace nb::literals;
 using namespace mvpt;
 
-void bind_probes(nb::module_ &m);
-void bind_light_probes(nb::module_ &m);
-void bind_spectrum(nb::module_ &m);
-
 namespace {
 
 using FloatArray = nb::ndarray<nb::numpy, float>;
@@ -367,8 +363,4 @@ NB_MODULE(_core, m) {
         size_t h = img.height, w = img.width;
         return make_array(std::move(img.rgb), {h, w, 3});
     }, "path"_a);
-
-    bind_probes(m);
-    bind_light_probes(m);
-    bind_spectrum(m);
 }

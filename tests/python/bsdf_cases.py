@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from mvpt import _core
+from mvpt import _probes
 
-FLAGS = _core.BsdfProbe.flag_values
+FLAGS = _probes.BsdfProbe.flag_values
 DELTA = FLAGS["delta"]
 
 
 def probe(xml: str):
     """A BsdfProbe for one <bsdf> element."""
-    return _core.BsdfProbe(xml)
+    return _probes.BsdfProbe(xml)
 
 
 def direction(theta_deg: float, phi_deg: float = 0.0, below: bool = False) -> tuple:

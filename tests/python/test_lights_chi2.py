@@ -10,7 +10,7 @@ integrals refined at the silhouette)."""
 import numpy as np
 import pytest
 
-from mvpt import _core
+from mvpt import _core, _probes
 from chi2 import chi2_test
 from light_chi2 import chi2_directions, sidak_alpha
 
@@ -46,7 +46,7 @@ RECT = """<shape type="rectangle">
 
 @pytest.mark.parametrize("ref", [(0.0, 0.0, 0.0), (1.5, -1.0, 0.5), (0.2, 0.3, 1.6)])
 def test_area_rectangle(ref):
-    probe = _core.LightProbe(RECT)
+    probe = _probes.LightProbe(RECT)
     n = 200_000
     d, w, pdf, ok = sampled_dirs(probe, ref, n)
     check_weights(probe, ref, d, w, pdf, ok)
@@ -67,7 +67,7 @@ def test_area_cube_mesh():
     """Closed emitter: area sampling picks back faces half of the time (failed samples)."""
     xml = """<shape type="cube"><transform name="to_world"><scale value="0.5"/><rotate y="1" angle="20"/>
              <translate z="2.5"/></transform><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"""
-    probe = _core.LightProbe(xml)
+    probe = _probes.LightProbe(xml)
     ref = (0.4, 0.3, 0.0)
     d, w, pdf, ok = sampled_dirs(probe, ref, 200_000)
     assert 0.3 < ok.mean() < 0.7
@@ -107,7 +107,7 @@ def test_envmap_synthetic(tmp_path):
     xml = f"""<emitter type="envmap"><string name="filename" value="{tmp_path / 'env.exr'}"/>
               <float name="scale" value="0.5"/>
               <transform name="to_world"><rotate x="1" angle="35"/><rotate y="1" angle="-70"/></transform></emitter>"""
-    ok, p, msg = envmap_chi2(_core.LightProbe(xml), 300_000)
+    ok, p, msg = envmap_chi2(_probes.LightProbe(xml), 300_000)
     assert ok, msg
 
 
@@ -115,7 +115,7 @@ def test_envmap_mis_compensation(tmp_path):
     synthetic_envmap(tmp_path / "env.exr")
     xml = f"""<emitter type="envmap"><string name="filename" value="{tmp_path / 'env.exr'}"/>
               <boolean name="mis_compensation" value="true"/></emitter>"""
-    ok, p, msg = envmap_chi2(_core.LightProbe(xml), 200_000)
+    ok, p, msg = envmap_chi2(_probes.LightProbe(xml), 200_000)
     assert ok, msg
 
 
@@ -123,6 +123,6 @@ def test_envmap_matpreview():
     path = shared_scenes() / "m3data-matpreview" / "envmap.exr"
     if not path.exists():
         pytest.skip(f"shared scenes not available ({path} is absent)")
-    probe = _core.LightProbe(f'<emitter type="envmap"><string name="filename" value="{path}"/></emitter>')
+    probe = _probes.LightProbe(f'<emitter type="envmap"><string name="filename" value="{path}"/></emitter>')
     ok, p, msg = envmap_chi2(probe, 400_000, quad=16)  # 512 x 256 texels
     assert ok, msg

@@ -4,7 +4,7 @@ Mitsuba 3's own plugins (scalar_rgb) when it is installed."""
 import numpy as np
 import pytest
 
-from mvpt import _core
+from mvpt import _probes
 from test_lights_chi2 import synthetic_envmap
 
 try:
@@ -41,7 +41,7 @@ def test_envmap_texel_orientation(tmp_path, rotate):
         (ax, angle) = rotate
         tw = f'<transform name="to_world"><rotate x="{ax[0]}" y="{ax[1]}" z="{ax[2]}" angle="{angle}"/></transform>'
         R = rotation(ax, angle)
-    probe = _core.LightProbe(f'<emitter type="envmap"><string name="filename" value="{tmp_path / "env.exr"}"/>'
+    probe = _probes.LightProbe(f'<emitter type="envmap"><string name="filename" value="{tmp_path / "env.exr"}"/>'
                              f'<float name="scale" value="2"/>{tw}</emitter>')
     y, x = np.mgrid[1:h - 1, 0:w]  # the first and last rows are the poles
     d = latlong_dir((x.ravel() + 0.5) / w, y.ravel() / (h - 1)) @ R.T.astype(np.float32)
@@ -57,7 +57,7 @@ def test_envmap_texel_orientation(tmp_path, rotate):
 def test_envmap_matches_mitsuba(tmp_path):
     synthetic_envmap(tmp_path / "env.exr")
     fn = str(tmp_path / "env.exr")
-    probe = _core.LightProbe(f'<emitter type="envmap"><string name="filename" value="{fn}"/><float name="scale" value="1.5"/>'
+    probe = _probes.LightProbe(f'<emitter type="envmap"><string name="filename" value="{fn}"/><float name="scale" value="1.5"/>'
                              '<transform name="to_world"><rotate x="1" angle="40"/><rotate z="1" angle="15"/></transform></emitter>')
     em = mi.load_dict({"type": "envmap", "filename": fn, "scale": 1.5,
                        "to_world": mi.ScalarTransform4f().rotate([0, 0, 1], 15) @ mi.ScalarTransform4f().rotate([1, 0, 0], 40)})
@@ -81,7 +81,7 @@ def test_envmap_matches_mitsuba(tmp_path):
 
 
 def test_point_light_weight():
-    probe = _core.LightProbe('<emitter type="point"><point name="position" x="1" y="2" z="3"/>'
+    probe = _probes.LightProbe('<emitter type="point"><point name="position" x="1" y="2" z="3"/>'
                              '<rgb name="intensity" value="5, 6, 7"/></emitter>')
     ref = (0.5, -1.0, 0.0)
     d, w, pdf, dist = probe.sample_li(ref, 4)
@@ -93,7 +93,7 @@ def test_point_light_weight():
 
 
 def test_directional_weight():
-    probe = _core.LightProbe('<emitter type="directional"><vector name="direction" x="1" y="-2" z="0.5"/>'
+    probe = _probes.LightProbe('<emitter type="directional"><vector name="direction" x="1" y="-2" z="0.5"/>'
                              '<rgb name="irradiance" value="3, 2, 1"/></emitter>')
     d, w, pdf, dist = probe.sample_li((0.1, 0.2, 0.3), 3)
     dd = -np.array([1, -2, 0.5]) / np.linalg.norm([1, -2, 0.5])
@@ -113,7 +113,7 @@ def test_spot_falloff():
     xml = ('<emitter type="spot"><transform name="to_world"><lookat origin="0, 0, 2" target="0, 0, 0" up="0, 1, 0"/>'
            '</transform><rgb name="intensity" value="4"/><float name="cutoff_angle" value="30"/>'
            '<float name="beam_width" value="10"/></emitter>')
-    probe = _core.LightProbe(xml)
+    probe = _probes.LightProbe(xml)
     angles = np.radians(np.linspace(0.5, 39.5, 40))  # avoid the exact cutoff, where float acos decides
     for a in angles:
         ref = (2 * np.tan(a), 0.0, 0.0)  # on the plane z = 0, angle a off the spot axis
@@ -126,7 +126,7 @@ def test_spot_falloff():
 def test_spot_and_point_match_mitsuba():
     xml = ('<emitter type="spot"><transform name="to_world"><lookat origin="0.5, 1, 2" target="0, 0, 0" up="0, 1, 0"/>'
            '</transform><rgb name="intensity" value="4, 3, 2"/><float name="cutoff_angle" value="25"/></emitter>')
-    probe = _core.LightProbe(xml)
+    probe = _probes.LightProbe(xml)
     em = mi.load_string(xml.replace("<emitter ", '<emitter version="3.0.0" '))
     rng = np.random.default_rng(5)
     refs = rng.uniform(-1.5, 1.5, size=(300, 3)) * [1, 1, 0.3]
@@ -139,7 +139,7 @@ def test_spot_and_point_match_mitsuba():
 
 
 def test_constant_environment():
-    probe = _core.LightProbe('<emitter type="constant"><rgb name="radiance" value="0.5, 1, 2"/></emitter>')
+    probe = _probes.LightProbe('<emitter type="constant"><rgb name="radiance" value="0.5, 1, 2"/></emitter>')
     d, w, pdf, _ = probe.sample_li((0, 0, 0), 1000)
     np.testing.assert_allclose(pdf, 1 / (4 * np.pi), rtol=1e-6)
     np.testing.assert_allclose(w, np.tile(np.array([0.5, 1, 2]) * 4 * np.pi, (1000, 1)), rtol=1e-5)
@@ -158,7 +158,7 @@ def test_constant_environment():
 ])
 def test_bad_parameters(xml, message):
     with pytest.raises(ValueError, match=message):
-        _core.LightProbe(xml)
+        _probes.LightProbe(xml)
 
 
 def test_animated_point_light_moves():
@@ -166,7 +166,7 @@ def test_animated_point_light_moves():
     xml = ('<emitter type="point"><animation name="to_world">'
            '<transform time="0"><translate x="0" y="0" z="1"/></transform>'
            '<transform time="1"><translate x="2" y="0" z="1"/></transform></animation></emitter>')
-    probe = _core.LightProbe(xml)
+    probe = _probes.LightProbe(xml)
     for t, x in [(0.0, 0.0), (0.25, 0.5), (1.0, 2.0), (3.0, 2.0)]:
         d, w, _, dist = probe.sample_li((0, 0, 0), 1, time=t)
         np.testing.assert_allclose(dist[0], np.hypot(x, 1.0), rtol=1e-5)

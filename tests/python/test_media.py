@@ -14,7 +14,7 @@ from chi2 import chi2_test  # noqa: E402
 from media_scenes import LIGHTS, SENSORS, blob_grid, fog_scene, heterogeneous, homogeneous, medium_xml, write_vol  # noqa: E402
 
 mvpt = pytest.importorskip("mvpt")
-from mvpt import _core  # noqa: E402
+from mvpt import _probes  # noqa: E402
 
 # ---------------------------------------------------------------- phase functions
 
@@ -29,7 +29,7 @@ WIS = [(-1.0, 0.0, 0.0), (0.48, -0.6, 0.64)]
 @pytest.mark.parametrize("name,xml", PHASES, ids=[p[0] for p in PHASES])
 @pytest.mark.parametrize("wi", WIS, ids=["equator", "oblique"])
 def test_phase_sampling_chi2(name, xml, wi):
-    probe = _core.PhaseProbe(xml)
+    probe = _probes.PhaseProbe(xml)
 
     def sample_fn(n):
         wo = probe.sample(*wi, n, 5)
@@ -42,7 +42,7 @@ def test_phase_sampling_chi2(name, xml, wi):
 
 def test_henyey_greenstein_values():
     """p integrates to 1 over the sphere (any wi), is reciprocal, and peaks forward (wo = -wi) for g > 0."""
-    probe = _core.PhaseProbe('<phase type="hg"><float name="g" value="0.7"/></phase>')
+    probe = _probes.PhaseProbe('<phase type="hg"><float name="g" value="0.7"/></phase>')
     rng = np.random.default_rng(3)
     d = rng.normal(size=(400_000, 3))
     d = (d / np.linalg.norm(d, axis=1, keepdims=True)).astype(np.float32)
@@ -66,7 +66,7 @@ def test_forced_scattering_distances_and_weights():
     scatters nowhere), and each channel's mean weight is the albedo times its probability of
     scattering before t_end (z-test; exactly zero without extinction)."""
     sigma, albedo, t_end, n = np.array([2.0, 0.5, 0.0]), 0.7, 1.3, 200_000
-    probe = _core.MediumProbe('<medium type="homogeneous"><rgb name="sigma_t" value="2, 0.5, 0"/>'
+    probe = _probes.MediumProbe('<medium type="homogeneous"><rgb name="sigma_t" value="2, 0.5, 0"/>'
                               f'<float name="albedo" value="{albedo}"/></medium>')
     r = probe.sample_within(t_end, n, 4).astype(np.float64)
     scattered = np.isfinite(r[:, 0])

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvpt import _core
+from mvpt import _probes
 
 from chi2 import chi2_test  # the shared harness, tests/python/chi2.py
 
@@ -68,7 +68,7 @@ CHI2_CASES = [
 
 @pytest.mark.parametrize("type_,name,params,wi", CHI2_CASES, ids=[c[1] for c in CHI2_CASES])
 def test_chi2_sample_matches_pdf(type_, name, params, wi):
-    probe = _core.BsdfProbe(principled_xml(params, type_))
+    probe = _probes.BsdfProbe(principled_xml(params, type_))
     wi = unit(wi)
 
     seed = sum(map(ord, name))  # a different random stream per case: independent tests (Šidák)
@@ -88,7 +88,7 @@ def test_chi2_sample_matches_pdf(type_, name, params, wi):
 
 @pytest.mark.parametrize("type_,name,params,wi", CHI2_CASES, ids=[c[1] for c in CHI2_CASES])
 def test_weight_is_eval_over_pdf(type_, name, params, wi):
-    probe = _core.BsdfProbe(principled_xml(params, type_))
+    probe = _probes.BsdfProbe(principled_xml(params, type_))
     wi = unit(wi)
     wo, weight, pdf, stype = probe.sample(*wi, 20000, 3)
     pdf = np.asarray(pdf).reshape(-1)
@@ -127,7 +127,7 @@ MITSUBA_CASES = CHI2_CASES + [
 def test_eval_pdf_match_mitsuba(type_, name, params, wi):
     mi = pytest.importorskip("mitsuba")
     mi.set_variant("scalar_rgb")
-    probe = _core.BsdfProbe(principled_xml(params, type_))
+    probe = _probes.BsdfProbe(principled_xml(params, type_))
     bsdf = mi.load_dict(mitsuba_dict(params, type_))
     ctx = mi.BSDFContext()
     si = mi.SurfaceInteraction3f()
@@ -155,10 +155,10 @@ def test_eval_pdf_match_mitsuba(type_, name, params, wi):
 
 def test_parameter_errors():
     with pytest.raises(ValueError, match="either 'eta' or 'specular'"):
-        _core.BsdfProbe('<bsdf type="principled"><float name="eta" value="1.5"/>'
+        _probes.BsdfProbe('<bsdf type="principled"><float name="eta" value="1.5"/>'
                         '<float name="specular" value="0.5"/></bsdf>')
     with pytest.raises(ValueError, match="roughnes"):
-        _core.BsdfProbe('<bsdf type="principled"><float name="roughnes" value="0.5"/></bsdf>')
+        _probes.BsdfProbe('<bsdf type="principled"><float name="roughnes" value="0.5"/></bsdf>')
 
 
 # --------------------------------------------------------------------------- render
@@ -289,7 +289,7 @@ def test_textured_parameters_match_mitsuba(type_):
     mi = pytest.importorskip("mitsuba")
     xml = TEXTURED[type_]
     try:
-        _core.BsdfProbe(xml)
+        _probes.BsdfProbe(xml)
     except ValueError as e:
         if "checkerboard" in str(e):
             pytest.skip(f"no checkerboard texture plugin in this build: {e}")
@@ -300,7 +300,7 @@ def test_textured_parameters_match_mitsuba(type_):
     rng = np.random.default_rng(11)
     # uv at cell centres of the finest checkerboard (period 1/5 in uv: cells 0.1 wide).
     for u, v in [(0.05, 0.05), (0.15, 0.05), (0.05, 0.15), (0.25, 0.35), (0.55, 0.85), (0.95, 0.45)]:
-        probe = _core.BsdfProbe(xml, u, v)
+        probe = _probes.BsdfProbe(xml, u, v)
         si = mi.SurfaceInteraction3f()
         si.uv = mi.Point2f(u, v)
         for wi in random_dirs(rng, 3):

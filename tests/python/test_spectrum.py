@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import mvpt
-from mvpt import _core
+from mvpt import _probes
 
 mi = pytest.importorskip("mitsuba")
 mi.set_variant("scalar_rgb")
@@ -53,7 +53,7 @@ def _mitsuba_rgb(text, use):
 @pytest.mark.parametrize("use", USES)
 @pytest.mark.parametrize("name", list(SPECTRA))
 def test_conversion_matches_mitsuba(name, use):
-    got = np.array(_core.spectrum_to_rgb(*_pairs(SPECTRA[name]), use))
+    got = np.array(_probes.spectrum_to_rgb(*_pairs(SPECTRA[name]), use))
     want = _mitsuba_rgb(SPECTRA[name], use)
     assert np.allclose(got, want, rtol=1e-4, atol=1e-6), f"{name} as {use}: mvpt {got}, Mitsuba {want}"
 
@@ -61,18 +61,18 @@ def test_conversion_matches_mitsuba(name, use):
 def test_roles_differ_as_in_mitsuba():
     # The cbox light as emission vs reflectance: no D65 weighting, no clamping at 1.
     w, v = _pairs(SPECTRA["cbox_light"])
-    assert np.all(np.array(_core.spectrum_to_rgb(w, v, "emission")) > 2.0)
-    assert np.allclose(_core.spectrum_to_rgb(w, v, "reflectance"), 1.0)
+    assert np.all(np.array(_probes.spectrum_to_rgb(w, v, "emission")) > 2.0)
+    assert np.allclose(_probes.spectrum_to_rgb(w, v, "reflectance"), 1.0)
     with pytest.raises(ValueError, match="at least two"):
-        _core.spectrum_to_rgb([500.0], [1.0], "emission")
+        _probes.spectrum_to_rgb([500.0], [1.0], "emission")
     with pytest.raises(ValueError, match="use must be"):
-        _core.spectrum_to_rgb([], [1.0], "albedo")
+        _probes.spectrum_to_rgb([], [1.0], "albedo")
 
 
 def test_diffuse_reflectance_through_the_loader():
     # f * cos at normal incidence and exit is reflectance / pi.
     text = SPECTRA["cbox_green"]
-    probe = mvpt._core.BsdfProbe(f'<bsdf type="diffuse"><spectrum name="reflectance" value="{text}"/></bsdf>')
+    probe = _probes.BsdfProbe(f'<bsdf type="diffuse"><spectrum name="reflectance" value="{text}"/></bsdf>')
     f = probe.eval(0.0, 0.0, 1.0, np.array([[0.0, 0.0, 1.0]], dtype=np.float32))[0]
     assert np.allclose(f * np.pi, _mitsuba_rgb(text, "reflectance"), rtol=1e-4)
 

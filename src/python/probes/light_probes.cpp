@@ -6,6 +6,7 @@
 #include "mvpt/scene/scene.h"
 
 #include "arrays.h"
+#include "scene_errors.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -35,7 +36,7 @@ struct LightProbe {
         std::string doc = "<scene version=\"3.0.0\">" + xml +
                           "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"4\"/>"
                           "<integer name=\"height\" value=\"4\"/></film></sensor></scene>";
-        scene = load_scene_string(doc, base_dir);
+        scene = mvpt_py::scene_errors_as_value_errors([&] { return load_scene_string(doc, base_dir); });
         if (index >= scene->lights().size())
             throw std::invalid_argument("light index " + std::to_string(index) + " out of range: the snippet has " +
                                         std::to_string(scene->lights().size()) + " light(s)");

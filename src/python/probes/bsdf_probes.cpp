@@ -9,6 +9,7 @@
 #include "mvpt/scene/xml_parser.h"
 
 #include "arrays.h"
+#include "scene_errors.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -26,6 +27,7 @@ using namespace mvpt;
 namespace {
 
 using mvpt_py::OutArray;
+using mvpt_py::scene_errors_as_value_errors;
 using mvpt_py::out_array;
 using mvpt_py::Vec3Array;
 
@@ -43,7 +45,8 @@ struct BsdfProbe {
     SurfaceInteraction si;
 
     BsdfProbe(const std::string &xml, float u, float v, const std::string &base_dir) {
-        bsdf = std::static_pointer_cast<Bsdf>(object_from_xml(xml, "bsdf", base_dir));
+        bsdf = std::static_pointer_cast<Bsdf>(
+            scene_errors_as_value_errors([&] { return object_from_xml(xml, "bsdf", base_dir); }));
         si.uv = {u, v};
         si.n = {0, 0, 1};
         si.sh_frame = Frame();
@@ -187,7 +190,8 @@ struct PhaseProbe {
     std::shared_ptr<PhaseFunction> phase;
 
     explicit PhaseProbe(const std::string &xml) {
-        phase = std::static_pointer_cast<PhaseFunction>(object_from_xml(xml, "phase", "."));
+        phase = std::static_pointer_cast<PhaseFunction>(
+            scene_errors_as_value_errors([&] { return object_from_xml(xml, "phase", "."); }));
     }
 
     /// n directions for wi (n, 3).
@@ -215,7 +219,8 @@ struct MediumProbe {
     std::shared_ptr<Medium> medium;
 
     explicit MediumProbe(const std::string &xml) {
-        medium = std::static_pointer_cast<Medium>(object_from_xml(xml, "medium", "."));
+        medium = std::static_pointer_cast<Medium>(
+            scene_errors_as_value_errors([&] { return object_from_xml(xml, "medium", "."); }));
     }
 
     /// n draws of sample_within over [0, t_end): rows (t, weight r, g, b); t = inf where no
