@@ -47,7 +47,7 @@ inline Vec3f square_to_cosine_hemisphere(Vec2f u) {
     float z = safe_sqrt(1.f - p.x * p.x - p.y * p.y);
     return {p.x, p.y, z};
 }
-inline float square_to_cosine_hemisphere_pdf(Vec3f v) { return v.z > 0.f ? v.z * InvPi : 0.f; }
+inline float square_to_cosine_hemisphere_pdf(Vec3f v) { return select(v.z > 0.f, v.z * InvPi, 0.f); }
 
 inline Vec3f square_to_uniform_sphere(Vec2f u) {
     float z = 1.f - 2.f * u.y;

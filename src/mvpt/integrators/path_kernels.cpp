@@ -18,19 +18,11 @@ MVPT_MULTI_ISA void lambert_sample_kernel_impl(float *c, size_t s, size_t n) {
     for (size_t i = 0; i < n; ++i) {
         const float wiz = c[WiZ * s + i];
         const bool front = wiz > 0.f, back = (wiz < 0.f) & (c[TwoSided * s + i] > 0.f);
-        // Concentric disk [Shirley & Chiu 1997] and cosine-weighted hemisphere (warp.h).
-        float x = 2.f * c[Ux * s + i] - 1.f, y = 2.f * c[Uy * s + i] - 1.f;
-        bool centre = (x == 0.f) & (y == 0.f);
-        bool x_major = std::abs(x) > std::abs(y);
-        float r = select(x_major, x, y);
-        float a = (Pi / 4.f) * select(x_major, y / x, -(x / y));
-        float z = a * a;
-        float sn = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * a + a;
-        float cs = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.f;
-        float wox = select(centre, 0.f, r * select(x_major, cs, -sn));
-        float woy = select(centre, 0.f, r * select(x_major, sn, cs));
-        float woz = std::sqrt(max_of(1.f - wox * wox - woy * woy, 0.f));
-        float pdf = select(woz > 0.f, woz * InvPi, 0.f);
+        // DiffuseBsdf::sample (warp.h's branch-free cosine-weighted hemisphere).
+        const Vec3f wo = warp::square_to_cosine_hemisphere(Vec2f(c[Ux * s + i], c[Uy * s + i]));
+        const float wox = wo.x, woy = wo.y;
+        float woz = wo.z;
+        const float pdf = warp::square_to_cosine_hemisphere_pdf(wo);
         woz = select(back, -woz, woz); // twosided mirrors the back side's sample
         const float rr = c[Rr * s + i], rg = c[Rg * s + i], rb = c[Rb * s + i];
         bool weight_ok = (front | back) & !(pdf <= 0.f) & !((rr == 0.f) & (rg == 0.f) & (rb == 0.f));
