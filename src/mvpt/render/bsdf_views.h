@@ -32,4 +32,22 @@ struct ViewBlock {
     }
 };
 
+/// lobe(wi, f, pdf) for the directions wi[0..n), block by block, into f and pdf. Called from a
+/// function compiled per instruction set (MVPT_MULTI_ISA), with an always-inline `lobe`: a
+/// lambda that is not inlined would be compiled for the baseline instruction set alone.
+template <typename Lobe>
+[[gnu::always_inline]] inline void lobe_over_views(const Vec3f *wi, size_t n, Color3f *f, float *pdf, Lobe &&lobe) {
+    for (size_t c0 = 0; c0 < n; c0 += ViewBlock::Size) {
+        ViewBlock b;
+        const size_t m = b.load(wi + c0, n - c0);
+        for (size_t c = 0; c < ViewBlock::Size; ++c) {
+            Color3f fc;
+            float pc;
+            lobe(b.wi(c), fc, pc);
+            b.set(c, fc, pc);
+        }
+        b.store(f + c0, pdf + c0, m);
+    }
+}
+
 } // namespace mvpt

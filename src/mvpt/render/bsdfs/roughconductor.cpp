@@ -15,18 +15,15 @@ namespace mvpt {
 /// rough_conductor_lobe<true, true> for the directions wi[0..n) and one wo: one vector loop.
 MVPT_MULTI_ISA void rough_conductor_lobe_views(const RoughConductorLocal &l, bool beckmann, const Vec3f *wi, size_t n,
                                                Vec3f wo, Spectrum *f, float *pdf) {
-    for (size_t c0 = 0; c0 < n; c0 += ViewBlock::Size) {
-        ViewBlock b;
-        const size_t m = b.load(wi + c0, n - c0);
-        Spectrum fc;
-        float pc;
-        // One loop per distribution, without a lambda: it would not be compiled for this clone's ISA.
-        if (beckmann)
-            for (size_t c = 0; c < ViewBlock::Size; ++c) rough_conductor_lobe<true, true>(l, true, b.wi(c), wo, fc, pc), b.set(c, fc, pc);
-        else
-            for (size_t c = 0; c < ViewBlock::Size; ++c) rough_conductor_lobe<true, true>(l, false, b.wi(c), wo, fc, pc), b.set(c, fc, pc);
-        b.store(f + c0, pdf + c0, m);
-    }
+    // One loop per distribution, its formulas alone in each.
+    if (beckmann)
+        lobe_over_views(wi, n, f, pdf, [&](Vec3f w, Spectrum &fc, float &pc) __attribute__((always_inline)) {
+            rough_conductor_lobe<true, true>(l, true, w, wo, fc, pc);
+        });
+    else
+        lobe_over_views(wi, n, f, pdf, [&](Vec3f w, Spectrum &fc, float &pc) __attribute__((always_inline)) {
+            rough_conductor_lobe<true, true>(l, false, w, wo, fc, pc);
+        });
 }
 
 class RoughConductor final : public Bsdf {
