@@ -7,6 +7,7 @@
 #include "../core/math.h"
 #include "../core/warp.h"
 #include "../render/interaction.h"
+#include "../render/shapes/sphere_cone.h"
 #include "path_kernels.h"
 
 namespace mvpt::kernel {
@@ -101,8 +102,8 @@ template <size_t P0, size_t L0, size_t W0, size_t B0, size_t O0>
 }
 
 /// A point on a sphere emitter seen from p (outside), sampled uniformly in the subtended cone
-/// (Sphere::sample_solid_angle) with AreaLight::sample_li's direction, distance, density and
-/// weight L/pdf, operation for operation as the scalar code.
+/// (sample_sphere_cone, as Sphere::sample_solid_angle) with AreaLight::sample_li's direction,
+/// distance, density and weight L/pdf, operation for operation as the scalar code.
 struct SphereEmitterSample {
     float lpx, lpy, lpz;  ///< the point on the sphere
     float vx, vy, vz;     ///< from p to it
@@ -122,33 +123,13 @@ struct SphereEmitterSample {
     const bool flip = q[SphereTable::Flip * M + k] > 0.f;
     const float lr = q[SphereTable::Lr * M + k], lg = q[SphereTable::Lg * M + k], lb = q[SphereTable::Lb * M + k];
     SphereEmitterSample r;
-    float dcx = cx - px, dcy = cy - py, dcz = cz - pz;
-    float dc2 = dcx * dcx + dcy * dcy + dcz * dcz;
-    float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
-          inv_sin_max = 1.f / sin_max, cos_max = std::sqrt(max_of(1.f - sin_max2, 0.f));
-    // Taylor expansion below ~1.5 degrees, as Sphere::sample_solid_angle.
-    float tay = (cos_max - 1.f) * ux + 1.f;
-    float sin2 = select(sin_max2 > 0.00068523f, 1.f - tay * tay, sin_max2 * ux);
-    float cos_t = std::sqrt(max_of(1.f - sin2, 0.f));
-    float cos_alpha = sin2 * inv_sin_max + cos_t * std::sqrt(max_of(1.f - sin2 * inv_sin_max * inv_sin_max, 0.f));
-    float sin_alpha = std::sqrt(max_of(1.f - cos_alpha * cos_alpha, 0.f));
-    Vec2f sc_phi = warp::sincos_turn(uy);
-    float vlx = sc_phi.y * sin_alpha, vly = sc_phi.x * sin_alpha, vlz = cos_alpha;
-    // Frame(dc * -inv_dc) [Duff et al. 2017] and to_world.
-    float neg_inv = -inv_dc;
-    float fnx = dcx * neg_inv, fny = dcy * neg_inv, fnz = dcz * neg_inv;
-    float sign = std::copysign(1.f, fnz);
-    float fa = -1.f / (sign + fnz), fb = fnx * fny * fa;
-    float fsx = 1.f + sign * fnx * fnx * fa, fsy = sign * fb, fsz = -sign * fnx;
-    float ftx = fb, fty = sign + fny * fny * fa, ftz = -fny;
-    float dirx = (fsx * vlx + ftx * vly) + fnx * vlz;
-    float diry = (fsy * vlx + fty * vly) + fny * vlz;
-    float dirz = (fsz * vlx + ftz * vly) + fnz * vlz;
+    const SphereConeSample cone = sample_sphere_cone(Vec3f(cx, cy, cz), radius, Vec3f(px, py, pz), Vec2f(ux, uy));
+    const float dirx = cone.dir.x, diry = cone.dir.y, dirz = cone.dir.z;
     r.lpx = cx + dirx * radius, r.lpy = cy + diry * radius, r.lpz = cz + dirz * radius;
     float snx = select(flip, -dirx, dirx), sny = select(flip, -diry, diry), snz = select(flip, -dirz, dirz);
     r.vx = r.lpx - px, r.vy = r.lpy - py, r.vz = r.lpz - pz;
     float dist2 = r.vx * r.vx + r.vy * r.vy + r.vz * r.vz;
-    r.pdf = select(dist2 == 0.f, 0.f, 1.f / ((2.f * Pi) * (1.f - cos_max)));
+    r.pdf = select(dist2 == 0.f, 0.f, cone.pdf);
     // AreaLight::sample_li.
     r.dist = std::sqrt(dist2);
     float inv_dist = 1.f / r.dist;

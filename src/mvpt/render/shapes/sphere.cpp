@@ -7,6 +7,7 @@
 #include "analytic.h"
 #include "instance.h"
 #include "mesh.h"
+#include "sphere_cone.h"
 
 #include <cstring>
 #include <limits>
@@ -144,20 +145,10 @@ public:
         float &pdf = result.second;
         if (dc2 > radius_adj * radius_adj) {
             // Outside: uniform direction in the cone subtended by the sphere.
-            float inv_dc = 1.f / std::sqrt(dc2), sin_max = radius * inv_dc, sin_max2 = sin_max * sin_max,
-                  inv_sin_max = 1.f / sin_max, cos_max = safe_sqrt(1.f - sin_max2);
-            // Taylor expansion below ~1.5 degrees, where 1 - cos^2 cancels badly.
-            float sin2 = sin_max2 > 0.00068523f ? 1.f - sqr((cos_max - 1.f) * u.x + 1.f) : sin_max2 * u.x;
-            float cos_t = safe_sqrt(1.f - sin2);
-            // Angle alpha at the sphere's center between -dc and the sampled point.
-            float cos_alpha = sin2 * inv_sin_max + cos_t * safe_sqrt(1.f - sin2 * inv_sin_max * inv_sin_max);
-            // sin/cos of phi = 2 pi u.y without libm: the wavefront's vector kernel computes the same bits.
-            float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha);
-            Vec2f sc_phi = warp::sincos_turn(u.y);
-            Vec3f dir = Frame(dc * -inv_dc).to_world({sc_phi.y * sin_alpha, sc_phi.x * sin_alpha, cos_alpha});
-            s.p = m_center + dir * radius;
-            s.n = dir;
-            pdf = warp::square_to_uniform_cone_pdf(cos_max);
+            const SphereConeSample c = sample_sphere_cone(m_center, radius, ref, u);
+            s.p = m_center + c.dir * radius;
+            s.n = c.dir;
+            pdf = c.pdf;
             if (squared_norm(s.p - ref) == 0.f) pdf = 0.f;
         } else {
             // Inside: uniform by area, converted to solid angle.
