@@ -51,7 +51,11 @@ MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t,
     const D4 magic = {0x1.8p52, 0x1.8p52, 0x1.8p52, 0x1.8p52};
     I4 magic_bits;
     __builtin_memcpy(&magic_bits, &magic, sizeof(magic));
+    // In a large cache, the entries of the next few views are loaded while this one's is summed.
+    const size_t ahead = cache.large() ? 8 : 0;
+    for (size_t i = begin; i < std::min(end, begin + ahead); ++i) cache.prefetch(slots[i], films[i]);
     for (size_t i = begin; i < end; ++i) {
+        if (ahead && i + ahead < end) cache.prefetch(slots[i + ahead], films[i + ahead]);
         const __m128 fn = _mm_loadu_ps(&f_nee[i].r), fb = _mm_loadu_ps(&f_bounce[i].r);
         const __m128 L = _mm_add_ps(_mm_and_ps(_mm_mul_ps(fn, nw), nee_mask),
                                     _mm_and_ps(_mm_mul_ps(_mm_mul_ps(fb, bs), sfx), bounce_mask));

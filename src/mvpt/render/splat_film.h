@@ -135,8 +135,7 @@ public:
     /// (its old sums added to the film) if it held another view-pixel.
     SplatEntry &at(int slot, uint32_t pixel, uint32_t x, uint32_t y) {
         const uint32_t key = m_offset[size_t(slot)] + pixel;
-        const uint32_t torus = ((y & ((1u << m_bits_y) - 1)) << m_bits_x) | (x & ((1u << m_bits_x) - 1));
-        SplatEntry &e = m_entries[(m_base[size_t(slot)] + torus) & m_mask];
+        SplatEntry &e = m_entries[index(slot, x, y)];
         if (e.key != key) [[unlikely]] replace(e, key);
         return e;
     }
@@ -144,6 +143,16 @@ public:
     SplatEntry &at(int slot, uint32_t pixel, Vec2f film) {
         const int *crop = &m_crop[2 * size_t(slot)];
         return at(slot, pixel, uint32_t(int(film.x) - crop[0]), uint32_t(int(film.y) - crop[1]));
+    }
+    /// Whether the cache outgrows a core's L2 cache (more than 2 MiB, from 33 views on): then a
+    /// sample's sharing views' entries, far apart, are mostly not in the core's caches, and
+    /// prefetching them pays (81 views: -13 % time; 25 views: +3 % without this test).
+    bool large() const { return m_entries.size() > (size_t(1) << 15); }
+    /// Starts loading the entry that at(slot, pixel, film) will return. Always inlined: GCC
+    /// takes a function whose only effect is a prefetch for pure, and drops calls to it.
+    [[gnu::always_inline]] void prefetch(int slot, Vec2f film) const {
+        const int *crop = &m_crop[2 * size_t(slot)];
+        __builtin_prefetch(&m_entries[index(slot, uint32_t(int(film.x) - crop[0]), uint32_t(int(film.y) - crop[1]))]);
     }
     /// Add one shared contribution W*L, W at film position `film` (of the pixel with window
     /// index `pixel`, which the box filter uses) of the native sample whose Sampler::sample_hash
@@ -207,6 +216,11 @@ public:
     void discard();
 
 private:
+    /// The entry of (x, y) of view `slot`'s window: its block, the pixel on it as on a torus.
+    size_t index(int slot, uint32_t x, uint32_t y) const {
+        const uint32_t torus = ((y & ((1u << m_bits_y) - 1)) << m_bits_x) | (x & ((1u << m_bits_x) - 1));
+        return (m_base[size_t(slot)] + torus) & m_mask;
+    }
     void replace(SplatEntry &e, uint32_t key);
 
     MvPassFilm *m_film;
