@@ -32,17 +32,23 @@ namespace {
     return l;
 }
 
-/// One lane of rough_conductor_sample_kernel; `Mode`: 0 all GGX, 1 all Beckmann, 2 mixed.
-template <int Mode> [[gnu::always_inline]] inline void conductor_sample_lane(float *c, size_t s, size_t i) {
+/// Whether lane i's distribution is Beckmann's, given which distributions the lanes hold.
+template <MicrofacetLanes Lanes>
+[[gnu::always_inline]] inline bool lane_is_beckmann(const float *c, size_t s, size_t i) {
+    return Lanes == MicrofacetLanes::Beckmann ||
+           (Lanes == MicrofacetLanes::Mixed && c[cond_col::Beckmann * s + i] > 0.f);
+}
+
+/// One lane of rough_conductor_sample_kernel.
+template <MicrofacetLanes Lanes>
+[[gnu::always_inline]] inline void conductor_sample_lane(float *c, size_t s, size_t i) {
     using namespace rs_col;
-    const bool beckmann = Mode == 1 || (Mode == 2 && c[Beckmann * s + i] > 0.f);
+    const bool beckmann = lane_is_beckmann<Lanes>(c, s, i);
     const float wx = c[WiX * s + i], wy = c[WiY * s + i], wz0 = c[WiZ * s + i];
     const bool flipped = (wz0 < 0.f) & (c[TwoSided * s + i] > 0.f); // TwoSidedBsdf mirrors the back side
     const float wz = select(flipped, -wz0, wz0);
     const float a = c[Alpha * s + i];
     // RoughConductor::sample: MicrofacetDistribution::sample and ::pdf (visible normals), then the reflection.
-    constexpr MicrofacetLanes Lanes = Mode == 0 ? MicrofacetLanes::GGX
-                                    : Mode == 1 ? MicrofacetLanes::Beckmann : MicrofacetLanes::Mixed;
     const Vec3f wi(wx, wy, wz);
     const Vec3f m = microfacet_sample_visible<Lanes>(wi, Vec2f(c[Ux * s + i], c[Uy * s + i]), a, a, beckmann);
     const float pdf_m = microfacet_pdf_visible(wi, m, a, a, beckmann);
@@ -54,9 +60,10 @@ template <int Mode> [[gnu::always_inline]] inline void conductor_sample_lane(flo
 }
 
 /// One lane of rough_conductor_nee_kernel.
-template <int Mode> [[gnu::always_inline]] inline void conductor_nee_lane(float *c, size_t s, size_t i, float light_count) {
+template <MicrofacetLanes Lanes>
+[[gnu::always_inline]] inline void conductor_nee_lane(float *c, size_t s, size_t i, float light_count) {
     using namespace rn_col;
-    const bool beckmann = Mode == 1 || (Mode == 2 && c[Beckmann * s + i] > 0.f);
+    const bool beckmann = lane_is_beckmann<Lanes>(c, s, i);
     const float wx = c[WiX * s + i], wy = c[WiY * s + i], wz0 = c[WiZ * s + i];
     const bool two = c[TwoSided * s + i] > 0.f;
     const bool flipped = (wz0 < 0.f) & two;
@@ -95,83 +102,87 @@ template <int Mode> [[gnu::always_inline]] inline void conductor_nee_lane(float 
 }
 
 /// One lane of rough_conductor_sphere_nee_kernel.
-template <int Mode>
+template <MicrofacetLanes Lanes>
 [[gnu::always_inline]] inline void conductor_sphere_nee_lane(float *c, size_t s, size_t i, const float *q,
                                                              float light_count) {
     bool sampled = sphere_emitter_sample(c, s, i, q);
-    conductor_nee_lane<Mode>(c, s, i, light_count);
+    conductor_nee_lane<Lanes>(c, s, i, light_count);
     c[rn_col::Ok * s + i] = select(sampled, c[rn_col::Ok * s + i], 0.f);
 }
 
-/// 0 if every lane is GGX, 1 if every lane is Beckmann, else 2.
-int distribution_mode(const float *beckmann, size_t n) {
+/// Which distributions the lanes hold.
+MicrofacetLanes lanes_of(const float *beckmann, size_t n) {
     size_t count = 0;
     for (size_t i = 0; i < n; ++i) count += beckmann[i] > 0.f;
-    return count == 0 ? 0 : count == n ? 1 : 2;
+    return count == 0 ? MicrofacetLanes::GGX : count == n ? MicrofacetLanes::Beckmann : MicrofacetLanes::Mixed;
 }
 
 } // namespace
 
 MVPT_MULTI_ISA void rough_conductor_sample_ggx(float *c, size_t s, size_t n) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_sample_lane<0>(c, s, i);
+    for (size_t i = 0; i < n; ++i) conductor_sample_lane<MicrofacetLanes::GGX>(c, s, i);
 }
 MVPT_MULTI_ISA void rough_conductor_sample_beckmann(float *c, size_t s, size_t n) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_sample_lane<1>(c, s, i);
+    for (size_t i = 0; i < n; ++i) conductor_sample_lane<MicrofacetLanes::Beckmann>(c, s, i);
 }
 MVPT_MULTI_ISA void rough_conductor_sample_mixed(float *c, size_t s, size_t n) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_sample_lane<2>(c, s, i);
+    for (size_t i = 0; i < n; ++i) conductor_sample_lane<MicrofacetLanes::Mixed>(c, s, i);
 }
 
 void rough_conductor_sample_kernel(SoaColumns &c, size_t n) {
-    switch (distribution_mode(c[rs_col::Beckmann], n)) {
-    case 0: rough_conductor_sample_ggx(c.data.data(), c.stride, n); break;
-    case 1: rough_conductor_sample_beckmann(c.data.data(), c.stride, n); break;
+    switch (lanes_of(c[rs_col::Beckmann], n)) {
+    case MicrofacetLanes::GGX: rough_conductor_sample_ggx(c.data.data(), c.stride, n); break;
+    case MicrofacetLanes::Beckmann: rough_conductor_sample_beckmann(c.data.data(), c.stride, n); break;
     default: rough_conductor_sample_mixed(c.data.data(), c.stride, n); break;
     }
 }
 
 MVPT_MULTI_ISA void rough_conductor_nee_ggx(float *c, size_t s, size_t n, float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_nee_lane<0>(c, s, i, light_count);
+    for (size_t i = 0; i < n; ++i) conductor_nee_lane<MicrofacetLanes::GGX>(c, s, i, light_count);
 }
 MVPT_MULTI_ISA void rough_conductor_nee_beckmann(float *c, size_t s, size_t n, float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_nee_lane<1>(c, s, i, light_count);
+    for (size_t i = 0; i < n; ++i) conductor_nee_lane<MicrofacetLanes::Beckmann>(c, s, i, light_count);
 }
 MVPT_MULTI_ISA void rough_conductor_nee_mixed(float *c, size_t s, size_t n, float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_nee_lane<2>(c, s, i, light_count);
+    for (size_t i = 0; i < n; ++i) conductor_nee_lane<MicrofacetLanes::Mixed>(c, s, i, light_count);
 }
 
 void rough_conductor_nee_kernel(SoaColumns &c, size_t n, float light_count) {
-    switch (distribution_mode(c[rn_col::Beckmann], n)) {
-    case 0: rough_conductor_nee_ggx(c.data.data(), c.stride, n, light_count); break;
-    case 1: rough_conductor_nee_beckmann(c.data.data(), c.stride, n, light_count); break;
+    switch (lanes_of(c[rn_col::Beckmann], n)) {
+    case MicrofacetLanes::GGX: rough_conductor_nee_ggx(c.data.data(), c.stride, n, light_count); break;
+    case MicrofacetLanes::Beckmann: rough_conductor_nee_beckmann(c.data.data(), c.stride, n, light_count); break;
     default: rough_conductor_nee_mixed(c.data.data(), c.stride, n, light_count); break;
     }
 }
 
 MVPT_MULTI_ISA void rough_conductor_sphere_nee_ggx(float *c, size_t s, size_t n, const float *q, float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_sphere_nee_lane<0>(c, s, i, q, light_count);
+    for (size_t i = 0; i < n; ++i) conductor_sphere_nee_lane<MicrofacetLanes::GGX>(c, s, i, q, light_count);
 }
 MVPT_MULTI_ISA void rough_conductor_sphere_nee_beckmann(float *c, size_t s, size_t n, const float *q,
                                                         float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_sphere_nee_lane<1>(c, s, i, q, light_count);
+    for (size_t i = 0; i < n; ++i) conductor_sphere_nee_lane<MicrofacetLanes::Beckmann>(c, s, i, q, light_count);
 }
 MVPT_MULTI_ISA void rough_conductor_sphere_nee_mixed(float *c, size_t s, size_t n, const float *q, float light_count) {
 #pragma GCC ivdep
-    for (size_t i = 0; i < n; ++i) conductor_sphere_nee_lane<2>(c, s, i, q, light_count);
+    for (size_t i = 0; i < n; ++i) conductor_sphere_nee_lane<MicrofacetLanes::Mixed>(c, s, i, q, light_count);
 }
 
 void rough_conductor_sphere_nee_kernel(SoaColumns &c, size_t n, const SphereTable &spheres, float light_count) {
-    switch (distribution_mode(c[rn_col::Beckmann], n)) {
-    case 0: rough_conductor_sphere_nee_ggx(c.data.data(), c.stride, n, spheres.v, light_count); break;
-    case 1: rough_conductor_sphere_nee_beckmann(c.data.data(), c.stride, n, spheres.v, light_count); break;
+    switch (lanes_of(c[rn_col::Beckmann], n)) {
+    case MicrofacetLanes::GGX:
+        rough_conductor_sphere_nee_ggx(c.data.data(), c.stride, n, spheres.v, light_count);
+        break;
+    case MicrofacetLanes::Beckmann:
+        rough_conductor_sphere_nee_beckmann(c.data.data(), c.stride, n, spheres.v, light_count);
+        break;
     default: rough_conductor_sphere_nee_mixed(c.data.data(), c.stride, n, spheres.v, light_count); break;
     }
 }

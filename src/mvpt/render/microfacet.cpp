@@ -1,8 +1,5 @@
 #include "microfacet.h"
 
-#include "../core/poly_math.h"
-#include "../core/warp.h"
-
 #include <cmath>
 
 namespace mvpt {
