@@ -82,6 +82,53 @@ def test_forced_scattering_distances_and_weights():
     assert np.all(r[:, 3] == 0)
 
 
+# ---------------------------------------------------------------- free flights along camera segments
+
+FLIGHT_SIGMA = {"a": np.array([2.0, 0.5, 1.0]), "b": np.array([0.3, 1.5, 0.0])}
+FLIGHT_SCENE = f"""<scene version="3.0.0"><integrator type="volpath"/>
+  <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
+  <shape type="cube"><transform name="to_world"><scale value="3, 3, 0.5"/><translate z="-1.5"/></transform>
+    <bsdf type="null"/><medium type="homogeneous" name="interior"><rgb name="sigma_t" value="2, 0.5, 1"/></medium></shape>
+  <shape type="cube"><transform name="to_world"><scale value="3, 3, 0.75"/><translate z="0.75"/></transform>
+    <bsdf type="null"/><medium type="homogeneous" name="interior"><rgb name="sigma_t" value="0.3, 1.5, 0"/></medium></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="5"/><translate z="3"/></transform></shape>
+</scene>"""
+
+
+def _flight_depth(t):
+    """Optical depth per channel from z = -5 to distance t along +z: pieces a (t in [3, 4]) and
+    b (t in [5, 6.5]) of the scene above, vacuum between them, the wall at t = 8."""
+    t = np.asarray(t, dtype=np.float64)[..., None]
+    return (FLIGHT_SIGMA["a"] * np.clip(t - 3.0, 0.0, 1.0) + FLIGHT_SIGMA["b"] * np.clip(t - 5.0, 0.0, 1.5))
+
+
+def test_flight_along_segment_chi2():
+    """flight_along_segment (the medium vertices of multi-view path tracing, design §10) through
+    two media with null boundaries and vacuum between them: the distances follow the channel
+    mixture 1/3 sum_c sigma_c T_c over the whole segment (chi-square over 20 bins inside the
+    media and one for "no scattering"), a channel without extinction never scatters in its
+    piece, and the density and transmittance it reports at each point are the analytic ones."""
+    probe = _probes.SegmentProbe(FLIGHT_SCENE)
+    n = 200_000
+    r = probe.flights((0.0, 0.0, -5.0), (0.0, 0.0, 1.0), 100.0, n, 7).astype(np.float64)
+    t = r[:, 0]
+    edges = np.concatenate([np.linspace(3.0, 4.0, 11), np.linspace(5.0, 6.5, 11)])
+    cdf = lambda x: 1.0 - np.exp(-_flight_depth(x)).mean(-1)  # noqa: E731 (P(scattered before x))
+    expected = np.diff(cdf(edges))
+    expected[10] = 0.0  # the vacuum between the media
+    expected = np.append(expected, 1.0 - cdf(8.0))
+    counts = np.append(np.histogram(t[np.isfinite(t)], edges)[0], np.sum(~np.isfinite(t)))
+    keep = expected > 0
+    assert counts[~keep].sum() == 0
+    chi2, p = stats.chisquare(counts[keep], expected[keep] * n)
+    assert p > 1e-3, (chi2, p, counts, expected * n)
+    s = np.isfinite(t)
+    sigma = np.where(((t[s] >= 3) & (t[s] <= 4))[:, None], FLIGHT_SIGMA["a"], FLIGHT_SIGMA["b"])
+    tr = np.exp(-_flight_depth(t[s]))
+    np.testing.assert_allclose(r[s, 2:], tr, rtol=2e-4, atol=1e-6)
+    np.testing.assert_allclose(r[s, 1], (sigma * tr).mean(-1), rtol=2e-4)
+
+
 # ---------------------------------------------------------------- furnace tests
 
 def furnace_scene(medium, sensor_inside=False):

@@ -1,13 +1,16 @@
 """Multi-view path tracing through participating media (design doc §10) converges to the
 volumetric path tracer: the shared vertex is the first surface that is not null, each view's
 share is weighted by its own camera segment's transmittance (exact, or ratio-tracked in a
-grid), and the in-scattering along the native camera segment stays with the native view.
+grid), and the in-scattering along the native camera segment stays with the native view
+(heterogeneous media) or is shared as medium vertices (homogeneous ones).
 
 Four small scenes seen by a 2x2 rig (fog around a rough metal ball, a heterogeneous grid
 around a diffuse ball, a camera inside thin fog, an absorbing rough-glass ball), each
 rendered by `volpath` with both methods over K independent seeds and compared by the block
 t-tests of mitsuba_compare with no tolerance (mean_tol = 0), as test_mvpt_unbiased.py does
-for surfaces."""
+for surfaces. Where the media are homogeneous the scatterings on camera segments are shared
+too (medium vertices); a fifth scene of dense fog seen from far-apart views makes their
+densities differ from view to view."""
 from __future__ import annotations
 
 import sys
@@ -24,6 +27,7 @@ mvpt = pytest.importorskip("mvpt")
 
 K = 8  # independent seeds per estimate
 RIG = "grid:2x2,spacing=0.35"
+WIDE_RIG = "grid:2x2,spacing=1.5"
 PT_SPP, MV_SPP = 48, 24
 
 SENSOR = """<sensor type="perspective"><float name="fov" value="40"/>
@@ -55,12 +59,16 @@ def _cases(tmp: Path) -> dict:
     vol = write_vol(tmp / "blob.vol", blob_grid(12))
     grid = heterogeneous(vol, '<float name="scale" value="2.5"/><float name="albedo" value="0.7"/>')
     thin = homogeneous('<float name="sigma_t" value="0.15"/><float name="albedo" value="0.9"/>')
+    dense = homogeneous('<rgb name="sigma_t" value="3, 2, 1.4"/><float name="albedo" value="0.9"/>',
+                        '<phase type="hg"><float name="g" value="-0.3"/></phase>')
     ink = homogeneous('<rgb name="sigma_t" value="2, 1, 0.4"/><float name="albedo" value="0"/>')
     glass = '<bsdf type="roughdielectric"><float name="alpha" value="0.2"/></bsdf>'
     return {
         "fog-metal": _scene(_ball('<bsdf type="null"/>', 0.9, medium_xml(fog, "interior")) + _ball(METAL)),
         "grid-diffuse": _scene('<shape type="cube"><bsdf type="null"/>' + medium_xml(grid, "interior") + "</shape>"
                                + _ball('<bsdf type="diffuse"/>', 0.3)),
+        "dense-fog-wide": _scene(_ball('<bsdf type="null"/>', 0.9, medium_xml(dense, "interior"))
+                                 + _ball('<bsdf type="diffuse"/>', 0.3)),
         "camera-in-fog": _scene(_ball(METAL, 0.5), medium_xml(thin, "medium")),
         "absorbing-glass": _scene(_ball(glass, 0.5, medium_xml(ink, "interior"))),
     }
@@ -77,9 +85,11 @@ def _estimates(scene, spp, method, base):
     return runs, {v: estimate_from_seeds([r.images[v] for r in runs], v) for v in ids}
 
 
-@pytest.mark.parametrize("name", ["fog-metal", "grid-diffuse", "camera-in-fog", "absorbing-glass"])
+@pytest.mark.parametrize("name", ["fog-metal", "grid-diffuse", "dense-fog-wide", "camera-in-fog", "absorbing-glass"])
 def test_balance_through_media_is_unbiased(cases, name):
-    scene = mvpt.load_string(cases[name], rig=RIG)
+    # Dense fog seen from far apart: the views' segments to a medium vertex differ in
+    # transmittance, so its densities (§10) must be each view's own.
+    scene = mvpt.load_string(cases[name], rig=WIDE_RIG if name == "dense-fog-wide" else RIG)
     ids = [v["id"] for v in scene.views]
     assert len(ids) == 4
     _, pt = _estimates(scene, PT_SPP, "pt", 1000)
@@ -93,10 +103,12 @@ def test_balance_through_media_is_unbiased(cases, name):
     assert res.passed, res.summary()
 
 
-def test_balance_weights_sum_to_one_through_media(cases):
+@pytest.mark.parametrize("name", ["grid-diffuse", "fog-metal"])
+def test_balance_weights_sum_to_one_through_media(cases, name):
     """Visibility through media (only surfaces that are not null block) is the same for every
-    strategy, so the balance weights of a pixel still sum to one per pass in expectation."""
-    scene = mvpt.load_string(cases["grid-diffuse"], rig=RIG)
+    strategy, so the balance weights of a pixel still sum to one per pass in expectation; the
+    medium vertices' contributions (fog-metal) add no weight."""
+    scene = mvpt.load_string(cases[name], rig=RIG)
     ids = [v["id"] for v in scene.views]
     runs = [mvpt.render(scene, spp=MV_SPP, seed=3000 + i, method="mvpt") for i in range(K)]
     ones, w = {}, {}
@@ -104,14 +116,15 @@ def test_balance_weights_sum_to_one_through_media(cases):
         shape = runs[0].weight_sum[v].shape + (3,)
         ones[v] = ImageEstimate(np.ones(shape), np.zeros(shape), np.full(shape, np.inf), "1")
         w[v] = estimate_from_seeds([np.repeat(r.weight_sum[v][..., None], 3, axis=2) for r in runs], v)
-    res = compare_estimates("grid-diffuse: sum of W per pass vs 1", [(i, v, w[v], ones[v]) for i, v in enumerate(ids)],
+    res = compare_estimates(f"{name}: sum of W per pass vs 1", [(i, v, w[v], ones[v]) for i, v in enumerate(ids)],
                             mean_tol=0.0)
     print(res.summary())
     assert res.passed, res.summary()
 
 
-def test_media_renders_are_bit_identical_for_any_thread_count(cases):
-    scene = mvpt.load_string(cases["grid-diffuse"], rig=RIG)
+@pytest.mark.parametrize("name", ["grid-diffuse", "fog-metal"])
+def test_media_renders_are_bit_identical_for_any_thread_count(cases, name):
+    scene = mvpt.load_string(cases[name], rig=RIG)
     runs = [mvpt.render(scene, spp=4, seed=9, threads=t, method="mvpt") for t in (1, 2, 3)]
     for r in runs[1:]:
         for vid in runs[0].view_ids:

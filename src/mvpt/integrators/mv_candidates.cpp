@@ -38,13 +38,14 @@ void ViewShifts::resize(size_t n) {
 namespace {
 
 /// The cheap tests of §3 on one view's shift geometry, branch-free: orientation (y in the
-/// clip range, G > 0, k's lens point on the native lens point's side of the surface, y beyond
-/// k's near plane) and image bounds; the pixel index is computed from the clamped position.
+/// clip range, G > 0, k's lens point on the native lens point's side of the surface, or any
+/// side for a point in a medium, y beyond k's near plane) and image bounds; the pixel index
+/// is computed from the clamped position.
 [[gnu::always_inline]] inline uint32_t status_of(const MvVertex &y, bool depth_ok, const ShiftGeometry &g, int32_t x0,
                                                 int32_t y0, int32_t x1, int32_t y1, uint32_t *pixel) {
     float side = dot(y.n, g.lens_point - y.p);
     bool depth = depth_ok & (g.density > 0.f);
-    bool facing = (side * y.side > 0.f) & (g.visible_length > 0.f);
+    bool facing = ((side * y.side > 0.f) | y.in_medium) & (g.visible_length > 0.f);
     float fx0 = float(x0), fy0 = float(y0), fx1 = float(x1), fy1 = float(y1);
     bool inside = (g.film.x >= fx0) & (g.film.x < fx1) & (g.film.y >= fy0) & (g.film.y < fy1);
     // Clamped into the window first (a NaN becomes x0), so the conversion is always defined.

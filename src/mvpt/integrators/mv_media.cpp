@@ -45,7 +45,7 @@ Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const 
     return sum * (1.f / float(estimates));
 }
 
-void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, Spectrum tr_native,
+void mv_media_visibility(const MvContext &ctx, MvScratch &sc, Point3f p, float time, Spectrum tr_native,
                          bool selected_only, Sampler *sampler, RayCounters &counters, MvViewStats *st_l) {
     const MvCandidates &c = sc.cand;
     const size_t m = c.size;
@@ -60,7 +60,7 @@ void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInter
         }
         const MvView &v = ctx.views[c.slot[i]];
         // The segment from k's near plane (vis from y towards its lens point) to just before y.
-        const Vec3f to_lens = c.lens_point(i) - si.p;
+        const Vec3f to_lens = c.lens_point(i) - p;
         const float dist = norm(to_lens), vis = c.vis[i];
         RandomStream rs(0);
         if (sampler) {
@@ -70,7 +70,7 @@ void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInter
         bool visible = true;
         if (vis > 0.f && dist > 0.f && std::isfinite(dist)) {
             const Vec3f d = to_lens / dist;
-            Ray r{si.p + d * vis, -d, 0.f, vis * (1.f - ShadowEpsilon), si.time};
+            Ray r{p + d * vis, -d, 0.f, vis * (1.f - ShadowEpsilon), time};
             SegmentWalk w = walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters);
             visible = !w.stopped;
             sc.tr[i] = w.tr;

@@ -1,7 +1,8 @@
 // Multi-view path tracing through participating media (docs/multiview-path-tracing.md §10):
 // the shared vertex is the first surface a camera ray meets that is not null; each view's
 // contribution is multiplied by the transmittance of its own camera segment, and the
-// in-scattering along the native camera segment is the native view's own radiance.
+// in-scattering along the native camera segment is shared as medium vertices where every
+// medium is homogeneous (mv_medium_vertex.cpp), else the native view's own radiance.
 #pragma once
 
 #include "mv_sample.h"
@@ -44,13 +45,31 @@ inline constexpr int MaxInScatterEstimates = 9;
 Spectrum mv_in_scattering(const MvContext &ctx, int slot, const Ray &ray, const MvMediaVertex &y, Sampler &sampler,
                           RayCounters &counters);
 
-/// Test 5 of §3 through media: candidate i sees the shared vertex `si` when no surface that is
+/// Test 5 of §3 through media: candidate i sees the shared vertex `p` when no surface that is
 /// not null lies on its camera segment (from its near plane); fills sc.visible and, for the
 /// visible ones, the segment's transmittance sc.tr[i] (sc.tr[0], the native view's, is
 /// `tr_native`). With `selected_only`, unselected candidates are not traced. `sampler` (or
 /// null: a fixed stream, for the densities alone) gives each view's transmittance stream.
-void mv_media_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteraction &si, Spectrum tr_native,
+void mv_media_visibility(const MvContext &ctx, MvScratch &sc, Point3f p, float time, Spectrum tr_native,
                          bool selected_only, Sampler *sampler, RayCounters &counters, MvViewStats *st_l);
+
+/// The dimension of a native sample's medium vertex (§10): its block of draws (the layout of a
+/// volumetric path's step, VolDimsPerStep), then its suffix's steps from depth 1.
+inline constexpr uint32_t DimMediumVertex = 3u << 22, DimMediumVertexStride = 1u << 20;
+/// How many flights a native sample draws along its camera segment (each a medium vertex).
+inline constexpr int MediumFlights = 4;
+
+/// Whether the scatterings on camera segments can be shared (MvContext::medium_vertices).
+bool mv_can_share_medium_vertices(const MvContext &ctx);
+
+/// The medium vertex of a native sample of view `slot` (§10): a free flight along its camera
+/// segment `near` (from the near plane, lens point `lens` on the unit disk, at `time`; the
+/// sample's own pixel `pixel` and film position `film`); where it scatters, the point is
+/// shifted to every view that sees it, shaded once (next-event estimation and a phase sample
+/// from the views' mixture) and joins `pending` with a suffix from depth 1.
+void mv_medium_vertex(const MvContext &ctx, int slot, const Ray &near, Vec2f lens, uint32_t pixel, Vec2f film,
+                      const SampleKey &key, Sampler &sampler, MvScratch &sc, MvPendingSamples &pending,
+                      RayCounters &counters, MvViewStats &st);
 
 /// The medium a ray leaving the shared vertex `si` in world direction `d` enters: the shape's
 /// when it bounds media, else `arrival`, the one the camera ray was in.

@@ -56,6 +56,7 @@ void MvContext::prepare() {
         Vec3f d = centre(views[1]) - centre(views[0]);
         if (squared_norm(d) > 0.f && std::isfinite(squared_norm(d))) across = normalize(d);
     }
+    medium_vertices = mv_can_share_medium_vertices(*this);
 }
 
 namespace {
@@ -76,17 +77,19 @@ float cached_similarity(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, c
     return v;
 }
 
-/// Selection probability s_{j->k} of §6 between candidates j and k.
-float selection(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si, size_t j,
+/// Selection probability s_{j->k} of §6 between candidates j and k (the BSDF at y is read only
+/// for the material similarity).
+float selection(const MvContext &ctx, MvScratch &sc, const Bsdf *bsdf, const SurfaceInteraction *si, size_t j,
                 size_t k) {
     if (j == k) return 1.f;
     float s = ctx.cfg.select_jacobian ? jacobian_similarity(sc.cand.g[j], sc.cand.g[k]) : 1.f;
-    if (s > 0.f && sc.material) s *= cached_similarity(ctx, sc, bsdf, si, j, k);
+    if (s > 0.f && sc.material) s *= cached_similarity(ctx, sc, *bsdf, *si, j, k);
     return s;
 }
 
-/// The shift of y to every view with the cheap tests (§3 tests 1–3), into sc.shifts.
-void shift_all_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc) {
+} // namespace
+
+void mv_shift_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc) {
     if (ctx.static_shift) { // one vector loop over contiguous camera data, no virtual call per view
         shift_static_views(ctx.projections, ctx.films, y, sc.shifts);
         return;
@@ -113,13 +116,15 @@ void shift_all_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScra
     }
 }
 
+namespace {
+
 /// The candidates of §3 for the native sample of view `slot_l` (pixel `pixel_l`) with first hit
 /// `y`: the native view first, then every view that passes the cheap tests, with its native
 /// count and viewing direction (and lobe, for the material similarity).
 void gather_shifts(const MvContext &ctx, int slot_l, uint32_t pixel_l, Vec2f film_l, const MvVertex &y,
                    const Bsdf &bsdf, const SurfaceInteraction &si, MvScratch &sc, MvViewStats *st_l) {
     const int nv = int(ctx.views.size());
-    shift_all_views(ctx, slot_l, y, sc);
+    mv_shift_views(ctx, slot_l, y, sc);
     const ViewShifts &vs = sc.shifts;
     MvCandidates &c = sc.cand;
     c.reserve(size_t(nv));
@@ -199,9 +204,25 @@ void trace_visibility(const MvContext &ctx, MvScratch &sc, const SurfaceInteract
     }
 }
 
-/// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d.
-void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, const SurfaceInteraction &si,
-                       const int *targets, size_t nt) {
+} // namespace
+
+void mv_select(const MvContext &ctx, MvScratch &sc, Sampler &sampler, const Bsdf *bsdf, const SurfaceInteraction *si) {
+    const MvCandidates &cand = sc.cand;
+    // Without a selection term every candidate stays selected (s = 1): no draws.
+    if (!sc.material && ctx.cfg.select_jacobian && sampler.kind() == SamplerKind::Independent)
+        select_by_jacobian(cand, ctx.select_keys.data(), sampler.sample_hash(), true, sc.s_sel.data(),
+                           sc.selected.data()); // the same draws, in one vector loop
+    else if (sc.material || ctx.cfg.select_jacobian)
+        for (size_t i = 1; i < cand.size; ++i) {
+            sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
+            if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)
+            sampler.set_dimension(DimSelectBase + ctx.views[cand.slot[i]].scene_index);
+            sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
+        }
+}
+
+void mv_balance_sums(const MvContext &ctx, MvScratch &sc, const Bsdf *bsdf, const SurfaceInteraction *si,
+                     const int *targets, size_t nt) {
     MvCandidates &c = sc.cand;
     const size_t m = c.size;
     //   D_k = sum_j n_j rho_{j->k},  rho_{j->k} = (dt_k/dt_j) (G_j/G_k) s_{j->k},  rho_{k->k} = 1,
@@ -252,15 +273,13 @@ void balance_densities(const MvContext &ctx, MvScratch &sc, const Bsdf &bsdf, co
             if (!ctx.all_time_compatible && !time_compatible(vj, vk, ctx.scene_moves)) continue;
             float ratio = c.g[j] * inv_gk; // |T'_{k->j}| = G_j / G_k
             float s = ctx.cfg.select_jacobian ? std::min(1.f, ratio) : 1.f;
-            if (sc.material && s > 0.f) s *= cached_similarity(ctx, sc, bsdf, si, j, size_t(k));
+            if (sc.material && s > 0.f) s *= cached_similarity(ctx, sc, *bsdf, *si, j, size_t(k));
             float tau = time_density_ratio(vk, vj, ctx.scene_moves);
             sum += double(c.n[j]) * double(tau * ratio * s);
         }
         sc.d[k] = float(sum);
     }
 }
-
-} // namespace
 
 std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, int slot, const SurfaceInteraction &hit,
                                                         Point3f lens_point, float time, Vec2f lens, MvScratch &sc) {
@@ -275,12 +294,12 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
     const Bsdf &bsdf = *si.shape->bsdf;
     gather_shifts(ctx, slot, pixel, geo.film, y, bsdf, si, sc, nullptr);
     RayCounters counters;
-    if (ctx.volpath) mv_media_visibility(ctx, sc, si, Spectrum(1.f), false, nullptr, counters, nullptr);
+    if (ctx.volpath) mv_media_visibility(ctx, sc, si.p, si.time, Spectrum(1.f), false, nullptr, counters, nullptr);
     else trace_visibility(ctx, sc, si, time, false, counters, nullptr);
     std::vector<int> targets;
     for (size_t i = 0; i < sc.cand.size; ++i)
         if (sc.visible[i]) targets.push_back(int(i));
-    balance_densities(ctx, sc, bsdf, si, targets.data(), targets.size());
+    mv_balance_sums(ctx, sc, &bsdf, &si, targets.data(), targets.size());
     for (int i : targets) out.emplace_back(sc.cand.slot[i], sc.d[i]);
     return out;
 }
@@ -288,7 +307,7 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
 void MvPendingSamples::clear() {
     samples.clear();
     entries = 0;
-    rays.clear(), states.clear(), samplers.clear(), media.clear();
+    rays.clear(), states.clear(), samplers.clear(), media.clear(), dims.clear();
     shadow_rays.clear();
 }
 
@@ -398,7 +417,13 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     // Where no view can share the sample through media, it is the volumetric path tracer's.
     const bool unshared = !hit || !si.shape->bsdf->has_smooth() || max_depth <= 1 || ctx.views.size() < 2;
     if (ctx.volpath && unshared) {
-        native_only(ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters));
+        if (!ctx.medium_vertices) {
+            native_only(ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters));
+            return;
+        }
+        // The in-scattering along the segment is the medium vertex's; the rest is l's alone.
+        native_only(ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters, VolPathPart::ReachesSurface));
+        mv_medium_vertex(ctx, slot_l, media_y.near, xi, pixel_l, film_l, key, sampler, sc, pending, counters, st_l);
         return;
     }
     if (!hit) {
@@ -431,21 +456,11 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     gather_shifts(ctx, slot_l, pixel_l, film_l, y, bsdf, si, sc, &st_l);
     const MvCandidates &cand = sc.cand;
     const size_t m = cand.size;
-    // Without a selection term every candidate stays selected (gather_shifts set s = 1): no draws.
-    if (!sc.material && ctx.cfg.select_jacobian && sampler.kind() == SamplerKind::Independent)
-        select_by_jacobian(cand, ctx.select_keys.data(), sampler.sample_hash(), true, sc.s_sel.data(),
-                           sc.selected.data()); // the same draws, in one vector loop
-    else if (sc.material || ctx.cfg.select_jacobian)
-        for (size_t i = 1; i < m; ++i) {
-            sc.s_sel[i] = selection(ctx, sc, bsdf, si, 0, i);
-            if (sc.s_sel[i] >= 1.f) continue; // selected whatever the draw (u < 1)
-            sampler.set_dimension(DimSelectBase + ctx.views[cand.slot[i]].scene_index);
-            sc.selected[i] = sampler.next_1d() < sc.s_sel[i];
-        }
+    mv_select(ctx, sc, sampler, &bsdf, &si);
     // The balance estimator needs the visibility of every candidate (it enters D); the
     // published variant only that of the selected ones.
     if (ctx.volpath)
-        mv_media_visibility(ctx, sc, si, media_y.walk.tr, ctx.cfg.mis_selected_only, &sampler, counters, &st_l);
+        mv_media_visibility(ctx, sc, si.p, si.time, media_y.walk.tr, ctx.cfg.mis_selected_only, &sampler, counters, &st_l);
     else
         trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
@@ -456,7 +471,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         sharing[ns] = int(i);
         ns += sc.visible[i] & sc.selected[i];
     }
-    balance_densities(ctx, sc, bsdf, si, sharing.data(), ns);
+    mv_balance_sums(ctx, sc, &bsdf, &si, sharing.data(), ns);
 
     // ---------------- Shared next-event estimation (§7) ----------------
     sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
@@ -548,7 +563,10 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             rec.suffix = int32_t(pending.rays.size());
             const Vec3f wo = si.to_world(bs.wo);
             pending.rays.push_back(si.spawn_ray(wo));
-            if (ctx.volpath) pending.media.push_back(mv_medium_towards(si, wo, media_y.walk.medium));
+            if (ctx.volpath) {
+                pending.media.push_back(mv_medium_towards(si, wo, media_y.walk.medium));
+                pending.dims.push_back(DimCameraEnd);
+            }
             pending.states.push_back(state);
             pending.samplers.push_back(sampler);
         }
@@ -572,7 +590,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             f_nee[i] *= tr, fs[i] *= tr;
         }
         if (mix.delta) rec.delta_bounce *= sc.tr[sharing[mix.view]];
-        const Spectrum in_scattered = mv_in_scattering(ctx, slot_l, ray, media_y, sampler, counters);
+        // (The in-scattering is the medium vertex's where those are shared.)
+        const Spectrum in_scattered =
+            ctx.medium_vertices ? Spectrum(0.f) : mv_in_scattering(ctx, slot_l, ray, media_y, sampler, counters);
         rec.e = (le_y * media_y.walk.tr + in_scattered) * (1.f / n_l);
     }
     rec.hash = sampler.sample_hash();
@@ -598,6 +618,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     pending.samples.push_back(rec);
     st_l.sharing += ns;
     st_l.rays += counters.rays + counters.shadow_rays - rays_before;
+    if (ctx.medium_vertices)
+        mv_medium_vertex(ctx, slot_l, media_y.near, xi, pixel_l, film_l, key, sampler, sc, pending, counters, st_l);
 }
 
 } // namespace mvpt

@@ -71,6 +71,10 @@ struct MvContext {
     Vec3f across{1.f, 0.f, 0.f};
     /// Cells of the scene proven to see the whole rig unblocked (static scenes and cameras).
     std::shared_ptr<const RigVisibility> rig;
+    /// Scatterings in media on camera segments are shared too (§10, medium vertices): the
+    /// volumetric path tracer renders the media, all of them have a constant extinction, no
+    /// emitter has a null BSDF, paths have a bounce and there are views to share with.
+    bool medium_vertices = false;
 
     /// Sets the derived members above from `views` and `scene_moves` (`windows` included).
     void prepare();
@@ -134,6 +138,9 @@ struct MvPendingSamples {
         int32_t shadow = -1;
         bool valid = false;
         bool nee = false; ///< nee_weight is not black
+        /// A medium vertex (§10): its contributions are added as native-only radiance (to E,
+        /// with W = 0), since no fixed sum of their weights is known.
+        bool medium = false;
         uint64_t hash = 0; ///< the native sample's Sampler::sample_hash (for the splats' taps)
         SampleKey key = NoSample; ///< the native sample, for the report of dropped contributions
         float b_scale = 0.f;
@@ -156,6 +163,7 @@ struct MvPendingSamples {
     std::vector<PathState> states;
     std::vector<Sampler> samplers;
     std::vector<const Medium *> media; ///< the medium each suffix starts in (scenes with media)
+    std::vector<uint32_t> dims;        ///< the first sampler dimension of each suffix's steps (scenes with media)
     std::vector<Spectrum> radiance;
     std::vector<uint8_t> valid;
     /// The shared NEE's shadow rays, traced as packets with the suffixes; results.
@@ -163,6 +171,20 @@ struct MvPendingSamples {
     std::vector<uint8_t> shadow_blocked;
     void clear();
 };
+
+/// The shift of a shared vertex `y` of a native sample of view `slot_l` to every view with the
+/// cheap tests (§3 tests 1–3), into sc.shifts.
+void mv_shift_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc);
+
+/// The selection draws of §6 for the candidates in sc.cand (sc.s_sel, sc.selected set to 1 by
+/// the caller); `bsdf` and `si` (the shared surface vertex) are read for the material
+/// similarity only (sc.material).
+void mv_select(const MvContext &ctx, MvScratch &sc, Sampler &sampler, const Bsdf *bsdf, const SurfaceInteraction *si);
+
+/// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d, summed over the
+/// visible candidates (sc.visible); `bsdf` and `si` as for mv_select.
+void mv_balance_sums(const MvContext &ctx, MvScratch &sc, const Bsdf *bsdf, const SurfaceInteraction *si,
+                     const int *targets, size_t nt);
 
 /// The densities D_k (§5) that a native sample of view `slot` whose camera ray (from
 /// `lens_point`, unit-disk point `lens`, at `time`) hits `hit` gives every view k that can share

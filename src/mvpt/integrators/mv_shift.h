@@ -24,6 +24,8 @@ struct MvVertex {
     float time = 0.f; ///< scene time of the native sample
     Vec2f lens;     ///< xi on the unit disk
     float side = 0.f; ///< n . (u_l - y): the side of the surface the native lens point is on
+    /// A point in a medium (§10): n is zero, G is per unit volume and length, every side faces.
+    bool in_medium = false;
 };
 
 /// Which test rejected a shift (§3, cheap tests first); counted per view.

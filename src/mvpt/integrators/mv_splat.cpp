@@ -100,7 +100,7 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
     if (ctx.volpath) // through media: one path at a time
         for (size_t i = 0; i < n_suffix; ++i) {
             pending.radiance[i] = ctx.volpath->trace(*ctx.scene, pending.rays[i], pending.media[i], pending.states[i],
-                                                     pending.samplers[i], counters);
+                                                     pending.samplers[i], counters, VolPathPart::All, pending.dims[i]);
             pending.valid[i] = 1;
         }
     else if (n_suffix > 0)
@@ -123,6 +123,14 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
         const int *slots = pending.slot.data() + first;
         const uint32_t *pixels = pending.pixel.data() + first;
         const Vec2f *films = pending.film.data() + first;
+        if (rec.medium) { // a medium vertex's contributions are native-only radiance of each view (W = 0)
+            size_t lost = 0;
+            for (uint32_t i = 0; i < n; ++i)
+                lost += !sink.native(slots[i], pixels[i], films[i], rec.hash, Spectrum(0.f), 0.f,
+                                     mv_entry_value(t, f_nee[i], f_bounce[i], w[i]));
+            if (lost) sink.lost(rec.key);
+            continue;
+        }
         // Two entries on their own: a delta lobe's direction serves its view only, and the
         // native view's entry (i = 0) also carries E.
         const int delta = bounce ? rec.delta_view : -1;

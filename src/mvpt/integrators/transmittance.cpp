@@ -53,4 +53,43 @@ SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, Null
     return w;
 }
 
+SegmentFlight flight_along_segment(const Scene &scene, Ray ray, const Medium *medium, float u,
+                                   RayCounters &counters) {
+    SegmentFlight f;
+    const float u3 = u * 3.f;
+    const int c = std::min(int(u3), 2);
+    float tau = -std::log1p(-std::min(u3 - float(c), OneMinusEpsilon)); // optical depth left in channel c
+    const Point3f target = ray.at(ray.tmax);
+    const bool finite = std::isfinite(ray.tmax);
+    for (int crossing = 0; crossing < MaxNullCrossings; ++crossing) {
+        Spectrum sigma(0.f);
+        if (medium && !medium->constant_extinction(sigma)) return f;
+        // Where the flight ends if no surface comes first.
+        const float t_end = sigma[c] > 0.f ? tau / sigma[c] : Infinity;
+        Ray query = ray;
+        query.tmax = std::min(ray.tmax, t_end);
+        SurfaceInteraction si;
+        ++counters.rays;
+        const bool hit = scene.intersect(query, si);
+        if (!hit && t_end < ray.tmax) { // it scatters in this piece
+            for (int i = 0; i < 3; ++i) f.tr[i] *= std::exp(-sigma[i] * t_end);
+            f.scattered = true;
+            f.p = ray.at(t_end);
+            f.medium = medium;
+            f.pdf = (sigma[0] * f.tr[0] + sigma[1] * f.tr[1] + sigma[2] * f.tr[2]) * (1.f / 3.f);
+            return f;
+        }
+        if (!hit) return f; // it leaves the segment
+        for (int i = 0; i < 3; ++i) f.tr[i] *= std::exp(-sigma[i] * si.t);
+        tau -= sigma[c] * si.t;
+        if (si.shape->bsdf->flags() != BsdfNull) return f; // the surface term's vertex (§10)
+        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
+        const Point3f o = si.offset_p(ray.d);
+        const float rest = finite ? dot(target - o, ray.d) : Infinity;
+        if (!(rest > 0.f)) return f;
+        ray = Ray{o, ray.d, 0.f, rest, ray.time};
+    }
+    return f;
+}
+
 } // namespace mvpt

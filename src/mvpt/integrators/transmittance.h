@@ -45,6 +45,24 @@ struct SegmentWalk {
 SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, NullRule rule, RandomStream &rs,
                          RayCounters &counters);
 
+/// A free flight along a camera segment, drawn once over the whole segment (multi-view path
+/// tracing's medium vertices, docs/multiview-path-tracing.md §10).
+struct SegmentFlight {
+    bool scattered = false; ///< false: it reached the segment's first surface that is not null (or its end)
+    Point3f p;              ///< where it scattered
+    const Medium *medium = nullptr; ///< the medium it scattered in
+    Spectrum tr{1.f};       ///< transmittance from the start to p
+    float pdf = 0.f;        ///< density of p per unit length: 1/3 sum_c sigma_c tr_c
+};
+
+/// A free flight along `ray` (unit direction) over [0, ray.tmax), starting in `medium`, through
+/// surfaces whose BSDF is `null`, in media of constant extinction: channel c = floor(3u), and
+/// the rest of u an optical depth tau ~ Exp(1); it scatters where channel c's optical depth
+/// from the start reaches tau. The point's density is the mixture over channels,
+/// 1/3 sum_c sigma_c(p) T_c(p): a function of the segment to p alone. No scattering where a
+/// medium's extinction is not constant.
+SegmentFlight flight_along_segment(const Scene &scene, Ray ray, const Medium *medium, float u, RayCounters &counters);
+
 /// Transmittance along a shadow ray (NullRule::Transmission): zero when blocked.
 inline Spectrum shadow_transmittance(const Scene &scene, const Ray &ray, const Medium *medium, RandomStream &rs,
                                      RayCounters &counters) {

@@ -106,6 +106,7 @@ Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *med
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
     const BsdfContext ctx;
     const bool scattered_only = part == VolPathPart::ScatteredInMedium;
+    const bool unscattered_only = part == VolPathPart::ReachesSurface;
     const uint32_t dim0 = dims;
 
     Spectrum result(0.f), throughput = start.throughput;
@@ -133,12 +134,15 @@ Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *med
         SurfaceInteraction si;
         ++counters.rays;
         // In a medium, surfaces beyond where the flight surely ends need not be found.
+        const bool pass_through = unscattered_only && depth == 0; // the camera segment, without scattering
         Ray query = ray;
-        if (medium) query.tmax = std::min(query.tmax, medium->free_flight_bound(u_flight));
+        if (medium && !pass_through) query.tmax = std::min(query.tmax, medium->free_flight_bound(u_flight));
         const bool hit = scene.intersect(query, si);
 
         // ---------------- Free flight through the medium ----------------
-        if (medium) {
+        if (medium && pass_through) {
+            throughput *= medium->transmittance(ray, hit ? si.t : Infinity, rs);
+        } else if (medium) {
             MediumSample ms = medium->sample(ray, hit ? si.t : Infinity, u_flight, rs);
             throughput *= ms.weight;
             if (ms.scattered) {

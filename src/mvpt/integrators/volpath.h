@@ -28,6 +28,10 @@ enum class VolPathPart {
     /// in-scattering along a camera segment; multi-view path tracing shares the rest, §10).
     /// Emitters on the null surfaces crossed before it count too.
     ScatteredInMedium,
+    /// The rest: paths that reach the first surface that is not null (or leave the scene)
+    /// without scattering in a medium on the way, weighted by the transmittance there. With
+    /// ScatteredInMedium it makes up All.
+    ReachesSurface,
 };
 
 class VolPathIntegrator final : public Integrator {

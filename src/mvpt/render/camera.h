@@ -75,7 +75,9 @@ public:
     /// Film area per unit surface area at `y` (normal `n_y`, any length and side), for the
     /// lens point `u(time, lens)` (design doc §4):
     ///     G(y) = f^2 cos(phi) / (cos^3(theta) d^2),   f = (W/2) / tan(fov_x/2) in pixels,
-    /// theta between u->y and the optical axis, phi between n_y and y->u, d = |y - u|.
+    /// theta between u->y and the optical axis, phi between n_y and y->u, d = |y - u|. A zero
+    /// `n_y` makes y a point in a medium: then G is per unit volume and unit length along the
+    /// camera ray, f^2 / (cos^3(theta) d^2) (design doc §10).
     /// The Jacobian of the shift l->k is |T'_{l->k}| = G_k(y) / G_l(y). Returns 0 when `y`
     /// is not in front of the lens plane.
     virtual float film_density(Point3f y, Normal3f n_y, float time, Vec2f lens) const = 0;

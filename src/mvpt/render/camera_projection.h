@@ -67,7 +67,8 @@ inline void flatten(const CameraProjection &c, float out[ProjectionFields]) {
 }
 
 /// Camera::shift_geometry for camera `c` (design doc §3 projection through the focus plane,
-/// §4 film density G = f^2 cos(phi) / (cos^3(theta) d^2)). False when y's camera-space depth
+/// §4 film density G = f^2 cos(phi) / (cos^3(theta) d^2); a zero normal `n_y` makes y a point
+/// in a medium, with G per unit volume and length f^2 / (cos^3(theta) d^2), §10). False when y's camera-space depth
 /// lies outside [near, far]; `out` then holds meaningless values. Branch-free (a pinhole is a
 /// lens of radius 0), so that shift_geometry_batch vectorises over cameras.
 [[gnu::always_inline]] inline bool shift_geometry(const CameraProjection &c, Point3f y, Normal3f n_y, Vec2f lens, ShiftGeometry *out) {
@@ -84,8 +85,10 @@ inline void flatten(const CameraProjection &c, float out[ProjectionFields]) {
     // cos(theta) = p.z / d and cos(phi) = |n.w| / (|n| d), so G = f^2 |n.w| / (|n| p.z^3).
     Vec3f w = y - out->lens_point;
     float d = std::sqrt(sqr(p.x - ux) + sqr(p.y - uy) + sqr(p.z));
-    const float inv_n = 1.f / norm(n_y); // the same for every camera (hoisted out of batch loops)
-    out->density = sqr(c.film_distance) * absdot(n_y, w) * inv_n * (inv_z * inv_z * inv_z);
+    // d cos(phi) = |n.w| / |n|, or d in a medium (a zero normal).
+    const float n_norm = norm(n_y), inv_n = n_norm > 0.f ? 1.f / n_norm : 1.f; // hoisted out of batch loops
+    const float n_w = n_norm > 0.f ? absdot(n_y, w) : d;
+    out->density = sqr(c.film_distance) * n_w * inv_n * (inv_z * inv_z * inv_z);
     // Up to the near plane: d - near / cos(theta).
     out->visible_length = d * (1.f - c.near_clip * inv_z);
     return (p.z >= c.near_clip) & (p.z <= c.far_clip);

@@ -49,6 +49,18 @@ public:
         return false;
     }
 
+    /// sigma_t when it is one constant everywhere in the medium (a homogeneous medium), so that
+    /// a free flight through it has a density in closed form; false elsewhere.
+    virtual bool constant_extinction(Spectrum &sigma_t) const {
+        (void)sigma_t;
+        return false;
+    }
+    /// sigma_s at `p` where constant_extinction holds (sigma_t times the albedo there).
+    virtual Spectrum scattering(Point3f p) const {
+        (void)p;
+        return Spectrum(0.f);
+    }
+
     const PhaseFunction &phase() const { return *m_phase; }
     /// Mitsuba's `sample_emitters`: next-event estimation at scattering points in this medium.
     bool sample_emitters() const { return m_sample_emitters; }

@@ -135,7 +135,8 @@ public:
         float d2 = squared_norm(w), d = std::sqrt(d2);
         float cos_theta = dot(w, normalize(pose.axis[2])) / d;
         if (!(cos_theta > 0.f)) return 0.f;
-        float cos_phi = absdot(n_y, w) / (norm(n_y) * d);
+        const float n_norm = norm(n_y);
+        float cos_phi = n_norm > 0.f ? absdot(n_y, w) / (n_norm * d) : 1.f; // zero normal: a point in a medium
         return sqr(m_proj.film_distance) * cos_phi / (cos_theta * cos_theta * cos_theta * d2);
     }
 

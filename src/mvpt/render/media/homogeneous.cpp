@@ -56,6 +56,12 @@ public:
 
     Spectrum transmittance(const Ray &, float t, RandomStream &) const override { return exp_tr(t); }
 
+    bool constant_extinction(Spectrum &sigma_t) const override {
+        sigma_t = m_sigma_t;
+        return true;
+    }
+    Spectrum scattering(Point3f p) const override { return m_sigma_t * m_albedo->eval(p); }
+
     bool sample_within(const Ray &ray, float t_end, float u, MediumSample &out) const override {
         // The channel mixture of `sample`, each channel's exponential truncated to [0, t_end):
         //   p(t) = 1/3 sum_c sigma_c exp(-sigma_c t) / (1 - exp(-sigma_c t_end)).
