@@ -1,6 +1,7 @@
 // Medium vertices of multi-view path tracing (docs/multiview-path-tracing.md §10): a scattering
 // on a native camera segment, drawn by a free flight whose density every view can evaluate
 // from its own segment, shared with every view that sees it as a surface vertex is (§3–§7).
+#include "mv_densities.h"
 #include "mv_media.h"
 
 #include "volpath.h"

@@ -80,6 +80,11 @@ struct MvContext {
     void prepare();
 };
 
+/// Scratch arrays only grow: resizing them to each sample's count would refill them.
+template <typename V> void grow_scratch(V &v, size_t n) {
+    if (v.size() < n) v.resize(n);
+}
+
 /// Per-thread scratch space (kept between samples to avoid allocations).
 struct MvScratch {
     ViewShifts shifts;  ///< the shift of y to every view
@@ -175,16 +180,6 @@ struct MvPendingSamples {
 /// The shift of a shared vertex `y` of a native sample of view `slot_l` to every view with the
 /// cheap tests (§3 tests 1–3), into sc.shifts.
 void mv_shift_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc);
-
-/// The selection draws of §6 for the candidates in sc.cand (sc.s_sel, sc.selected set to 1 by
-/// the caller); `bsdf` and `si` (the shared surface vertex) are read for the material
-/// similarity only (sc.material).
-void mv_select(const MvContext &ctx, MvScratch &sc, Sampler &sampler, const Bsdf *bsdf, const SurfaceInteraction *si);
-
-/// D_k of §5 for the candidates `targets` (indices into sc.cand), into sc.d, summed over the
-/// visible candidates (sc.visible); `bsdf` and `si` as for mv_select.
-void mv_balance_sums(const MvContext &ctx, MvScratch &sc, const Bsdf *bsdf, const SurfaceInteraction *si,
-                     const int *targets, size_t nt);
 
 /// The densities D_k (§5) that a native sample of view `slot` whose camera ray (from
 /// `lens_point`, unit-disk point `lens`, at `time`) hits `hit` gives every view k that can share
