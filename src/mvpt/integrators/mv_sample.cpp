@@ -7,8 +7,6 @@
 #include "transmittance.h"
 #include "volpath.h"
 
-#include "../core/sampler_batch.h"
-#include "../core/warp.h"
 #include "../render/bsdf.h"
 #include "../render/light.h"
 #include "../render/shape.h"
@@ -226,39 +224,13 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
     const MvView &l = ctx.views[slot];
     const Camera &cam = *l.camera;
     const size_t n = prim.size();
-    prim.film.resize(n), prim.xi.resize(n), prim.time.resize(n), prim.rays.resize(n), prim.si.resize(n), prim.hit.resize(n);
+    prim.rays.resize(n), prim.si.resize(n), prim.hit.resize(n);
     // Native sample z_l = (t, x_l, xi) (§2). Box filter: x_l uniform in the pixel. xi is drawn
     // for pinholes too: other views may have a lens.
-    static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2, "independent_start_draws draws dimensions 0, 1, 2");
-    if (cam.sampler_kind == SamplerKind::Independent) { // all samples' starts and numbers in one vector loop
-        prim.pixel_hash.resize(n), prim.sample_hash.resize(n);
-        for (auto &d : prim.draws) d.resize(n);
-        float *const out[5] = {prim.draws[0].data(), prim.draws[1].data(), prim.draws[2].data(), prim.draws[3].data(),
-                               prim.draws[4].data()};
-        independent_start_draws(ctx.seeds[slot], l.scene_index, prim.px.data(),
-                                prim.py.data(), prim.sample_index.data(), n, prim.pixel_hash.data(),
-                                prim.sample_hash.data(), out);
-        for (size_t i = 0; i < n; ++i) {
-            // (Pixels of the window's margin have negative coordinates, stored as uint32.)
-            prim.film[i] = Vec2f(float(int32_t(prim.px[i])) + out[0][i], float(int32_t(prim.py[i])) + out[1][i]);
-            prim.xi[i] = warp::square_to_uniform_disk_concentric(Vec2f(out[2][i], out[3][i]));
-            prim.time[i] = cam.sample_time(out[4][i]);
-        }
-    } else {
-        prim.pixel_hash.clear();
-        for (size_t i = 0; i < n; ++i) {
-            Sampler sampler(cam.sampler_kind, ctx.seeds[slot]);
-            sampler.start(l.scene_index, prim.px[i], prim.py[i], prim.sample_index[i]);
-            sampler.set_dimension(DimFilm);
-            Vec2f u_film = sampler.next_2d();
-            Vec2f u_lens = sampler.next_2d();
-            float u_time = sampler.next_1d();
-            prim.film[i] = Vec2f(float(int32_t(prim.px[i])) + u_film.x, float(int32_t(prim.py[i])) + u_film.y);
-            prim.xi[i] = warp::square_to_uniform_disk_concentric(u_lens);
-            prim.time[i] = cam.sample_time(u_time);
-        }
-    }
-    cam.generate_rays(prim.film.data(), prim.xi.data(), prim.time.data(), n, prim.rays.data());
+    CameraSamples &cs = prim.camera;
+    cs.draw(cam, ctx.seeds[slot], l.scene_index, prim.px.data(), prim.py.data(), prim.sample_index.data(), n,
+            FilmSampling::Box, true);
+    cam.generate_rays(cs.film.data(), cs.lens.data(), cs.time.data(), n, prim.rays.data());
     ctx.scene->intersect(prim.rays.data(), n, prim.si.data(), prim.hit.data(), true);
 }
 
@@ -271,7 +243,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     const Camera &cam = *l.camera;
     const int px = int(prim.px[i_prim]), py = int(prim.py[i_prim]);
     const uint32_t pixel_l = ctx.windows[slot_l].index(px, py);
-    const Vec2f film_l = prim.film[i_prim];
+    const Vec2f film_l = prim.camera.film[i_prim];
     const float n_l = float(ctx.native_map[slot_l][pixel_l]);
     MvViewStats &st_l = stats[slot_l];
     const uint64_t rays_before = counters.rays + counters.shadow_rays;
@@ -279,12 +251,9 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
 
     // The native sample's stream (its camera dimensions were drawn by mv_trace_primaries).
     Sampler sampler(cam.sampler_kind, ctx.seeds[slot_l]);
-    if (!prim.pixel_hash.empty())
-        sampler.start_from(prim.pixel_hash[i_prim], prim.sample_hash[i_prim], prim.sample_index[i_prim], 0);
-    else
-        sampler.start(l.scene_index, uint32_t(px), uint32_t(py), prim.sample_index[i_prim]);
-    const Vec2f xi = prim.xi[i_prim];
-    const float t = prim.time[i_prim];
+    prim.camera.start(sampler, i_prim, l.scene_index, uint32_t(px), uint32_t(py), prim.sample_index[i_prim], 0);
+    const Vec2f xi = prim.camera.lens[i_prim];
+    const float t = prim.camera.time[i_prim];
     const Ray &ray = prim.rays[i_prim];
     ++counters.camera_rays;
     ++counters.rays;

@@ -11,6 +11,7 @@
 
 #include "../render/splat_film.h"
 #include "../render/camera_projection.h"
+#include "../render/camera_samples.h"
 #include "../scene/rig_visibility.h"
 
 #include <cstdint>
@@ -110,11 +111,7 @@ struct MvScratch {
 struct MvPrimaries {
     std::vector<uint32_t> px, py;         ///< pixel (full-film coordinates)
     std::vector<uint32_t> sample_index;   ///< the pixel's native-sample index
-    /// The independent sampler's hashes of (seed, view, pixel) and of the sample (for Sampler::start_from).
-    std::vector<uint64_t> pixel_hash, sample_hash;
-    std::vector<float> draws[5];          ///< the camera dimensions' numbers (independent sampler)
-    std::vector<Vec2f> film, xi;          ///< film position, unit-disk lens point
-    std::vector<float> time;
+    CameraSamples camera;                 ///< film position, unit-disk lens point and time
     std::vector<Ray> rays;
     std::vector<SurfaceInteraction> si;
     std::vector<uint8_t> hit;

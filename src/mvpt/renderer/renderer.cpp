@@ -1,11 +1,10 @@
 #include "renderer.h"
 
 #include "../core/memory.h"
-#include "../core/sampler_batch.h"
 
-#include "../core/warp.h"
 #include "../integrators/mvpath.h"
 #include "../render/camera.h"
+#include "../render/camera_samples.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
@@ -32,10 +31,7 @@ struct TileBuffers {
     std::vector<Sampler> samplers;
     std::vector<Ray> rays;
     std::vector<Spectrum> radiance;
-    std::vector<Vec2f> film_positions, lens_points;
-    std::vector<float> times;
-    std::vector<uint64_t> pixel_hash, sample_hash;
-    std::vector<float> draws[5];
+    CameraSamples camera;
 };
 } // namespace
 
@@ -161,11 +157,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         const Camera &cam = *cams[view];
         const FilmDesc &film = cam.film;
         FilmBuffer &fb = m_films[tile.view_slot];
-        const bool independent = cam.sampler_kind == SamplerKind::Independent;
-        const bool thin_lens = cam.lens_radius() > 0.f; // per tile, not per sample (a virtual call)
         const uint32_t seed = uint32_t(m_opts.seed ? *m_opts.seed : cam.seed); // as Sampler keeps it
-        static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
-                      "independent_start_draws draws the camera dimensions 0, 1, 2");
         // One thread_local reached through a pointer the compiler cannot see through (an empty
         // asm): in the Python module (a shared library) each use of a thread_local would call
         // __tls_get_addr.
@@ -194,10 +186,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         std::vector<Sampler> &samplers = tb.samplers;
         std::vector<Ray> &rays = tb.rays;
         std::vector<Spectrum> &radiance = tb.radiance;
-        std::vector<Vec2f> &film_positions = tb.film_positions, &lens_points = tb.lens_points;
-        std::vector<float> &times = tb.times;
-        std::vector<uint64_t> &pixel_hash = tb.pixel_hash, &sample_hash = tb.sample_hash;
-        std::vector<float> (&draws)[5] = tb.draws;
+        CameraSamples &cs = tb.camera;
         // 1024 rather than 256: fuller packets and kernel chunks at the deep, sparse bounces (cbox -2.6 %).
         constexpr size_t BatchPaths = 1024;
         for (size_t b0 = 0; b0 < slot_x.size(); b0 += BatchPaths) {
@@ -206,39 +195,9 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
             samplers.assign(n, Sampler(cam.sampler_kind, seed));
             rays.resize(n);
             radiance.resize(n);
-            film_positions.resize(n);
-            lens_points.resize(n);
-            times.resize(n);
-            if (independent) {
-                // The samplers' starts and camera numbers in one vector loop (sampler_batch.h).
-                pixel_hash.resize(n);
-                sample_hash.resize(n);
-                for (auto &d : draws) d.resize(n);
-                float *const out[5] = {draws[0].data(), draws[1].data(), draws[2].data(), draws[3].data(), draws[4].data()};
-                independent_start_draws(seed, uint32_t(view), sx, sy, sq, n, pixel_hash.data(), sample_hash.data(), out);
-            }
-            for (size_t i = 0; i < n; ++i) {
-                Sampler &sampler = samplers[i];
-                Vec2f u_film, u_lens;
-                float u_time;
-                if (independent) {
-                    sampler.start_from(pixel_hash[i], sample_hash[i], sq[i], DimCameraEnd);
-                    u_film = {draws[0][i], draws[1][i]};
-                    u_lens = {draws[2][i], draws[3][i]};
-                    u_time = draws[4][i];
-                } else {
-                    sampler.start(uint32_t(view), sx[i], sy[i], sq[i]);
-                    sampler.set_dimension(DimFilm);
-                    u_film = sampler.next_2d();
-                    u_lens = sampler.next_2d();
-                    u_time = sampler.next_1d();
-                }
-                Vec2f offset = film.filter->sample(u_film);
-                film_positions[i] = Vec2f(float(sx[i]) + 0.5f + offset.x, float(sy[i]) + 0.5f + offset.y);
-                lens_points[i] = thin_lens ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
-                times[i] = cam.sample_time(u_time);
-            }
-            cam.generate_rays(film_positions.data(), lens_points.data(), times.data(), n, rays.data());
+            cs.draw(cam, seed, uint32_t(view), sx, sy, sq, n, FilmSampling::Filter, false);
+            for (size_t i = 0; i < n; ++i) cs.start(samplers[i], i, uint32_t(view), sx[i], sy[i], sq[i], DimCameraEnd);
+            cam.generate_rays(cs.film.data(), cs.lens.data(), cs.time.data(), n, rays.data());
             rc.camera_rays += n;
             integrator.li_batch(m_scene, rays.data(), samplers.data(), radiance.data(), n, rc, cam.medium.get());
             for (size_t i = 0; i < n; ++i) {
