@@ -39,7 +39,7 @@ void CameraSamples::draw(const Camera &cam, uint32_t seed, uint32_t view, const 
             u_lens = sampler.next_2d();
             u_time = sampler.next_1d();
         }
-        const Vec2f pixel(float(int32_t(px[i])), float(int32_t(py[i])));
+        const Vec2f pixel{float(int32_t(px[i])), float(int32_t(py[i]))};
         if (film_sampling == FilmSampling::Filter) {
             const Vec2f offset = filter.sample(u_film);
             film[i] = Vec2f(pixel.x + 0.5f + offset.x, pixel.y + 0.5f + offset.y);
