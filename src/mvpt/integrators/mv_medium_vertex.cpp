@@ -105,19 +105,16 @@ size_t medium_sharing(const MvContext &ctx, int slot, uint32_t pixel, Vec2f film
 }
 
 /// Next-event estimation at p for the sharing views, whose directions towards their lens points
-/// are wi[0, ns): each view's phase value into f[i], the light's weight times the power
-/// heuristic against the views' phase mixture into rec (nee, nee_weight).
-void medium_nee(const Scene &scene, const Medium &medium, Point3f p, float time, const Vec3f *wi, size_t ns,
+/// are wi[0, ns): the volumetric path tracer's emitter sample, each view's phase value into
+/// f[i], and the light's weight times the power heuristic against the views' phase mixture
+/// into rec (nee, nee_weight).
+void medium_nee(const MvContext &ctx, const Medium &medium, Point3f p, float time, const Vec3f *wi, size_t ns,
                 uint32_t dims, Sampler &sampler, Spectrum *f, MvPendingSamples::Sample &rec, RayCounters &counters) {
-    const auto &lights = scene.lights();
-    if (!medium.sample_emitters() || lights.empty()) return;
+    if (!medium.sample_emitters()) return;
     sampler.set_dimension(dims + 3); // as a volumetric step draws its emitter sample
-    const float u_select = sampler.next_1d();
-    const Vec2f u_light = sampler.next_2d();
-    RandomStream rs = sampler.next_stream();
-    const size_t idx = std::min(size_t(u_select * float(lights.size())), lights.size() - 1);
-    auto [ls, weight] = lights[idx]->sample_li(p, u_light, time);
-    if (weight.is_black()) return;
+    LightSample ls;
+    const Spectrum le = ctx.volpath->sample_emitter(*ctx.scene, p, nullptr, &medium, time, sampler, counters, ls);
+    if (le.is_black()) return;
     float p_mix = 0.f;
     for (size_t i = 0; i < ns; ++i) {
         const float fi = medium.phase().eval(wi[i], ls.d);
@@ -125,9 +122,8 @@ void medium_nee(const Scene &scene, const Medium &medium, Point3f p, float time,
         p_mix += fi;
     }
     p_mix /= float(ns);
-    const Ray shadow{p, ls.d, 0.f, std::isinf(ls.dist) ? Infinity : ls.dist * (1.f - ShadowEpsilon), time};
-    weight *= float(lights.size()) * shadow_transmittance(scene, shadow, &medium, rs, counters);
-    rec.nee_weight = weight * (ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix));
+    const float n_lights = float(ctx.scene->lights().size());
+    rec.nee_weight = le * (ls.delta ? 1.f : mis_power(ls.pdf / n_lights, p_mix));
     rec.nee = !rec.nee_weight.is_black() && p_mix > 0.f;
 }
 
@@ -180,7 +176,7 @@ void one_medium_vertex(const MvContext &ctx, int slot, const Ray &near, Vec2f le
     rec.key = key;
     rec.valid = true; // the volumetric path tracer keeps every path
     rec.medium = true;
-    medium_nee(*ctx.scene, *flight.medium, flight.p, near.time, wi.data(), ns, dims, sampler, f_nee, rec, counters);
+    medium_nee(ctx, *flight.medium, flight.p, near.time, wi.data(), ns, dims, sampler, f_nee, rec, counters);
     medium_bounce(*flight.medium, flight.p, near.time, wi.data(), ns, dims, sampler, fs, rec, pending);
     for (size_t i = 0; i < ns; ++i) { // each sharing view's factor, pixel and W
         const size_t k = size_t(sc.sharing[i]);

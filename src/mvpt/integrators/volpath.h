@@ -65,6 +65,13 @@ public:
     Spectrum in_scattering(const Scene &scene, const Ray &ray, const Medium &medium, Sampler &sampler,
                            RayCounters &counters, bool &drawn, uint32_t dims = DimInScatter) const;
 
+    /// One emitter sample seen from `p` (a surface point `si`, or a point in a medium when
+    /// `si` is null): the emitter's radiance over its density times the transmittance to it,
+    /// with the light sample for the MIS weight; zero when blocked. Draws an emitter choice, a
+    /// point and the shadow ray's stream from the sampler's current dimension on.
+    Spectrum sample_emitter(const Scene &scene, Point3f p, const SurfaceInteraction *si, const Medium *medium,
+                            float time, Sampler &sampler, RayCounters &counters, LightSample &ls) const;
+
 private:
     /// A scattering at `ray.o` in `medium` coming along `ray.d`, with the path's `throughput`:
     /// next-event estimation (when the medium samples emitters; returned, throughput included)
@@ -73,11 +80,6 @@ private:
     Spectrum scatter_in_medium(const Scene &scene, const Medium &medium, const Spectrum &throughput, uint32_t block,
                                Sampler &sampler, RayCounters &counters, Ray &ray, float &pdf, bool &delta) const;
 
-    /// One emitter sample seen from `p` (a surface point `si`, or a point in a medium when
-    /// `si` is null): the emitter's radiance over its density times the transmittance to it,
-    /// with the light sample for the MIS weight; zero when blocked.
-    Spectrum sample_emitter(const Scene &scene, Point3f p, const SurfaceInteraction *si, const Medium *medium,
-                            float time, Sampler &sampler, RayCounters &counters, LightSample &ls) const;
 
     PathConfig m_cfg;
     PathIntegrator m_surfaces;
