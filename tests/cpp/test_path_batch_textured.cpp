@@ -6,6 +6,7 @@
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
 #include "mvpt/render/bsdf.h"
+#include "mvpt/render/bsdfs/bsdf_form.h"
 #include "mvpt/scene/scene.h"
 
 #include <gtest/gtest.h>
@@ -70,9 +71,9 @@ TEST(PathBatchTextured, TexturedDiffuseTakesTheLambertKernels) {
     size_t textured = 0, twosided_textured = 0;
     for (const auto &shape : scene->shapes())
         if (shape->bsdf)
-            if (const LambertInfo *lam = shape->bsdf->lambert(); lam && lam->texture) {
+            if (const BsdfForm form = bsdf_form(*shape->bsdf); form.kind == BsdfForm::Lambert && form.lambert.texture) {
                 ++textured;
-                twosided_textured += lam->two_sided;
+                twosided_textured += form.lambert.two_sided;
             }
     EXPECT_EQ(textured, 3u);
     EXPECT_EQ(twosided_textured, 1u);

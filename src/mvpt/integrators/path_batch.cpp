@@ -12,7 +12,9 @@
 
 #include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
+#include "../render/bsdfs/bsdf_form.h"
 #include "../render/light.h"
+#include "../render/lights/area.h"
 #include "../render/shape.h"
 #include "../render/texture.h"
 #include "../scene/scene.h"
@@ -67,6 +69,33 @@ inline void put_lambert_lane(float *cols, size_t m, const LambertInfo &lam, int 
     cols[lam_col::Emitter * LambertChunk + m] = float(row);
 }
 
+/// The forms (bsdf_form) of the BSDFs met at one vertex of a batch, each found once: a
+/// direct-mapped table by BSDF address in front of the forms found (the casts that find a form
+/// cost more than the kernels save, if made at every vertex).
+class BsdfForms {
+public:
+    /// Empties the table, with room for n forms (their addresses stay fixed until the next reset).
+    void reset(size_t n) {
+        m_slots.fill(Slot{});
+        m_forms.clear();
+        m_forms.reserve(n);
+    }
+    const BsdfForm *find(const Bsdf *bsdf) {
+        Slot &s = m_slots[(uint64_t(uintptr_t(bsdf)) * 0x9E3779B97F4A7C15ull) >> (64 - SlotBits)];
+        if (s.bsdf != bsdf) s = {bsdf, &m_forms.emplace_back(bsdf_form(*bsdf))};
+        return s.form;
+    }
+
+private:
+    static constexpr int SlotBits = 6;
+    struct Slot {
+        const Bsdf *bsdf = nullptr;
+        const BsdfForm *form = nullptr;
+    };
+    std::array<Slot, size_t(1) << SlotBits> m_slots;
+    std::vector<BsdfForm> m_forms;
+};
+
 /// Per-thread buffers, reused across batches.
 struct WaveBuffers {
     std::vector<WavePath> paths;
@@ -77,6 +106,7 @@ struct WaveBuffers {
     std::vector<SurfaceInteraction> si;
     std::vector<uint8_t> hit, blocked, alive;
     std::vector<ScatterVertex> scatter;
+    BsdfForms forms;
     std::vector<PendingShadow> shadows;
     /// Per scattering vertex, its random numbers in li's order (u_light_select, u_light.x,
     /// u_light.y, u_lobe, u_dir.x, u_dir.y, u_rr) and, for independent samplers, the sample
@@ -140,8 +170,9 @@ struct EmitterTables {
     void build(const std::vector<std::shared_ptr<Light>> &lights, WaveBuffers &buf) {
         buf.quad_of_light.assign(lights.size(), -1);
         for (size_t l = 0, nq = 0; l < lights.size() && nq < QuadTable::Max; ++l) {
-            QuadEmitter q;
-            if (!lights[l]->quad_emitter(q)) continue;
+            const std::optional<QuadEmitter> quad = quad_emitter(*lights[l]);
+            if (!quad) continue;
+            const QuadEmitter &q = *quad;
             const float row[QuadTable::Params] = {q.origin.x, q.origin.y, q.origin.z, q.e1.x, q.e1.y, q.e1.z,
                                                   q.e2.x, q.e2.y, q.e2.z, q.n.x, q.n.y, q.n.z, q.inv_area,
                                                   q.radiance.r, q.radiance.g, q.radiance.b};
@@ -150,8 +181,9 @@ struct EmitterTables {
         }
         buf.sphere_of_light.assign(lights.size(), -1);
         for (size_t l = 0, ns = 0; l < lights.size() && ns < SphereTable::Max; ++l) {
-            SphereEmitter e;
-            if (!lights[l]->sphere_emitter(e)) continue;
+            const std::optional<SphereEmitter> sphere = sphere_emitter(*lights[l]);
+            if (!sphere) continue;
+            const SphereEmitter &e = *sphere;
             const float row[SphereTable::Params] = {e.center.x, e.center.y, e.center.z, e.radius,
                                                     e.flip_normals ? 1.f : 0.f, e.radiance.r, e.radiance.g,
                                                     e.radiance.b};
@@ -315,6 +347,7 @@ size_t Wavefront::emission(size_t active) {
     // Escaped rays are evaluated afterwards, all at once (`escaped`).
     size_t n_scatter = 0, n_env_mis = 0, env_nomis = active;
     std::fill(buf.alive.data(), buf.alive.data() + active, uint8_t(0)); // before the loop: see above
+    buf.forms.reset(active);
     for (size_t k = 0; k < active; ++k) {
         WavePath &p = paths[k];
         Sampler &sampler = m_samplers[p.slot];
@@ -350,8 +383,9 @@ size_t Wavefront::emission(size_t active) {
         scatter[j].path = uint32_t(k);
         scatter[j].sampled = false;
         scatter[j].bsdf = si.shape->bsdf.get();
+        const BsdfForm *form = scatter[j].form = buf.forms.find(scatter[j].bsdf);
         // A Lambertian vertex's kernels read only wi's z, which their gather computes.
-        if (const LambertInfo *lam = scatter[j].bsdf->lambert()) scatter[j].refl = lambert_reflectance(*lam, si);
+        if (form->kind == BsdfForm::Lambert) scatter[j].refl = lambert_reflectance(form->lambert, si);
         else si.wi = si.to_local(-ray.d);
         if (independent) {
             buf.u_hash[j] = sampler.sample_hash();
@@ -476,10 +510,11 @@ bool Wavefront::emitter_kernel_lane(size_t j) {
     const Point3f p = m_buf.si[v.path].p;
     const size_t idx = std::min(size_t(m_u[0][j] * m_lights_f), m_lights - 1);
     const int quad = m_tables.quad_row[idx], sphere = m_tables.sphere_row[idx];
-    if (const LambertInfo *lam = v.bsdf->lambert()) {
+    if (v.form->kind == BsdfForm::Lambert) {
+        const LambertInfo &lam = v.form->lambert;
         if (quad >= 0) {
             m_quad_one = m_n_quad == 0 || m_quad_one == quad ? quad : -1;
-            put_lambert_lane(m_buf.quad.data.data(), m_n_quad, *lam, quad);
+            put_lambert_lane(m_buf.quad.data.data(), m_n_quad, lam, quad);
             m_buf.quad_index[m_n_quad] = v.path;
             m_buf.quad_vertex[m_n_quad++] = uint32_t(j);
             if (m_n_quad == LambertChunk) flush_quad(m_n_quad, m_quad_one);
@@ -487,20 +522,19 @@ bool Wavefront::emitter_kernel_lane(size_t j) {
         }
         if (sphere < 0 || !m_tables.outside_sphere(sphere, p)) return false;
         size_t &n = m_n_sphere;
-        put_lambert_lane(m_buf.sphere.data.data(), n, *lam, sphere);
+        put_lambert_lane(m_buf.sphere.data.data(), n, lam, sphere);
         m_buf.sphere_index[n] = v.path;
         m_buf.sphere_vertex[n++] = uint32_t(j);
         if (n == LambertChunk) flush_sphere(n);
         return true;
     }
-    const RoughConductorInfo *cond = v.bsdf->rough_conductor();
-    if (!cond || sphere < 0 || !m_tables.outside_sphere(sphere, p)) return false;
+    if (v.form->kind != BsdfForm::RoughConductor || sphere < 0 || !m_tables.outside_sphere(sphere, p)) return false;
     size_t &n = m_n_conductor_sphere;
     const size_t m = n++;
     m_buf.conductor_sphere_index[m] = v.path;
     float *col = m_buf.conductor_sphere.data.data() + m;
     constexpr size_t st = LambertChunk;
-    gather_conductor_sample(col, *cond, v.path, j);
+    gather_conductor_sample(col, v.form->conductor, v.path, j);
     col[rsn_col::Ux * st] = m_u[1][j], col[rsn_col::Uy * st] = m_u[2][j];
     col[rsn_col::Sphere * st] = float(sphere);
     if (n == LambertChunk) flush_conductor_sphere(n);
@@ -593,19 +627,19 @@ void Wavefront::emitter_nee(size_t n_scatter) {
         const SurfaceInteraction &si = sis[v.path];
         const Bsdf &bsdf = *v.bsdf;
         const LightSample &ls = v.emitter_sample.first;
-        if (const LambertInfo *lam = bsdf.lambert()) {
+        if (v.form->kind == BsdfForm::Lambert) {
             const size_t m = n_lam++;
             buf.lambert_index[m] = v.path;
             buf.lambert_vertex[m] = uint32_t(j);
-            lc[ln_col::TwoSided][m] = lam->two_sided ? 1.f : 0.f;
+            lc[ln_col::TwoSided][m] = v.form->lambert.two_sided ? 1.f : 0.f;
             if (n_lam == LambertChunk) flush_lambert_nee(n_lam);
             continue;
         }
-        if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
+        if (v.form->kind == BsdfForm::RoughConductor) {
             const size_t m = n_rc++;
             buf.conductor_index[m] = v.path;
             float *col = rc.data.data() + m;
-            gather_conductor_nee(col, LambertChunk, si, *cond, paths[v.path].throughput);
+            gather_conductor_nee(col, LambertChunk, si, v.form->conductor, paths[v.path].throughput);
             put_emitter_sample<rn_col::Ldx>(col, LambertChunk, ls, v.emitter_sample.second);
             if (n_rc == LambertChunk) flush_conductor_nee(n_rc);
             continue;
@@ -659,18 +693,18 @@ void Wavefront::sample_bsdfs(size_t n_scatter) {
         WavePath &p = paths[k];
         const SurfaceInteraction &si = sis[k];
         const Bsdf &bsdf = *v.bsdf;
-        if (const LambertInfo *lam = bsdf.lambert()) {
+        if (v.form->kind == BsdfForm::Lambert) {
             const size_t m = n_lam++;
             buf.lambert_index[m] = uint32_t(k);
             buf.lambert_vertex[m] = uint32_t(j);
-            lc[ls_col::TwoSided][m] = lam->two_sided ? 1.f : 0.f;
+            lc[ls_col::TwoSided][m] = v.form->lambert.two_sided ? 1.f : 0.f;
             if (n_lam == LambertChunk) flush_lambert_samples(n_lam);
             continue;
         }
-        if (const RoughConductorInfo *cond = bsdf.rough_conductor()) {
+        if (v.form->kind == BsdfForm::RoughConductor) {
             const size_t m = n_rc++;
             buf.conductor_index[m] = uint32_t(k);
-            gather_conductor_sample(buf.conductor.data.data() + m, *cond, uint32_t(k), j);
+            gather_conductor_sample(buf.conductor.data.data() + m, v.form->conductor, uint32_t(k), j);
             if (n_rc == LambertChunk) flush_conductor_samples(n_rc);
             continue;
         }

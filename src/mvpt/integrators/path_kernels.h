@@ -94,7 +94,7 @@ enum : size_t {
 };
 }
 
-/// Parameters of up to `Max` quad emitters (QuadEmitter in light.h), one row per parameter.
+/// Parameters of up to `Max` quad emitters (QuadEmitter in render/lights/area.h), one row per parameter.
 struct QuadTable {
     static constexpr size_t Max = 16;
     enum : size_t { Ox, Oy, Oz, E1x, E1y, E1z, E2x, E2y, E2z, Nx, Ny, Nz, InvArea, Lr, Lg, Lb, Params };
@@ -108,7 +108,7 @@ struct QuadTable {
 /// invariants instead of lane by lane (which GCC assembles from scalar loads).
 void lambert_quad_nee_kernel(SoaColumns &c, size_t n, const QuadTable &quads, float light_count, int one_quad = -1);
 
-/// Parameters of up to `Max` sphere emitters (SphereEmitter in light.h), one row per parameter.
+/// Parameters of up to `Max` sphere emitters (SphereEmitter in render/lights/area.h), one row per parameter.
 struct SphereTable {
     static constexpr size_t Max = 16;
     enum : size_t { Cx, Cy, Cz, Radius, Flip, Lr, Lg, Lb, Params };

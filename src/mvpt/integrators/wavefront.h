@@ -11,6 +11,7 @@
 namespace mvpt {
 
 class Bsdf;
+struct BsdfForm;
 
 /// One path between two vertices: li's loop variables (its ray is in the wavefront's rays).
 struct WavePath {
@@ -30,8 +31,9 @@ struct WavePath {
 struct ScatterVertex {
     /// Index of the path among the active ones.
     uint32_t path;
-    /// The BSDF at the vertex (looked up once).
+    /// The BSDF at the vertex and its form (looked up once).
     const Bsdf *bsdf;
+    const BsdfForm *form;
     /// A Lambertian BSDF's reflectance at the vertex (evaluated once, read by the NEE and sampling loops).
     Color3f refl;
     /// Next-event estimation: whether an emitter was sampled, the sample and its weight.

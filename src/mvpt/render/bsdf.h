@@ -48,34 +48,6 @@ struct BsdfSample {
     uint32_t sampled_type = BsdfNone;
 };
 
-class Texture;
-
-/// A Lambertian reflectance (diffuse, or twosided around one): the wavefront path tracer
-/// samples and evaluates it in vector kernels.
-struct LambertInfo {
-    /// The reflectance when it is constant (`texture` is null).
-    Color3f reflectance;
-    /// Reflects on both sides (twosided: the back side mirrors directions through the surface).
-    bool two_sided = false;
-    /// A varying reflectance: this texture at the hit's uv (then `reflectance` is unused).
-    const Texture *texture = nullptr;
-};
-
-/// A rough conductor of constant parameters (roughconductor with constant textures, one alpha,
-/// visible-normal sampling; or twosided around one): sampled and evaluated by the wavefront
-/// path tracer's vector kernels.
-struct RoughConductorInfo {
-    /// Beckmann, else GGX.
-    bool beckmann = true;
-    /// The roughness as MicrofacetDistribution holds it (at least 1e-4).
-    float alpha = 0.1f;
-    Color3f eta, k;
-    /// The specular reflectance (1 when absent).
-    Color3f specular{1.f};
-    /// Reflects on both sides (twosided: the back side mirrors directions through the surface).
-    bool two_sided = false;
-};
-
 class Bsdf : public Object {
 public:
     /// Either direction below the surface (local frame): a one-sided lobe is zero there, and a
@@ -111,17 +83,9 @@ public:
     bool is_purely_delta() const { return m_flags != 0 && (m_flags & BsdfSmooth) == 0; }
     /// Roughness at `si` for path-reuse heuristics: GGX-equivalent alpha, 1 for diffuse.
     virtual float roughness(const SurfaceInteraction &) const { return 1.f; }
-    /// The Lambertian reflectance this BSDF amounts to, or nullptr.
-    const LambertInfo *lambert() const { return m_is_lambert ? &m_lambert : nullptr; }
-    /// The constant rough conductor this BSDF amounts to, or nullptr.
-    const RoughConductorInfo *rough_conductor() const { return m_is_rough_conductor ? &m_rough_conductor : nullptr; }
 
 protected:
     uint32_t m_flags = BsdfNone;
-    LambertInfo m_lambert;
-    bool m_is_lambert = false;
-    RoughConductorInfo m_rough_conductor;
-    bool m_is_rough_conductor = false;
 };
 
 } // namespace mvpt

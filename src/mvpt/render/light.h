@@ -25,24 +25,6 @@ struct LightSample {
     bool delta = false;
 };
 
-/// A parallelogram emitter of constant radiance whose sample_li picks origin + u.x e1 + u.y e2
-/// (uniform by area): the wavefront path tracer samples it in a vector kernel.
-struct QuadEmitter {
-    Point3f origin;
-    Vec3f e1, e2;
-    Normal3f n;
-    float inv_area = 0.f;
-    Color3f radiance;
-};
-
-/// A sphere emitter of constant radiance sampled by Sphere::sample_solid_angle.
-struct SphereEmitter {
-    Point3f center;
-    float radius = 0.f;
-    bool flip_normals = false;
-    Color3f radiance;
-};
-
 enum LightFlags : uint32_t {
     LightDeltaPosition = 1u << 0,
     LightDeltaDirection = 1u << 1,
@@ -90,10 +72,6 @@ public:
     virtual const Shape *shape() const { return nullptr; }
     /// True when an area light's radiance is the same all over its shape (uv unused).
     virtual bool uniform_radiance() const { return false; }
-    /// True, with `quad` filled, when sample_li is exactly QuadEmitter's sampling.
-    virtual bool quad_emitter(QuadEmitter &quad) const { (void)quad; return false; }
-    /// True, with `sphere` filled, when sample_li is a constant-radiance sphere's.
-    virtual bool sphere_emitter(SphereEmitter &sphere) const { (void)sphere; return false; }
 
     uint32_t flags() const { return m_flags; }
     bool is_delta() const { return (m_flags & (LightDeltaPosition | LightDeltaDirection)) != 0; }

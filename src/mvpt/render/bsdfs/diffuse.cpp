@@ -3,6 +3,7 @@
 #include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../texture.h"
+#include "bsdf_form.h"
 
 namespace mvpt {
 
@@ -12,9 +13,6 @@ public:
         m_reflectance = get_texture(props, "reflectance", 0.5f);
         m_constant = m_reflectance->is_constant();
         if (m_constant) m_constant_value = m_reflectance->eval(Vec2f(0.f, 0.f));
-        m_is_lambert = true;
-        m_lambert.reflectance = m_constant_value;
-        m_lambert.texture = m_constant ? nullptr : m_reflectance.get();
         m_flags = BsdfDiffuseReflection;
     }
 
@@ -54,6 +52,9 @@ public:
         }
     }
 
+    /// The reflectance as a LambertInfo (one-sided).
+    LambertInfo form() const { return {m_constant_value, false, m_constant ? nullptr : m_reflectance.get()}; }
+
 private:
     /// The reflectance texture at `uv`, without a virtual call when it is constant.
     Color3f reflectance(Vec2f uv) const { return m_constant ? m_constant_value : m_reflectance->eval(uv); }
@@ -62,6 +63,11 @@ private:
     bool m_constant = false;
     Color3f m_constant_value;
 };
+
+std::optional<LambertInfo> diffuse_form(const Bsdf &bsdf) {
+    if (auto *d = dynamic_cast<const DiffuseBsdf *>(&bsdf)) return d->form();
+    return std::nullopt;
+}
 
 MVPT_REGISTER_PLUGIN("bsdf", "diffuse", [](const Properties &p, const LoadContext &) {
     return std::make_shared<DiffuseBsdf>(p);

@@ -8,6 +8,7 @@
 #include "../bsdf_views.h"
 #include "../texture.h"
 #include "conductor_ior.h"
+#include "bsdf_form.h"
 #include "microfacet_params.h"
 
 namespace mvpt {
@@ -34,20 +35,19 @@ public:
         if (props.has_texture("specular_reflectance"))
             m_specular_reflectance = get_texture(props, "specular_reflectance", 1.f);
         m_flags = BsdfGlossyReflection;
-        // Constant and isotropic with visible-normal sampling: the wavefront's vector kernels.
+        // Constant and isotropic with visible-normal sampling: a closed form (bsdf_form.h).
         auto constant = [](const std::shared_ptr<Texture> &t) { return !t || t->is_constant(); };
         if (constant(m_ior.eta) && constant(m_ior.k) && constant(m_specular_reflectance) && constant(m_distr.alpha_u) &&
             !m_distr.anisotropic() && m_distr.sample_visible) {
             const Vec2f uv(0.f, 0.f);
-            RoughConductorInfo &info = m_rough_conductor;
-            info = RoughConductorInfo{};
+            RoughConductorInfo info;
             info.beckmann = m_distr.type == MicrofacetType::Beckmann;
             info.alpha = MicrofacetDistribution(m_distr.type, m_distr.alpha_u->eval_1(uv), m_distr.alpha_v->eval_1(uv))
                              .alpha_u();
             info.eta = m_ior.eta->eval(uv);
             info.k = m_ior.k->eval(uv);
             if (m_specular_reflectance) info.specular = m_specular_reflectance->eval(uv);
-            m_is_rough_conductor = true;
+            m_form = info;
         }
     }
 
@@ -103,6 +103,8 @@ public:
     }
 
     float roughness(const SurfaceInteraction &si) const override { return m_distr.mean_alpha(si); }
+    /// The constant parameters, when they are constant (and isotropic, with visible-normal sampling).
+    const std::optional<RoughConductorInfo> &form() const { return m_form; }
 
 private:
     bool beckmann() const { return m_distr.type == MicrofacetType::Beckmann; }
@@ -122,7 +124,13 @@ private:
     ConductorIor m_ior;
     MicrofacetParams m_distr;
     std::shared_ptr<Texture> m_specular_reflectance;
+    std::optional<RoughConductorInfo> m_form;
 };
+
+std::optional<RoughConductorInfo> rough_conductor_form(const Bsdf &bsdf) {
+    if (auto *c = dynamic_cast<const RoughConductor *>(&bsdf)) return c->form();
+    return std::nullopt;
+}
 
 MVPT_REGISTER_PLUGIN("bsdf", "roughconductor", [](const Properties &p, const LoadContext &) {
     return std::make_shared<RoughConductor>(p);

@@ -3,8 +3,7 @@
 // (Mitsuba 3.9's `twosided`, which decides the side by the shading normal).
 #include "../../core/plugin.h"
 #include "../bsdf.h"
-
-#include <cstring>
+#include "bsdf_form.h"
 
 namespace mvpt {
 
@@ -20,20 +19,6 @@ public:
         m_flags = m_brdf[0]->flags() | m_brdf[1]->flags();
         if (m_flags & BsdfTransmission)
             props.fail("", "twosided: only materials without a transmission component can be nested");
-        // Both sides one Lambertian reflectance (the same constant or texture): sampled and
-        // evaluated as such by the wavefront path tracer's kernels.
-        const LambertInfo *front = m_brdf[0]->lambert(), *back = m_brdf[1]->lambert();
-        if (front && back && !front->two_sided && !back->two_sided && front->texture == back->texture &&
-            std::memcmp(&front->reflectance, &back->reflectance, sizeof(Color3f)) == 0) {
-            m_is_lambert = true;
-            m_lambert = {front->reflectance, true, front->texture};
-        }
-        const RoughConductorInfo *fc = m_brdf[0]->rough_conductor(), *bc = m_brdf[1]->rough_conductor();
-        if (fc && bc && !fc->two_sided && !bc->two_sided && same_conductor(*fc, *bc)) {
-            m_is_rough_conductor = true;
-            m_rough_conductor = *fc;
-            m_rough_conductor.two_sided = true;
-        }
     }
 
     std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
@@ -63,17 +48,18 @@ public:
         return si.wi.z < 0.f ? m_brdf[1]->roughness(si) : m_brdf[0]->roughness(si);
     }
 
+    /// The front and back BRDFs.
+    std::pair<const Bsdf *, const Bsdf *> sides() const { return {m_brdf[0].get(), m_brdf[1].get()}; }
+
 private:
-    /// Bitwise-equal parameters.
-    static bool same_conductor(const RoughConductorInfo &a, const RoughConductorInfo &b) {
-        auto same = [](const void *x, const void *y, size_t n) { return std::memcmp(x, y, n) == 0; };
-        return a.beckmann == b.beckmann && same(&a.alpha, &b.alpha, sizeof(float)) &&
-               same(&a.eta, &b.eta, sizeof(Color3f)) && same(&a.k, &b.k, sizeof(Color3f)) &&
-               same(&a.specular, &b.specular, sizeof(Color3f));
-    }
     static Vec3f flip(Vec3f v) { return {v.x, v.y, -v.z}; }
     std::shared_ptr<Bsdf> m_brdf[2];
 };
+
+std::optional<std::pair<const Bsdf *, const Bsdf *>> twosided_sides(const Bsdf &bsdf) {
+    if (auto *t = dynamic_cast<const TwoSidedBsdf *>(&bsdf)) return t->sides();
+    return std::nullopt;
+}
 
 MVPT_REGISTER_PLUGIN("bsdf", "twosided", [](const Properties &p, const LoadContext &) {
     return std::make_shared<TwoSidedBsdf>(p);

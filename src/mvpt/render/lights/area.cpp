@@ -2,6 +2,7 @@
 // at the surface uv, leaving the front side of its shape.
 #include "../../core/plugin.h"
 #include "../light.h"
+#include "area.h"
 #include "../shape.h"
 #include "../shapes/mesh.h"
 #include "../texture.h"
@@ -24,18 +25,20 @@ public:
     const Shape *shape() const override { return m_shape; }
     bool uniform_radiance() const override { return m_radiance->is_constant(); }
     /// A constant-radiance parallelogram mesh: sample_li below reduces to QuadEmitter's sampling.
-    bool quad_emitter(QuadEmitter &q) const override {
+    std::optional<QuadEmitter> quad() const {
+        QuadEmitter q;
         auto *mesh = dynamic_cast<const TriangleMesh *>(m_shape);
         if (!m_radiance->is_constant() || !mesh || !mesh->parallelogram(q.origin, q.e1, q.e2, q.n, q.inv_area))
-            return false;
+            return std::nullopt;
         q.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
-        return true;
+        return q;
     }
-    bool sphere_emitter(SphereEmitter &s) const override {
+    std::optional<SphereEmitter> sphere() const {
+        SphereEmitter s;
         if (!m_radiance->is_constant() || !m_shape || !m_shape->sphere(s.center, s.radius, s.flip_normals))
-            return false;
+            return std::nullopt;
         s.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
-        return true;
+        return s;
     }
 
     // Mitsuba samples a spatially varying radiance texture by the texture's own
@@ -72,6 +75,16 @@ private:
     std::shared_ptr<Texture> m_radiance;
     const Shape *m_shape = nullptr;
 };
+
+std::optional<QuadEmitter> quad_emitter(const Light &light) {
+    if (auto *a = dynamic_cast<const AreaLight *>(&light)) return a->quad();
+    return std::nullopt;
+}
+
+std::optional<SphereEmitter> sphere_emitter(const Light &light) {
+    if (auto *a = dynamic_cast<const AreaLight *>(&light)) return a->sphere();
+    return std::nullopt;
+}
 
 MVPT_REGISTER_PLUGIN("emitter", "area", [](const Properties &p, const LoadContext &) {
     return std::make_shared<AreaLight>(p);
