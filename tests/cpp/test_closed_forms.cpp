@@ -1,5 +1,5 @@
 // The closed forms that the wavefront's vector kernels run (render/bsdfs/bsdf_form.h,
-// render/lights/area.h) are found for exactly the BSDFs and emitters that amount to them:
+// render/lights/area.h, render/shapes/sphere.h) are found for exactly the BSDFs and emitters that amount to them:
 // a form found where it does not hold would give wrong images, one missed would only be slow,
 // so both directions are checked here.
 #include "mvpt/render/bsdf.h"
@@ -7,6 +7,7 @@
 #include "mvpt/render/light.h"
 #include "mvpt/render/lights/area.h"
 #include "mvpt/render/shape.h"
+#include "mvpt/render/shapes/sphere.h"
 #include "mvpt/scene/scene.h"
 
 #include <gtest/gtest.h>
@@ -92,4 +93,11 @@ TEST(ClosedForms, EmitterFormsOfConstantAreaLightsOnly) {
     }
     EXPECT_EQ(quads, 1);
     EXPECT_EQ(spheres, 1);
+    int sphere_shapes = 0;
+    for (const auto &shape : scene->shapes())
+        if (const auto g = sphere_geometry(*shape)) {
+            ++sphere_shapes;
+            EXPECT_EQ(g->radius, 0.5);
+        }
+    EXPECT_EQ(sphere_shapes, 1);
 }

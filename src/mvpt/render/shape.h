@@ -46,15 +46,6 @@ struct MotionTime {
     float to_embree(float t) const { return t1 > t0 ? std::clamp((t - t0) / (t1 - t0), 0.f, 1.f) : 0.f; }
 };
 
-/// Conservative stand-ins for a shape's surface (scene/segment_cull.h): together they
-/// contain everything Embree can hit on the shape.
-struct OccluderList {
-    std::vector<std::array<Point3f, 3>> triangles;
-    /// Centre and radius.
-    std::vector<std::pair<Point3f, double>> spheres;
-    std::vector<BoundingBox> boxes;
-};
-
 class Shape : public Object {
 public:
     /// Add the geometry to `scene`; returns its Embree geometry id.
@@ -73,8 +64,6 @@ public:
     virtual bool is_shapegroup() const { return false; }
     virtual float area() const = 0;
     virtual BoundingBox bounds() const = 0;
-    /// The shape's occluders; the default is its bounding box.
-    virtual void occluders(OccluderList &out) const { out.boxes.push_back(bounds()); }
     /// Uniform point on the surface (density 1/area).
     virtual ShapeSample sample_area(Vec2f u) const = 0;
     /// A point as seen from `ref`; returns it with its solid-angle density at `ref`
@@ -83,12 +72,6 @@ public:
     /// Density of `sample_solid_angle` for the point `si` on this shape (the
     /// area-to-solid-angle factor uses the shading normal, as Mitsuba does).
     virtual float pdf_solid_angle(Point3f ref, const SurfaceInteraction &si) const;
-    /// True, with its centre, radius and normal orientation, for a sphere whose samples need
-    /// no uv (the wavefront path tracer samples it in a vector kernel).
-    virtual bool sphere(Point3f &center, float &radius, bool &flip_normals) const {
-        (void)center, (void)radius, (void)flip_normals;
-        return false;
-    }
 
     std::shared_ptr<Bsdf> bsdf;
     std::shared_ptr<Light> emitter;

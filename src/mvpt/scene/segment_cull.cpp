@@ -1,11 +1,14 @@
 #include "segment_cull.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <new>
 
 #include "../core/multi_isa.h"
+#include "../render/shapes/mesh.h"
+#include "../render/shapes/sphere.h"
 
 namespace mvpt {
 
@@ -217,6 +220,28 @@ void *create_leaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive *prims,
     for (size_t i = 0; i < count; ++i) l->prim[i] = prims[i].primID;
     return l;
 }
+
+/// Conservative stand-ins for shapes' surfaces: together they contain everything Embree can hit.
+struct OccluderList {
+    std::vector<std::array<Point3f, 3>> triangles;
+    /// Centre and radius.
+    std::vector<std::pair<Point3f, double>> spheres;
+    std::vector<BoundingBox> boxes;
+};
+
+/// A shape's occluders: a mesh's triangles, a sphere, or else the shape's bounding box.
+void add_occluders(const Shape &shape, OccluderList &out) {
+    if (auto *mesh = dynamic_cast<const TriangleMesh *>(&shape)) {
+        const auto &pos = mesh->data().positions;
+        const auto &idx = mesh->data().indices;
+        for (size_t i = 0; i + 2 < idx.size(); i += 3)
+            out.triangles.push_back({pos[idx[i]], pos[idx[i + 1]], pos[idx[i + 2]]});
+    } else if (const std::optional<SphereGeometry> g = sphere_geometry(shape)) {
+        out.spheres.emplace_back(g->center, g->radius);
+    } else {
+        out.boxes.push_back(shape.bounds());
+    }
+}
 } // namespace
 
 OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Shape>> &shapes) {
@@ -228,7 +253,7 @@ OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Sha
     std::vector<Range> ranges;
     for (const auto &s : shapes) {
         const size_t tri0 = list.triangles.size(), sph0 = list.spheres.size();
-        s->occluders(list);
+        add_occluders(*s, list);
         ranges.push_back({s.get(), tri0, list.triangles.size(), sph0, list.spheres.size()});
     }
     std::vector<RTCBuildPrimitive> build;

@@ -5,6 +5,7 @@
 #include "area.h"
 #include "../shape.h"
 #include "../shapes/mesh.h"
+#include "../shapes/sphere.h"
 #include "../texture.h"
 
 namespace mvpt {
@@ -34,11 +35,10 @@ public:
         return q;
     }
     std::optional<SphereEmitter> sphere() const {
-        SphereEmitter s;
-        if (!m_radiance->is_constant() || !m_shape || !m_shape->sphere(s.center, s.radius, s.flip_normals))
-            return std::nullopt;
-        s.radiance = m_radiance->eval(Vec2f(0.f, 0.f));
-        return s;
+        // (With uv wanted, sample_li fills them: no closed form then.)
+        const std::optional<SphereGeometry> g = m_shape ? sphere_geometry(*m_shape) : std::nullopt;
+        if (!m_radiance->is_constant() || !g || m_shape->sample_uv) return std::nullopt;
+        return SphereEmitter{g->center, float(g->radius), g->flip_normals, m_radiance->eval(Vec2f(0.f, 0.f))};
     }
 
     // Mitsuba samples a spatially varying radiance texture by the texture's own

@@ -119,12 +119,6 @@ unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene, const MotionTime
     return id;
 }
 
-void TriangleMesh::occluders(OccluderList &out) const {
-    const auto &pos = m_data.positions;
-    const auto &idx = m_data.indices;
-    for (size_t i = 0; i + 2 < idx.size(); i += 3) out.triangles.push_back({pos[idx[i]], pos[idx[i + 1]], pos[idx[i + 2]]});
-}
-
 Normal3f TriangleMesh::shading_normal(uint32_t prim, uint32_t i0, uint32_t i1, uint32_t i2, float b0, Vec2f b,
                                       Normal3f n) const {
     if (m_data.normals.empty()) return n;

@@ -20,7 +20,6 @@ public:
     void fill_interaction(const Ray &ray, float t, uint32_t prim, Vec2f b, SurfaceInteraction &si) const override;
     float area() const override { return m_area; }
     BoundingBox bounds() const override { return m_bounds; }
-    void occluders(OccluderList &out) const override;
     ShapeSample sample_area(Vec2f u) const override;
     /// Area sampling converted to solid angle, as Shape's default, without the extra call and copy.
     std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const override;

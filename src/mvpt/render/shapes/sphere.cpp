@@ -7,6 +7,7 @@
 #include "analytic.h"
 #include "instance.h"
 #include "mesh.h"
+#include "sphere.h"
 #include "sphere_cone.h"
 
 #include <cstring>
@@ -116,13 +117,7 @@ public:
         b.expand(m_center + Vec3f(float(m_radius)));
         return b;
     }
-    void occluders(OccluderList &out) const override { out.spheres.emplace_back(m_center, m_radius); }
-
-    bool sphere(Point3f &center, float &radius, bool &flip_normals) const override {
-        if (sample_uv) return false;
-        center = m_center, radius = float(m_radius), flip_normals = m_flip_normals;
-        return true;
-    }
+    SphereGeometry geometry() const { return {m_center, m_radius, m_flip_normals}; }
 
     ShapeSample sample_area(Vec2f u) const override {
         Normal3f n = warp::square_to_uniform_sphere(u);
@@ -231,6 +226,11 @@ private:
     float m_inv_area = 1.f;
     bool m_flip_normals = false;
 };
+
+std::optional<SphereGeometry> sphere_geometry(const Shape &shape) {
+    if (auto *s = dynamic_cast<const Sphere *>(&shape)) return s->geometry();
+    return std::nullopt;
+}
 
 MVPT_REGISTER_PLUGIN("shape", "sphere", [](const Properties &props, const LoadContext &) {
     return make_maybe_animated(props, [&](const Transform &to_world) { return std::make_shared<Sphere>(props, to_world); });
