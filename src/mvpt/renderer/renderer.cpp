@@ -1,4 +1,5 @@
 #include "renderer.h"
+#include "chunks.h"
 
 #include "../core/memory.h"
 
@@ -229,10 +230,10 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
 
     // Passes run in chunks: each task renders one tile for all passes of the chunk, in pass
     // order, so every pixel accumulates its samples in the same order as pass by pass (the
-    // images are identical) while the threads meet once per chunk instead of once per pass
-    // (on a loaded machine a descheduled thread holds up every pass boundary). Without a
-    // time budget a chunk grows to about a quarter of a second (the cancellation latency).
-    // A chunk is a whole number of pass groups (render_tile's batches): 16 passes, halved
+    // images are identical) while the threads meet about every quarter of a second
+    // (run_in_chunks) instead of once per pass (on a loaded machine a descheduled thread holds
+    // up every pass boundary); cancellation and the time budget stop between tiles. Without a
+    // time budget a chunk grows to about a quarter of a second. A chunk is a whole number of pass groups (render_tile's batches): 16 passes, halved
     // while a group of all views would exceed GroupPaths paths (so that the first chunk, one
     // group, stays short on large films). Under a time budget the first chunk is one pass;
     // then groups are as long as fits in ChunkSeconds (the budget's granularity), and each
@@ -252,6 +253,23 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         for (const Tile &t : all_tiles) pixels += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
         group = longest_group([&](int g) { return uint64_t(g) * pixels > GroupPaths; });
     }
+    // Each task renders one tile for its passes of the chunk, the passes that its pixels do not
+    // hold yet: a render stopped between tiles keeps the tiles it finished (their pixels have
+    // more samples), and a render resumed from its state renders only the others' passes.
+    auto render_passes = [&](const Tile &tile, int pass0, int pass1) -> uint64_t {
+        const FilmBuffer &fb = m_films[tile.view_slot];
+        const int width = cams[m_views[tile.view_slot]]->film.crop_width;
+        const int held = int(fb.count[size_t(tile.y0) * size_t(width) + size_t(tile.x0)]);
+        const int end = std::min(pass1, target[tile.view_slot]);
+        RayCounters &rc = counters.local();
+        uint64_t samples = 0;
+        for (int g = std::max(pass0, held); g < end; g += group) {
+            render_tile(tile, g, std::min(g + group, end), rc);
+            samples += uint64_t(std::min(g + group, end) - g) * uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0);
+        }
+        return samples;
+    };
+    ChunkTiming chunk_timing;
     int chunk = group, pass = m_first_pass;
     while (pass < max_target) {
         if (cancel.load()) { m_stats.cancelled = true; break; }
@@ -266,26 +284,37 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         auto t_chunk = clock::now();
 
         std::vector<const Tile *> tiles;
+        uint64_t chunk_samples = 0;
         for (const Tile &t : all_tiles)
-            if (pass < target[t.view_slot]) tiles.push_back(&t);
-
-        arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t> &r) {
-                RayCounters &rc = counters.local();
-                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
-                    const Tile &tile = *tiles[ti];
-                    const int end = std::min(pass_end, target[tile.view_slot]);
-                    for (int g = pass; g < end; g += group) render_tile(tile, g, std::min(g + group, end), rc);
-                }
-            });
-        });
-        last_pass = std::chrono::duration<double>(clock::now() - t_chunk).count() / double(pass_end - pass);
-        for (int q = pass; q < pass_end; ++q) {
-            uint64_t pass_samples = 0;
-            for (const Tile &t : all_tiles)
-                if (q < target[t.view_slot]) pass_samples += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
-            finish_pass(q, pass_samples, last_pass, seconds(), double(q + 1) / double(max_target), progress);
+            if (pass < target[t.view_slot]) {
+                tiles.push_back(&t);
+                chunk_samples += uint64_t(std::min(pass_end, target[t.view_slot]) - pass) * uint64_t(t.x1 - t.x0) *
+                                 uint64_t(t.y1 - t.y0);
+            }
+        // Cancellation, and the end of the time budget after the first pass, stop between tiles.
+        auto stop = [&] { return cancel.load() || (pass > 0 && m_opts.time_budget > 0.0 && seconds() > m_opts.time_budget); };
+        auto report = [&](uint64_t samples_done) {
+            if (!progress) return;
+            RenderProgress p;
+            p.pass = pass;
+            p.elapsed = seconds();
+            p.samples = m_stats.samples + samples_done;
+            p.fraction = std::min(1.0, (pass + double(samples_done) / double(std::max<uint64_t>(chunk_samples, 1)) *
+                                                   (pass_end - pass)) / double(max_target));
+            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
+            progress(p);
+        };
+        const ChunksDone done = run_in_chunks(arena, tiles.size(), threads, double(chunk_samples), chunk_timing,
+                                              [&](size_t ti) { return render_passes(*tiles[ti], pass, pass_end); },
+                                              stop, report);
+        m_stats.samples += done.samples;
+        if (!done.finished) {
+            m_stats.cancelled = cancel.load();
+            break;
         }
+        last_pass = std::chrono::duration<double>(clock::now() - t_chunk).count() / double(pass_end - pass);
+        for (int q = pass; q < pass_end; ++q)
+            finish_pass(q, 0, last_pass, seconds(), double(q + 1) / double(max_target), progress);
         pass = pass_end;
         if (checkpoint_due(seconds(), last_checkpoint)) write_state(pass, seconds(), last_pass, counters_now());
         if (m_opts.time_budget == 0.0 && last_pass > 0.0)
@@ -293,6 +322,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         else if (m_opts.time_budget > 0.0 && pass == m_first_pass + 1)
             group = longest_group([&](int g) { return double(g) * last_pass > ChunkSeconds; });
     }
+    m_stats.max_chunk_seconds = chunk_timing.longest;
     m_stats.seconds = seconds();
     m_stats.counters = counters_now();
     if (!m_opts.state_path.empty() && (m_stats.cancelled || m_opts.state_at_end))

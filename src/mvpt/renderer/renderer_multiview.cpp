@@ -2,6 +2,7 @@
 // shared through mv_native_sample, splatted into per-thread fixed-point buffers that are
 // merged once per pass; adaptive native-sample maps between passes (§8).
 #include "renderer.h"
+#include "chunks.h"
 
 #include "../integrators/mv_adaptive.h"
 #include "../integrators/mvpath.h"
@@ -32,50 +33,6 @@ struct MvThreadState {
     SampleKey first_dropped = NoSample; ///< the first native sample with a contribution dropped
     explicit MvThreadState(MvPassFilm &film) : cache(film), stats(film.views()), dropped(film.views(), 0) {}
 };
-
-/// What the chunks of a render have measured: CPU seconds per native sample, the longest chunk.
-struct ChunkTiming {
-    double seconds_per_sample = 0.0, longest = 0.0;
-};
-
-/// Renders tiles [0, tiles) with render(tile) (which returns its native samples) in chunks of
-/// about a quarter of a second, so that `report(native samples so far)` is called that often
-/// whatever the number of views and pixels; between tiles every task asks `stop()`, and a true
-/// answer abandons the rest (false is returned).
-template <typename Render, typename Stop, typename Report>
-bool run_in_chunks(tbb::task_arena &arena, size_t tiles, int threads, double samples, ChunkTiming &timing,
-                   Render &&render, Stop &&stop, Report &&report) {
-    using clock = std::chrono::steady_clock;
-    constexpr double ChunkSeconds = 0.25;
-    std::atomic<bool> abandoned{false};
-    uint64_t done = 0;
-    for (size_t first = 0; first < tiles && !abandoned.load();) {
-        const auto t0 = clock::now();
-        const double per_tile = timing.seconds_per_sample * samples / double(tiles); // CPU seconds
-        const size_t count = per_tile > 0.0 ? size_t(std::clamp(ChunkSeconds * threads / per_tile, 1.0, 1e9))
-                                            : size_t(2 * threads);
-        const size_t last = std::min(tiles, first + count);
-        std::atomic<uint64_t> chunk{0};
-        arena.execute([&] {
-            tbb::parallel_for(tbb::blocked_range<size_t>(first, last, 1), [&](const tbb::blocked_range<size_t> &r) {
-                uint64_t n = 0;
-                for (size_t ti = r.begin(); ti != r.end(); ++ti) {
-                    if (stop()) abandoned = true;
-                    if (abandoned.load(std::memory_order_relaxed)) break;
-                    n += render(ti);
-                }
-                chunk += n;
-            });
-        });
-        const double took = std::chrono::duration<double>(clock::now() - t0).count();
-        done += chunk.load();
-        if (chunk.load() > 0) timing.seconds_per_sample = took * threads / double(chunk.load());
-        timing.longest = std::max(timing.longest, took);
-        first = last;
-        if (!abandoned.load() && first < tiles) report(done);
-    }
-    return !abandoned.load();
-}
 
 /// The path tracers and method settings for a multi-view render of `scene`.
 struct MultiviewSettings {
@@ -207,7 +164,7 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         };
         const bool finished = run_in_chunks(arena, tiles.size(), threads, double(pass_samples), chunk_timing,
                                             [&](size_t ti) { return render_tile(state.local(), tiles[ti]); }, stop,
-                                            report);
+                                            report).finished;
         if (!finished) {
             for (MvThreadState &ts : state) ts.cache.discard();
             m_stats.cancelled = cancel.load();
