@@ -1,8 +1,8 @@
 """The `mvpt` command line: `mvpt render scene.xml -D spp=64 -o out/`, `mvpt demo`.
 
 Exit codes: 0 done, 1 bad scene or unwritable output, 2 bad command line, 130 interrupted
-by Ctrl-C (143 by SIGTERM, 129 by SIGHUP); an interrupted render stops within about a quarter
-of a second and writes the passes finished so far, with "cancelled" in the JSON, and its state
+by Ctrl-C (143 by SIGTERM, 129 by SIGHUP); an interrupted render stops within about half a
+second and writes the samples finished so far, with "cancelled" in the JSON, and its state
 (<stem>.mvpt-state), from which `mvpt render --resume OUT` continues it (nothing when no pass
 had finished)."""
 from __future__ import annotations

@@ -101,18 +101,11 @@ def test_cancel_from_progress_callback(slow):
     assert 1 <= s["passes"] < 1000 and elapsed < 10
     assert set(calls[-1]) >= {"pass", "fraction", "elapsed", "samples"}
     assert 0 < calls[-1]["fraction"] < 1
-    # Stopped between tiles: each 16 x 16 tile holds the passes finished or, if it was done in
-    # the unfinished group of passes, that group's too; the samples are those in the films.
-    total = 0
+    # Passes this short end in whole chunks: every pixel of every view has the same number of samples.
     for vid, count in r.sample_count.items():
-        assert (count >= s["passes"]).all(), vid
-        for y in range(0, SLOW_RES, 16):
-            for x in range(0, SLOW_RES, 16):
-                tile = count[y:y + 16, x:x + 16]
-                assert (tile == tile[0, 0]).all(), (vid, y, x)
-        total += int(count.sum())
+        assert (count == s["passes"]).all(), vid
         assert np.isfinite(r.images[vid]).all() and r.images[vid].mean() > 0
-    assert s["samples"] == total
+    assert s["samples"] == s["passes"] * 12 * SLOW_RES * SLOW_RES
 
 
 def test_other_exception_from_progress_cancels_and_propagates(slow):

@@ -1,4 +1,5 @@
 #include "path.h"
+#include "path_steps.h"
 
 #include "../render/bsdf.h"
 #include "../render/light.h"
@@ -50,14 +51,7 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
     const auto &lights = scene.lights();
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
     const BsdfContext ctx;
-
-    Spectrum result(0.f), throughput = state.throughput;
-    float eta = state.eta;
-    Point3f prev_p = state.prev_p; // previous scattering vertex (reference point of NEE's density)
-    float prev_bsdf_pdf = state.prev_bsdf_pdf;
-    bool prev_bsdf_delta = state.prev_bsdf_delta;
-    bool valid = state.valid;
-
+    Spectrum result(0.f);
     for (uint32_t depth = state.depth;; ++depth) {
         sampler.set_dimension(DimCameraEnd + depth * DimsPerVertex);
         SurfaceInteraction si;
@@ -70,67 +64,45 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
             hit = scene.intersect(ray, si);
         }
 
-        // ---------------- Emission (hit by BSDF sampling, MIS against NEE) ----------------
+        // Emission (hit by BSDF sampling, MIS against next-event estimation).
         const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
-        if (emitter && !m_cfg.hide_emitters && hit) valid = true;
+        if (emitter && !m_cfg.hide_emitters && hit) state.valid = true;
         if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
             float w;
-            Spectrum le = emitted_radiance(scene, emitter, ray, hit, si, prev_p, prev_bsdf_pdf, prev_bsdf_delta, w);
-            if (!le.is_black()) result += throughput * le * w;
+            Spectrum le = emitted_radiance(scene, emitter, ray, hit, si, state.prev_p, state.prev_bsdf_pdf,
+                                           state.prev_bsdf_delta, w);
+            if (!le.is_black()) result += state.throughput * le * w;
         }
         if (!hit || depth + 1 >= max_depth) break;
 
         const Bsdf &bsdf = *si.shape->bsdf;
         si.wi = si.to_local(-ray.d);
+        // The vertex's numbers, in this order: the emitter's choice and point, the BSDF's lobe
+        // and direction, Russian roulette.
+        const float u_light_select = sampler.next_1d();
+        const Vec2f u_light = sampler.next_2d();
+        const float u_lobe = sampler.next_1d();
+        const Vec2f u_dir = sampler.next_2d();
+        const float u_rr = sampler.next_1d();
 
-        // ---------------- Next-event estimation ----------------
-        float u_light_select = sampler.next_1d();
-        Vec2f u_light = sampler.next_2d();
+        // Next-event estimation.
         if (bsdf.has_smooth() && !lights.empty()) {
-            size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
-            const Light &light = *lights[idx];
-            auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
-            if (!weight.is_black()) {
-                weight *= float(lights.size());
-                Vec3f wo = si.to_local(ls.d);
-                Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
-                if (!f.is_black()) {
-                    Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
-                    ++counters.shadow_rays;
-                    if (!scene.occluded(shadow)) {
-                        float w = ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), bsdf.pdf(ctx, si, si.wi, wo));
-                        result += throughput * f * weight * w;
-                    }
-                }
+            const size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
+            const auto [ls, weight] = lights[idx]->sample_li(si.p, u_light, si.time);
+            Spectrum contribution;
+            Ray shadow;
+            if (nee_step(bsdf, ctx, si, state.throughput, ls, weight, float(lights.size()), contribution, shadow)) {
+                ++counters.shadow_rays;
+                if (!scene.occluded(shadow)) result += contribution;
             }
         }
 
-        // ---------------- BSDF sampling ----------------
-        float u_lobe = sampler.next_1d();
-        Vec2f u_dir = sampler.next_2d();
-        auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, u_dir);
-        if (!(bs.sampled_type & BsdfNull)) valid = true;
-        if (bsdf_weight.is_black()) break;
-        Vec3f wo_world = si.to_world(bs.wo);
-        ray = si.spawn_ray(wo_world);
-        throughput *= bsdf_weight;
-        eta *= bs.eta;
-        prev_p = si.p;
-        prev_bsdf_pdf = bs.pdf;
-        prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
-
-        // ---------------- Russian roulette ----------------
-        float t_max = throughput.max_value();
-        float u_rr = sampler.next_1d();
-        if (!(t_max > 0.f)) break;
-        if (depth + 1 >= uint32_t(m_cfg.rr_depth)) {
-            float q = std::min(t_max * eta * eta, 0.95f);
-            if (u_rr >= q) break;
-            throughput *= 1.f / q;
-        }
+        // BSDF sampling and Russian roulette.
+        const auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, u_dir);
+        if (!follow_bsdf_sample(state, si, bs, bsdf_weight, u_rr, depth, m_cfg.rr_depth, ray)) break;
     }
-    if (valid_out) *valid_out = valid;
-    return valid ? result : Spectrum(0.f);
+    if (valid_out) *valid_out = state.valid;
+    return state.valid ? result : Spectrum(0.f);
 }
 
 PathConfig read_path_config(const Properties &props) {

@@ -8,6 +8,7 @@
 #include "path.h"
 #include "lane_gather.h"
 #include "path_kernels.h"
+#include "path_steps.h"
 #include "wavefront.h"
 
 #include "../core/sampler_batch.h"
@@ -367,13 +368,10 @@ size_t Wavefront::emission(size_t active) {
                 buf.env_d[e] = ray.d;
                 continue;
             }
-            Spectrum le = emitter->eval(si_hit, -ray.d);
-            if (!le.is_black()) {
-                float w = 1.f;
-                if (!p.prev_bsdf_delta)
-                    w = mis_power(p.prev_bsdf_pdf, emitter_pdf(m_scene, emitter, p.prev_p, si_hit, ray.d));
-                p.result += p.throughput * le * w;
-            }
+            float w;
+            const Spectrum le = emitted_radiance(m_scene, emitter, ray, true, si_hit, p.prev_p, p.prev_bsdf_pdf,
+                                                 p.prev_bsdf_delta, w);
+            if (!le.is_black()) p.result += p.throughput * le * w;
         }
         if (!hit || p.depth + 1 >= m_max_depth) continue;
 
@@ -644,16 +642,13 @@ void Wavefront::emitter_nee(size_t n_scatter) {
             if (n_rc == LambertChunk) flush_conductor_nee(n_rc);
             continue;
         }
-        Spectrum weight = v.emitter_sample.second;
-        weight *= m_lights_f;
-        Vec3f wo = si.to_local(ls.d);
-        Spectrum f = bsdf.eval(m_ctx, si, si.wi, wo);
-        if (f.is_black()) continue;
-        const Ray r = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+        Spectrum contribution;
+        Ray r;
+        if (!nee_step(bsdf, m_ctx, si, paths[v.path].throughput, ls, v.emitter_sample.second, m_lights_f, contribution, r))
+            continue;
         const float ray_cols[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmax, r.time};
         for (size_t q = 0; q < 8; ++q) m_shadow[q][m_n_shadow] = ray_cols[q];
-        float w = ls.delta ? 1.f : mis_power(ls.pdf / m_lights_f, bsdf.pdf(m_ctx, si, si.wi, wo));
-        buf.shadows[m_n_shadow++] = {v.path, paths[v.path].throughput * f * weight * w};
+        buf.shadows[m_n_shadow++] = {v.path, contribution};
     }
     flush_lambert_nee(n_lam);
     flush_conductor_nee(n_rc);
@@ -708,22 +703,8 @@ void Wavefront::sample_bsdfs(size_t n_scatter) {
             if (n_rc == LambertChunk) flush_conductor_samples(n_rc);
             continue;
         }
-        auto [bs, bsdf_weight] = bsdf.sample(m_ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
-        if (!(bs.sampled_type & BsdfNull)) p.valid = true;
-        if (bsdf_weight.is_black()) continue;
-        rays[k] = si.spawn_ray(si.to_world(bs.wo));
-        p.throughput *= bsdf_weight;
-        p.eta *= bs.eta;
-        p.prev_p = si.p;
-        p.prev_bsdf_pdf = bs.pdf;
-        p.prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
-        float t_max = p.throughput.max_value();
-        if (!(t_max > 0.f)) continue;
-        if (p.depth + 1 >= uint32_t(m_cfg.rr_depth)) {
-            float q = std::min(t_max * p.eta * p.eta, 0.95f);
-            if (u[6][j] >= q) continue;
-            p.throughput *= 1.f / q;
-        }
+        const auto [bs, bsdf_weight] = bsdf.sample(m_ctx, si, si.wi, u[3][j], {u[4][j], u[5][j]});
+        if (!follow_bsdf_sample(p, si, bs, bsdf_weight, u[6][j], p.depth, m_cfg.rr_depth, rays[k])) continue;
         ++p.depth;
         alive[k] = 1;
     }

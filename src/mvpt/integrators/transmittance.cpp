@@ -10,6 +10,18 @@ namespace mvpt {
 namespace {
 /// Longest chain of null surfaces a segment crosses before it counts as blocked.
 constexpr int MaxNullCrossings = 256;
+
+/// Moves `ray` past the null surface `si` that it met, into the medium beyond (`medium`), for
+/// the rest of its segment towards `target` (at infinity unless `finite`); false when nothing
+/// of the segment is left.
+bool step_past(const SurfaceInteraction &si, Point3f target, bool finite, Ray &ray, const Medium *&medium) {
+    if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
+    const Point3f o = si.offset_p(ray.d);
+    const float rest = finite ? dot(target - o, ray.d) : Infinity;
+    if (!(rest > 0.f)) return false;
+    ray = Ray{o, ray.d, 0.f, rest, ray.time};
+    return true;
+}
 } // namespace
 
 SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, NullRule rule, RandomStream &rs,
@@ -38,15 +50,10 @@ SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, Null
             return w;
         }
         w.crossed_emitter |= si.shape->emitter != nullptr;
-        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
-        si.time = ray.time;
-        Point3f o = si.offset_p(ray.d);
-        float rest = finite ? dot(target - o, ray.d) : Infinity;
-        if (!(rest > 0.f)) {
+        if (!step_past(si, target, finite, ray, medium)) {
             w.medium = medium;
             return w;
         }
-        ray = Ray{o, ray.d, 0.f, rest, ray.time};
     }
     w.stopped = true;
     w.tr = Spectrum(0.f);
@@ -83,11 +90,7 @@ SegmentFlight flight_along_segment(const Scene &scene, Ray ray, const Medium *me
         for (int i = 0; i < 3; ++i) f.tr[i] *= std::exp(-sigma[i] * si.t);
         tau -= sigma[c] * si.t;
         if (si.shape->bsdf->flags() != BsdfNull) return f; // the surface term's vertex (§10)
-        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(ray.d, si.n);
-        const Point3f o = si.offset_p(ray.d);
-        const float rest = finite ? dot(target - o, ray.d) : Infinity;
-        if (!(rest > 0.f)) return f;
-        ray = Ray{o, ray.d, 0.f, rest, ray.time};
+        if (!step_past(si, target, finite, ray, medium)) return f;
     }
     return f;
 }

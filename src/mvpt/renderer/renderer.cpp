@@ -291,8 +291,16 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                 chunk_samples += uint64_t(std::min(pass_end, target[t.view_slot]) - pass) * uint64_t(t.x1 - t.x0) *
                                  uint64_t(t.y1 - t.y0);
             }
-        // Cancellation, and the end of the time budget after the first pass, stop between tiles.
-        auto stop = [&] { return cancel.load() || (pass > 0 && m_opts.time_budget > 0.0 && seconds() > m_opts.time_budget); };
+        // Cancellation, and the end of the time budget after the first pass, stop between tiles
+        // in a chunk expected to last more than half a second (passes that long), or once it has:
+        // a chunk is planned to last a quarter of a second, and one that does finishes, so that
+        // every pixel holds whole passes; a long pass is cut, its finished tiles kept.
+        const double chunk_start = seconds();
+        const bool long_chunk = last_pass * double(pass_end - pass) > 2.0 * ChunkSeconds;
+        auto stop = [&] {
+            const bool asked = cancel.load() || (pass > 0 && m_opts.time_budget > 0.0 && seconds() > m_opts.time_budget);
+            return asked && (long_chunk || seconds() - chunk_start > 2.0 * ChunkSeconds);
+        };
         auto report = [&](uint64_t samples_done) {
             if (!progress) return;
             RenderProgress p;
