@@ -134,8 +134,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     GIL released; `progress(dict)` is called every `poll` seconds and once at the end, with
     the passes finished, fraction done, elapsed seconds and samples so far. Ctrl-C (or
     KeyboardInterrupt raised by `progress`) cancels within about half a second (path tracing
-    at the end of its current quarter-second chunk of passes, or between the tiles of a pass
-    longer than that, keeping the finished tiles: their pixels' sample counts say so;
+    at the end of its current quarter-second chunk of short passes, or between the tiles of a
+    pass longer than half a second, keeping the finished tiles: their sample counts say so;
     multi-view path tracing between tiles, dropping the unfinished pass) and the images are
     returned with stats["cancelled"] set (stats["passes"] == 0: none finished); any other
     exception from `progress` cancels the render and is re-raised.

@@ -85,6 +85,21 @@ def test_time_budget_and_spp_whichever_first(small):
     assert r.stats["passes"] == 2 and r.stats["wall_time"] < 5
 
 
+def _assert_whole_tiles(r, res):
+    """A path-traced render stopped early holds whole passes, or, where it cut a long pass
+    (a loaded machine can make any pass long), whole 16 x 16 tiles of one pass more; the
+    samples counted are those in the films."""
+    total = 0
+    for vid, count in r.sample_count.items():
+        assert count.min() >= r.stats["passes"] and count.max() <= r.stats["passes"] + 1, vid
+        for y in range(0, res, 16):
+            for x in range(0, res, 16):
+                tile = count[y:y + 16, x:x + 16]
+                assert (tile == tile[0, 0]).all(), (vid, y, x)
+        total += int(count.sum())
+    assert r.stats["samples"] == total
+
+
 def test_cancel_from_progress_callback(slow):
     calls = []
 
@@ -101,11 +116,9 @@ def test_cancel_from_progress_callback(slow):
     assert 1 <= s["passes"] < 1000 and elapsed < 10
     assert set(calls[-1]) >= {"pass", "fraction", "elapsed", "samples"}
     assert 0 < calls[-1]["fraction"] < 1
-    # Passes this short end in whole chunks: every pixel of every view has the same number of samples.
-    for vid, count in r.sample_count.items():
-        assert (count == s["passes"]).all(), vid
+    _assert_whole_tiles(r, SLOW_RES)
+    for vid in r.images:
         assert np.isfinite(r.images[vid]).all() and r.images[vid].mean() > 0
-    assert s["samples"] == s["passes"] * 12 * SLOW_RES * SLOW_RES
 
 
 def test_other_exception_from_progress_cancels_and_propagates(slow):
@@ -263,8 +276,7 @@ def test_ctrl_c_during_render(slow):
         signal.signal(signal.SIGINT, previous)
     assert r.stats["cancelled"] is True and r.stats["passes"] >= 1
     assert time.monotonic() - t0 < 10
-    for count in r.sample_count.values():
-        assert (count == r.stats["passes"]).all()
+    _assert_whole_tiles(r, SLOW_RES)
 
 
 def test_ray_embree_cannot_trace_is_a_miss():

@@ -169,11 +169,16 @@ def test_ctrl_c_writes_finished_passes(tmp_path, sig):
         img = _core.read_image(str(exr))
         assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0
         assert (out / f"slow_v{i}.png").exists()
-        assert data["views"][f"v{i}"]["spp"] == data["passes"]
+        # Whole passes, or whole tiles of one pass more where a long pass was cut (a loaded
+        # machine can make a pass long).
+        assert data["passes"] <= data["views"][f"v{i}"]["spp"] <= data["passes"] + 1
     assert "cancelled after" in stdout
     assert _leftovers(out) == []
-    ch = _exr_channels(out / "slow_v0.exr")
-    assert (ch["sample_count.Y"] == data["passes"]).all()  # whole passes only
+    count = _exr_channels(out / "slow_v0.exr")["sample_count.Y"]
+    assert count.shape == (64, 64) and count.min() >= data["passes"] and count.max() <= data["passes"] + 1
+    for y in range(0, 64, 16):
+        for x in range(0, 64, 16):
+            assert (count[y:y + 16, x:x + 16] == count[y, x]).all()
 
 
 def test_outputs_atomic(tmp_path, capsys):

@@ -51,15 +51,15 @@ void mv_media_visibility(const MvContext &ctx, MvScratch &sc, Point3f p, float t
     const size_t m = c.size;
     sc.tr.resize(std::max<size_t>(m, 1));
     sc.tr[0] = tr_native;
+    // Each candidate's segment from k's near plane (vis from p towards its lens point) to just
+    // before p, walked as one batch; candidates without a segment see p.
+    MvMediaWalks &mw = sc.walks;
+    mw.clear();
     for (size_t i = 1; i < m; ++i) {
         sc.tr[i] = Spectrum(1.f);
-        if (selected_only && !sc.selected[i]) {
-            sc.visible[i] = 0;
-            if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
-            continue;
-        }
+        sc.visible[i] = 1;
+        if (selected_only && !sc.selected[i]) continue;
         const MvView &v = ctx.views[c.slot[i]];
-        // The segment from k's near plane (vis from y towards its lens point) to just before y.
         const Vec3f to_lens = c.lens_point(i) - p;
         const float dist = norm(to_lens), vis = c.vis[i];
         RandomStream rs(0);
@@ -67,17 +67,29 @@ void mv_media_visibility(const MvContext &ctx, MvScratch &sc, Point3f p, float t
             sampler->set_dimension(DimCameraSegmentBase + v.scene_index);
             rs = sampler->next_stream();
         }
-        bool visible = true;
-        if (vis > 0.f && dist > 0.f && std::isfinite(dist)) {
-            const Vec3f d = to_lens / dist;
-            Ray r{p + d * vis, -d, 0.f, vis * (1.f - ShadowEpsilon), time};
-            SegmentWalk w = walk_segment(*ctx.scene, r, v.camera->medium.get(), NullRule::PureNull, rs, counters);
-            visible = !w.stopped;
-            sc.tr[i] = w.tr;
+        if (!(vis > 0.f && dist > 0.f && std::isfinite(dist))) continue;
+        const Vec3f d = to_lens / dist;
+        mw.candidate.push_back(uint32_t(i));
+        mw.rays.push_back(Ray{p + d * vis, -d, 0.f, vis * (1.f - ShadowEpsilon), time});
+        mw.media.push_back(v.camera->medium.get());
+        mw.streams.push_back(rs);
+    }
+    mw.walks.resize(mw.rays.size());
+    walk_segments(*ctx.scene, mw.rays.data(), mw.media.data(), mw.rays.size(), NullRule::PureNull, mw.streams.data(),
+                  counters, mw.walks.data(), mw.buffers);
+    for (size_t j = 0; j < mw.walks.size(); ++j) {
+        const size_t i = mw.candidate[j];
+        sc.visible[i] = !mw.walks[j].stopped;
+        sc.tr[i] = mw.walks[j].tr;
+    }
+    for (size_t i = 1; i < m; ++i) {
+        if (selected_only && !sc.selected[i]) {
+            sc.visible[i] = 0;
+            if (st_l) ++st_l->rejected[int(ShiftTest::Selection)];
+            continue;
         }
-        sc.visible[i] = visible;
         if (!st_l) continue;
-        if (!visible) ++st_l->rejected[int(ShiftTest::Visibility)];
+        if (!sc.visible[i]) ++st_l->rejected[int(ShiftTest::Visibility)];
         else if (!selected_only && !sc.selected[i]) ++st_l->rejected[int(ShiftTest::Selection)];
     }
 }

@@ -8,6 +8,7 @@
 #include "mv_selection.h"
 #include "mv_shift.h"
 #include "mvpath.h"
+#include "transmittance.h"
 
 #include "../render/splat_film.h"
 #include "../render/camera_projection.h"
@@ -86,6 +87,20 @@ template <typename V> void grow_scratch(V &v, size_t n) {
     if (v.size() < n) v.resize(n);
 }
 
+/// The camera segments of a shared vertex's candidates, walked through media as one batch
+/// (mv_media_visibility, §10): which candidate each is, its ray, medium and random stream.
+struct MvMediaWalks {
+    std::vector<uint32_t> candidate;
+    std::vector<Ray> rays;
+    std::vector<const Medium *> media;
+    std::vector<RandomStream> streams;
+    std::vector<SegmentWalk> walks;
+    WalkBuffers buffers;
+    void clear() {
+        candidate.clear(), rays.clear(), media.clear(), streams.clear();
+    }
+};
+
 /// Per-thread scratch space (kept between samples to avoid allocations).
 struct MvScratch {
     ViewShifts shifts;  ///< the shift of y to every view
@@ -104,6 +119,7 @@ struct MvScratch {
     std::vector<Vec3f> sharing_wi;
     std::vector<float> view_pdf;
     std::vector<Spectrum> tr; ///< candidates' camera-segment transmittance (media, §10)
+    MvMediaWalks walks;
 };
 
 /// The camera samples of a tile's native samples (§2) and their first hits: the camera rays

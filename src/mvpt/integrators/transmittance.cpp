@@ -24,6 +24,43 @@ bool step_past(const SurfaceInteraction &si, Point3f target, bool finite, Ray &r
 }
 } // namespace
 
+namespace {
+/// One piece of a walk from `origin` towards `target`: `ray` reached `si` (`hit`) or its end,
+/// through `medium`. Updates the walk, and the ray and medium past a surface the rule passes;
+/// false when the walk has ended.
+bool walk_piece(SegmentWalk &w, Ray &ray, const Medium *&medium, bool hit, const SurfaceInteraction &si, NullRule rule,
+                RandomStream &rs, Point3f origin, Point3f target, bool finite) {
+    if (medium) {
+        w.tr *= medium->transmittance(ray, hit ? si.t : ray.tmax, rs);
+        ++w.medium_pieces;
+        w.piece_medium = medium;
+        w.piece_t0 = dot(ray.o - origin, ray.d);
+        w.piece_t1 = w.piece_t0 + (hit ? si.t : ray.tmax);
+    }
+    w.medium = medium;
+    if (!hit) return false;
+    const Bsdf &bsdf = *si.shape->bsdf;
+    if (rule == NullRule::PureNull ? bsdf.flags() != BsdfNull : (w.tr *= bsdf.null_transmission(si)).is_black()) {
+        w.stopped = true;
+        w.si = si;
+        if (rule == NullRule::Transmission) w.tr = Spectrum(0.f);
+        return false;
+    }
+    w.crossed_emitter |= si.shape->emitter != nullptr;
+    if (!step_past(si, target, finite, ray, medium)) {
+        w.medium = medium;
+        return false;
+    }
+    return true;
+}
+
+/// A walk that crossed MaxNullCrossings null surfaces: blocked.
+void too_many_crossings(SegmentWalk &w) {
+    w.stopped = true;
+    w.tr = Spectrum(0.f);
+}
+} // namespace
+
 SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, NullRule rule, RandomStream &rs,
                          RayCounters &counters) {
     SegmentWalk w;
@@ -33,31 +70,36 @@ SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, Null
         SurfaceInteraction si;
         ++counters.shadow_rays;
         const bool hit = scene.intersect(ray, si);
-        if (medium) {
-            w.tr *= medium->transmittance(ray, hit ? si.t : ray.tmax, rs);
-            ++w.medium_pieces;
-            w.piece_medium = medium;
-            w.piece_t0 = dot(ray.o - origin, ray.d);
-            w.piece_t1 = w.piece_t0 + (hit ? si.t : ray.tmax);
-        }
-        w.medium = medium;
-        if (!hit) return w;
-        const Bsdf &bsdf = *si.shape->bsdf;
-        if (rule == NullRule::PureNull ? bsdf.flags() != BsdfNull : (w.tr *= bsdf.null_transmission(si)).is_black()) {
-            w.stopped = true;
-            w.si = si;
-            if (rule == NullRule::Transmission) w.tr = Spectrum(0.f);
-            return w;
-        }
-        w.crossed_emitter |= si.shape->emitter != nullptr;
-        if (!step_past(si, target, finite, ray, medium)) {
-            w.medium = medium;
-            return w;
-        }
+        if (!walk_piece(w, ray, medium, hit, si, rule, rs, origin, target, finite)) return w;
     }
-    w.stopped = true;
-    w.tr = Spectrum(0.f);
+    too_many_crossings(w);
     return w;
+}
+
+void walk_segments(const Scene &scene, const Ray *rays, const Medium *const *media, size_t n, NullRule rule,
+                   RandomStream *rs, RayCounters &counters, SegmentWalk *walks, WalkBuffers &buf) {
+    buf.lane.resize(n), buf.rays.resize(n), buf.media.resize(n), buf.si.resize(n), buf.hit.resize(n);
+    size_t active = 0;
+    for (size_t i = 0; i < n; ++i) {
+        walks[i] = SegmentWalk{};
+        buf.lane[active] = uint32_t(i), buf.rays[active] = rays[i], buf.media[active++] = media[i];
+    }
+    for (int crossing = 0; crossing < MaxNullCrossings && active > 0; ++crossing) {
+        counters.shadow_rays += active;
+        std::fill(buf.si.begin(), buf.si.begin() + ptrdiff_t(active), SurfaceInteraction{}); // as walk_segment's
+        scene.intersect(buf.rays.data(), active, buf.si.data(), buf.hit.data(), true);
+        size_t next = 0; // the walks that go on move to the front, in order
+        for (size_t a = 0; a < active; ++a) {
+            const uint32_t i = buf.lane[a];
+            const Ray &start = rays[i];
+            const bool on = walk_piece(walks[i], buf.rays[a], buf.media[a], buf.hit[a] != 0, buf.si[a], rule, rs[i],
+                                       start.o, start.at(start.tmax), std::isfinite(start.tmax));
+            if (!on) continue;
+            buf.lane[next] = i, buf.rays[next] = buf.rays[a], buf.media[next++] = buf.media[a];
+        }
+        active = next;
+    }
+    for (size_t a = 0; a < active; ++a) too_many_crossings(walks[buf.lane[a]]);
 }
 
 SegmentFlight flight_along_segment(const Scene &scene, Ray ray, const Medium *medium, float u,

@@ -7,6 +7,8 @@
 #include "../render/interaction.h"
 #include "../render/integrator.h"
 
+#include <vector>
+
 namespace mvpt {
 
 class Medium;
@@ -44,6 +46,20 @@ struct SegmentWalk {
 /// through the surfaces `rule` passes.
 SegmentWalk walk_segment(const Scene &scene, Ray ray, const Medium *medium, NullRule rule, RandomStream &rs,
                          RayCounters &counters);
+
+/// Buffers of walk_segments, reused between calls.
+struct WalkBuffers {
+    std::vector<uint32_t> lane;
+    std::vector<Ray> rays;
+    std::vector<const Medium *> media;
+    std::vector<SurfaceInteraction> si;
+    std::vector<uint8_t> hit;
+};
+
+/// walk_segment for n segments at once, their rays traced as packets crossing by crossing:
+/// walks[i] is walk_segment(scene, rays[i], media[i], rule, rs[i], counters), bit for bit.
+void walk_segments(const Scene &scene, const Ray *rays, const Medium *const *media, size_t n, NullRule rule,
+                   RandomStream *rs, RayCounters &counters, SegmentWalk *walks, WalkBuffers &buf);
 
 /// A free flight along a camera segment, drawn once over the whole segment (multi-view path
 /// tracing's medium vertices, docs/multiview-path-tracing.md §10).

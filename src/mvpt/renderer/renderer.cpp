@@ -291,26 +291,20 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
                 chunk_samples += uint64_t(std::min(pass_end, target[t.view_slot]) - pass) * uint64_t(t.x1 - t.x0) *
                                  uint64_t(t.y1 - t.y0);
             }
-        // Cancellation, and the end of the time budget after the first pass, stop between tiles
-        // in a chunk expected to last more than half a second (passes that long), or once it has:
-        // a chunk is planned to last a quarter of a second, and one that does finishes, so that
-        // every pixel holds whole passes; a long pass is cut, its finished tiles kept.
+        // Cancellation, and the end of the time budget after the first pass, stop between the
+        // tiles of a pass that is expected to last more than half a second, or once it has (its
+        // finished tiles kept). Chunks of several passes are short (they are planned to last a
+        // quarter of a second) and finish, so that every pixel holds whole passes.
         const double chunk_start = seconds();
-        const bool long_chunk = last_pass * double(pass_end - pass) > 2.0 * ChunkSeconds;
+        const bool long_pass = pass_end - pass == 1 && last_pass > 2.0 * ChunkSeconds;
         auto stop = [&] {
             const bool asked = cancel.load() || (pass > 0 && m_opts.time_budget > 0.0 && seconds() > m_opts.time_budget);
-            return asked && (long_chunk || seconds() - chunk_start > 2.0 * ChunkSeconds);
+            return asked && pass_end - pass == 1 && (long_pass || seconds() - chunk_start > 2.0 * ChunkSeconds);
         };
         auto report = [&](uint64_t samples_done) {
-            if (!progress) return;
-            RenderProgress p;
-            p.pass = pass;
-            p.elapsed = seconds();
-            p.samples = m_stats.samples + samples_done;
-            p.fraction = std::min(1.0, (pass + double(samples_done) / double(std::max<uint64_t>(chunk_samples, 1)) *
-                                                   (pass_end - pass)) / double(max_target));
-            if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
-            progress(p);
+            const double in_chunk = double(samples_done) / double(std::max<uint64_t>(chunk_samples, 1));
+            report_progress(progress, pass, seconds(), m_stats.samples + samples_done,
+                            std::min(1.0, (pass + in_chunk * (pass_end - pass)) / double(max_target)));
         };
         const ChunksDone done = run_in_chunks(arena, tiles.size(), threads, double(chunk_samples), chunk_timing,
                                               [&](size_t ti) { return render_passes(*tiles[ti], pass, pass_end); },
@@ -355,11 +349,16 @@ void Renderer::finish_pass(int pass, uint64_t pass_samples, double pass_seconds,
     m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, pass_seconds);
     m_stats.passes = pass + 1;
     m_stats.samples += pass_samples;
+    report_progress(progress, pass + 1, elapsed, m_stats.samples, fraction);
+}
+
+void Renderer::report_progress(const std::function<void(const RenderProgress &)> &progress, int pass, double elapsed,
+                               uint64_t samples, double fraction) const {
     if (!progress) return;
     RenderProgress p;
-    p.pass = pass + 1;
+    p.pass = pass;
     p.elapsed = elapsed;
-    p.samples = m_stats.samples;
+    p.samples = samples;
     p.fraction = fraction;
     if (m_opts.time_budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / m_opts.time_budget));
     progress(p);

@@ -143,6 +143,10 @@ private:
     /// `fraction` (of the sample target) raised to the share of the time budget used.
     void finish_pass(int pass, uint64_t pass_samples, double pass_seconds, double elapsed, double fraction,
                      const std::function<void(const RenderProgress &)> &progress);
+    /// Calls `progress` (when set) with the pass, the seconds elapsed, the samples so far and
+    /// `fraction` of the sample target, raised to the share of the time budget spent.
+    void report_progress(const std::function<void(const RenderProgress &)> &progress, int pass, double elapsed,
+                         uint64_t samples, double fraction) const;
     void develop();
     void render_multiview(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress);
     /// Multi-view path tracing: the method's context, accumulators and native-sample maps of

@@ -151,16 +151,11 @@ void Renderer::render_multiview(const std::atomic<bool> &cancel,
         // ---------------- Native samples, tile by tile, in chunks ----------------
         auto stop = [&] { return cancel.load() || (pass > 0 && budget > 0.0 && seconds() > budget); };
         auto report = [&](uint64_t samples_done) {
-            if (!progress) return;
-            RenderProgress p;
-            p.pass = pass;
-            p.elapsed = seconds();
-            p.samples = m_stats.samples + samples_done;
-            p.fraction = range      ? (pass + double(samples_done) / double(pass_samples)) / m_opts.pass_count
-                         : unbounded ? 0.0
-                                     : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) / spp_target);
-            if (budget > 0.0) p.fraction = std::max(p.fraction, std::min(1.0, p.elapsed / budget));
-            progress(p);
+            report_progress(progress, pass, seconds(), m_stats.samples + samples_done,
+                            range       ? (pass + double(samples_done) / double(pass_samples)) / m_opts.pass_count
+                            : unbounded ? 0.0
+                                        : std::min(1.0, (native_done + double(samples_done) / double(pixels_total)) /
+                                                            spp_target));
         };
         const bool finished = run_in_chunks(arena, tiles.size(), threads, double(pass_samples), chunk_timing,
                                             [&](size_t ti) { return render_tile(state.local(), tiles[ti]); }, stop,
