@@ -22,11 +22,15 @@ def many_views():
     return mvpt.load_string(slow_scene(VIEWS, res=RES, spp=64))
 
 
-@pytest.fixture(scope="module")
-def pass_seconds(many_views):
-    r = mvpt.render(many_views, spp=1, method="mvpt")
+def _one_pass_seconds(scene, method: str) -> float:
+    r = mvpt.render(scene, spp=1, method=method)
     assert r.stats["passes"] == 1
     return r.stats["max_pass_seconds"]
+
+
+@pytest.fixture(scope="module")
+def pass_seconds(many_views):
+    return _one_pass_seconds(many_views, "mvpt")
 
 
 def test_progress_within_a_pass(many_views, pass_seconds):
@@ -76,9 +80,7 @@ def pt_views():
 
 @pytest.fixture(scope="module")
 def pt_pass_seconds(pt_views):
-    r = mvpt.render(pt_views, spp=1, method="pt")
-    assert r.stats["passes"] == 1
-    return r.stats["max_pass_seconds"]
+    return _one_pass_seconds(pt_views, "pt")
 
 
 def test_path_tracing_stops_between_tiles_and_resumes(tmp_path, pt_views, pt_pass_seconds):

@@ -232,8 +232,8 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
     // order, so every pixel accumulates its samples in the same order as pass by pass (the
     // images are identical) while the threads meet about every quarter of a second
     // (run_in_chunks) instead of once per pass (on a loaded machine a descheduled thread holds
-    // up every pass boundary); cancellation and the time budget stop between tiles. Without a
-    // time budget a chunk grows to about a quarter of a second. A chunk is a whole number of pass groups (render_tile's batches): 16 passes, halved
+    // up every pass boundary). Without a time budget a chunk grows to about a quarter of a
+    // second. A chunk is a whole number of pass groups (render_tile's batches): 16 passes, halved
     // while a group of all views would exceed GroupPaths paths (so that the first chunk, one
     // group, stays short on large films). Under a time budget the first chunk is one pass;
     // then groups are as long as fits in ChunkSeconds (the budget's granularity), and each

@@ -73,7 +73,7 @@ struct RenderStats {
     /// Longest pass, to judge how closely a time budget can be met (path tracing without a
     /// time budget runs passes in chunks: there, the longest chunk's mean pass).
     double max_pass_seconds = 0.0;
-    /// Multi-view path tracing: the longest stretch of a pass between two progress reports.
+    /// The longest stretch of a pass (or group of passes) between two progress reports.
     double max_chunk_seconds = 0.0;
     /// Multi-view path tracing: the time spent between passes (caches flushed, the pass folded
     /// into the accumulators, the next native-sample maps), in all.
