@@ -123,7 +123,7 @@ void medium_nee(const MvContext &ctx, const Medium &medium, Point3f p, float tim
     }
     p_mix /= float(ns);
     const float n_lights = float(ctx.scene->lights().size());
-    rec.nee_weight = le * (ls.delta ? 1.f : mis_power(ls.pdf / n_lights, p_mix));
+    rec.nee_weight = le * emitter_sample_mis(ls, n_lights, p_mix);
     rec.nee = !rec.nee_weight.is_black() && p_mix > 0.f;
 }
 

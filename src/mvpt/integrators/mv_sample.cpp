@@ -387,7 +387,7 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
                     pending.shadow_rays.push_back(shadow);
                     ++counters.shadow_rays;
                 }
-                nee_weight = weight * (ls.delta ? 1.f : mis_power(ls.pdf / float(lights.size()), p_mix / float(ns)));
+                nee_weight = weight * emitter_sample_mis(ls, float(lights.size()), p_mix / float(ns));
             }
         }
     }

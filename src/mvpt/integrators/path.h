@@ -3,6 +3,7 @@
 #pragma once
 
 #include "../render/integrator.h"
+#include "../render/light.h"
 
 namespace mvpt {
 
@@ -84,6 +85,13 @@ Spectrum emitted_radiance(const Scene &scene, const Light *emitter, const Ray &r
 inline float mis_power(float a, float b) {
     float a2 = a * a, b2 = b * b;
     return (a2 + b2) > 0.f ? a2 / (a2 + b2) : 0.f;
+}
+
+/// MIS weight of next-event estimation's sample `ls` of a light chosen uniformly among
+/// `n_lights`, against sampling its direction with density `pdf_other` (a BSDF's, a phase
+/// function's or a mixture of them): the power heuristic, 1 for a delta light.
+inline float emitter_sample_mis(const LightSample &ls, float n_lights, float pdf_other) {
+    return ls.delta ? 1.f : mis_power(ls.pdf / n_lights, pdf_other);
 }
 
 } // namespace mvpt

@@ -27,7 +27,7 @@ inline bool nee_step(const Bsdf &bsdf, const BsdfContext &ctx, const SurfaceInte
     const Spectrum f = bsdf.eval(ctx, si, si.wi, wo);
     if (f.is_black()) return false;
     shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
-    const float w = ls.delta ? 1.f : mis_power(ls.pdf / n_lights, bsdf.pdf(ctx, si, si.wi, wo));
+    const float w = emitter_sample_mis(ls, n_lights, bsdf.pdf(ctx, si, si.wi, wo));
     contribution = throughput * f * weight * w;
     return true;
 }

@@ -48,7 +48,7 @@ Spectrum VolPathIntegrator::scatter_in_medium(const Scene &scene, const Medium &
         Spectrum le = sample_emitter(scene, p, nullptr, &medium, ray.time, sampler, counters, ls);
         if (!le.is_black()) {
             float f = phase.eval(wi, ls.d);
-            result = throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), f));
+            result = throughput * le * f * emitter_sample_mis(ls, float(scene.lights().size()), f);
         }
     }
     sampler.set_dimension(block + 6);
@@ -176,7 +176,7 @@ Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *med
             if (!le.is_black()) {
                 Vec3f wo = si.to_local(ls.d);
                 auto [f, pdf] = bsdf.eval_pdf(ctx, si, si.wi, wo);
-                result += throughput * le * f * (ls.delta ? 1.f : mis_power(ls.pdf / float(scene.lights().size()), pdf));
+                result += throughput * le * f * emitter_sample_mis(ls, float(scene.lights().size()), pdf);
             }
         }
 
