@@ -11,6 +11,7 @@
 #include "path_steps.h"
 #include "wavefront.h"
 
+#include "../core/per_thread.h"
 #include "../core/sampler_batch.h"
 #include "../render/bsdf.h"
 #include "../render/bsdfs/bsdf_form.h"
@@ -752,12 +753,7 @@ void PathIntegrator::li_batch(const Scene &scene, const Ray *camera_rays, Sample
 
 void PathIntegrator::trace_batch(const Scene &scene, const Ray *start_rays, const PathState *states, Sampler *samplers,
                                  Spectrum *out, uint8_t *valid_out, size_t n, RayCounters &counters) const {
-    // Through a pointer the compiler cannot see through (an empty asm): otherwise GCC recomputes
-    // the thread_local's address, a __tls_get_addr call in a shared library, at every use.
-    thread_local WaveBuffers tls_buffers;
-    WaveBuffers *buf = &tls_buffers;
-    asm("" : "+r"(buf));
-    Wavefront(scene, m_cfg, samplers, *buf, counters).run(start_rays, states, n, out, valid_out);
+    Wavefront(scene, m_cfg, samplers, per_thread<WaveBuffers>(), counters).run(start_rays, states, n, out, valid_out);
 }
 
 } // namespace mvpt

@@ -2,6 +2,7 @@
 #include "chunks.h"
 
 #include "../core/memory.h"
+#include "../core/per_thread.h"
 
 #include "../integrators/mvpath.h"
 #include "../render/camera.h"
@@ -159,13 +160,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const std::function<void(
         const FilmDesc &film = cam.film;
         FilmBuffer &fb = m_films[tile.view_slot];
         const uint32_t seed = uint32_t(m_opts.seed ? *m_opts.seed : cam.seed); // as Sampler keeps it
-        // One thread_local reached through a pointer the compiler cannot see through (an empty
-        // asm): in the Python module (a shared library) each use of a thread_local would call
-        // __tls_get_addr.
-        thread_local TileBuffers tls_tile;
-        TileBuffers *tile_ptr = &tls_tile;
-        asm("" : "+r"(tile_ptr));
-        TileBuffers &tb = *tile_ptr;
+        TileBuffers &tb = per_thread<TileBuffers>();
         std::vector<uint32_t> &slot_x = tb.slot_x, &slot_y = tb.slot_y, &slot_pass = tb.slot_pass;
         slot_x.clear(), slot_y.clear(), slot_pass.clear();
         auto add = [&](int x, int y, int q) {
