@@ -1,6 +1,7 @@
 #include "sampler_batch.h"
 
 #include "sampler.h"
+#include "simd.h"
 
 namespace mvpt {
 
@@ -23,9 +24,9 @@ void draws_scalar(const uint64_t *hash, const uint32_t *dim, size_t begin, size_
 }
 
 #if defined(__GNUC__) && defined(__x86_64__)
-typedef uint64_t U64x8 __attribute__((vector_size(64)));
-typedef float F32x8 __attribute__((vector_size(32)));
-typedef int32_t I32x8 __attribute__((vector_size(32)));
+using U64x8 = simd::u64x8;
+using F32x8 = simd::f32x8;
+using I32x8 = simd::i32x8;
 
 /// mix_bits on 8 lanes.
 [[gnu::target("avx512f,avx512dq,avx512vl")]] inline U64x8 mix8(U64x8 v) {

@@ -1,6 +1,6 @@
 #include "mv_adaptive.h"
 
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>

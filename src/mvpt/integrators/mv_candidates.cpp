@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 #include "../core/sampler.h"
 #include "../render/interaction.h"
 
@@ -116,9 +116,7 @@ template <int Blocks, typename F8>
                                                   float *__restrict d) {
     F8 inv_gk[Blocks], acc[Blocks];
     for (int b = 0; b < Blocks; ++b) {
-        F8 gk;
-        __builtin_memcpy(&gk, g_targets + t0 + 8 * b, sizeof(gk));
-        inv_gk[b] = 1.f / gk;
+        inv_gk[b] = 1.f / simd::load<F8>(g_targets + t0 + 8 * b);
         acc[b] = F8{};
     }
     if (jacobian)
@@ -136,8 +134,7 @@ template <int Blocks, typename F8>
             for (int b = 0; b < Blocks; ++b) acc[b] += a;
         }
     for (int b = 0; b < Blocks; ++b) {
-        F8 out = acc[b] * inv_gk[b];
-        __builtin_memcpy(d + t0 + 8 * b, &out, sizeof(out));
+        simd::store(d + t0 + 8 * b, F8(acc[b] * inv_gk[b]));
     }
 }
 
@@ -147,7 +144,7 @@ MVPT_MULTI_ISA void balance_kernel(const float *__restrict g, const float *__res
     // Targets in the lanes of 8-wide vectors, up to four vectors per pass over j. (One 64-byte
     // vector type would halve the loop on AVX-512 but GCC lowers it through memory in the AVX2
     // clone: 5x the instructions.)
-    typedef float F8 __attribute__((vector_size(32)));
+    using F8 = simd::f32x8;
     size_t t0 = 0;
     for (; t0 + 32 <= padded_targets; t0 += 32) balance_blocks<4, F8>(g, nn, nv, g_targets, t0, jacobian, d);
     switch ((padded_targets - t0) / 8) {

@@ -1,7 +1,7 @@
 // The views that may share one native sample (docs/multiview-path-tracing.md §3–§5), held
 // as arrays over views, and the loops over them: the shift of y with its cheap tests, the
 // viewing directions, the visibility segments and the balance sums D_k. The loops over
-// many views are compiled for several instruction sets (core/multi_isa.h).
+// many views are compiled for several instruction sets (core/simd.h).
 #pragma once
 
 #include "mv_shift.h"

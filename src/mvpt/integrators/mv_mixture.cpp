@@ -1,6 +1,6 @@
 #include "mv_mixture.h"
 
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 
 #include <algorithm>
 
@@ -8,12 +8,8 @@ namespace mvpt {
 
 namespace {
 /// Eight running values, lane q taking the entries q, q + 8, ... (the order of the scalar loops).
-typedef float F8 __attribute__((vector_size(32)));
-F8 load8(const float *v) {
-    F8 x;
-    __builtin_memcpy(&x, v, sizeof(x));
-    return x;
-}
+using F8 = simd::f32x8;
+[[gnu::always_inline]] inline F8 load8(const float *v) { return simd::load<F8>(v); }
 } // namespace
 
 MVPT_MULTI_ISA float sum_over_views(const float *v, size_t n) {

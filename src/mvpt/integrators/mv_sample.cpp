@@ -17,47 +17,6 @@
 
 namespace mvpt {
 
-MvViewStats &MvViewStats::operator+=(const MvViewStats &o) {
-    native += o.native; received += o.received; tried += o.tried; sharing += o.sharing; rays += o.rays;
-    for (int i = 0; i < int(ShiftTest::Count); ++i) rejected[i] += o.rejected[i];
-    return *this;
-}
-
-void MvContext::prepare() {
-    all_time_compatible = all_time_compatible_equal_dt = true;
-    for (const MvView &a : views)
-        for (const MvView &b : views) {
-            all_time_compatible &= time_compatible(a, b, scene_moves);
-            all_time_compatible_equal_dt &= a.dt == b.dt;
-        }
-    select_keys.clear();
-    for (const MvView &v : views) select_keys.push_back(Sampler::dimension_key(DimSelectBase + v.scene_index));
-    std::vector<CameraProjection> proj;
-    static_shift = !scene_moves && all_time_compatible;
-    for (const MvView &v : views) {
-        const CameraProjection *p = v.camera->static_projection();
-        static_shift &= p != nullptr;
-        proj.push_back(p ? *p : CameraProjection{});
-    }
-    // Padded to whole vectors with copies of a real camera whose film window is empty.
-    const size_t padded = whole_lanes(views.size());
-    if (!proj.empty()) proj.resize(padded, proj.back());
-    projections = ProjectionTable(proj);
-    windows.clear();
-    for (const MvView &v : views) windows.emplace_back(v.camera->film);
-    films = FilmTable(windows, padded);
-    if (views.size() >= 2) {
-        auto centre = [](const MvView &v) {
-            const FilmDesc &f = v.camera->film;
-            Vec2f mid(float(f.crop_x) + 0.5f * float(f.crop_width), float(f.crop_y) + 0.5f * float(f.crop_height));
-            return v.camera->generate_ray(mid, Vec2f(0.f, 0.f), v.t0).o;
-        };
-        Vec3f d = centre(views[1]) - centre(views[0]);
-        if (squared_norm(d) > 0.f && std::isfinite(squared_norm(d))) across = normalize(d);
-    }
-    medium_vertices = mv_can_share_medium_vertices(*this);
-}
-
 namespace {
 const BsdfContext Ctx;
 } // namespace
@@ -200,24 +159,6 @@ std::vector<std::pair<int, float>> mv_balance_densities(const MvContext &ctx, in
     mv_balance_sums(ctx, sc, &bsdf, &si, targets.data(), targets.size());
     for (int i : targets) out.emplace_back(sc.cand.slot[i], sc.d[i]);
     return out;
-}
-
-void MvPendingSamples::clear() {
-    samples.clear();
-    entries = 0;
-    rays.clear(), states.clear(), samplers.clear(), media.clear(), dims.clear();
-    shadow_rays.clear();
-}
-
-size_t MvPendingSamples::add_entries(size_t n) {
-    const size_t first = entries;
-    entries += n;
-    if (entries > slot.size()) { // grow geometrically: no per-sample resizing (and zero fills)
-        const size_t size = std::max(entries, 2 * slot.size());
-        slot.resize(size), pixel.resize(size), film.resize(size), w.resize(size);
-        f_nee.resize(size + 1), f_bounce.resize(size + 1); // + 1: mv_splat.cpp reads 16 bytes per entry
-    }
-    return first;
 }
 
 void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {

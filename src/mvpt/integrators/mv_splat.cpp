@@ -1,19 +1,33 @@
 // The end of a tile's native samples (§7): their suffixes traced as one wavefront, their
 // shared NEE's shadow rays as packets, and each sharing view's contribution W·L splatted.
-#include "mv_sample.h"
+#include "mv_splat.h"
+#include "path.h"
 #include "volpath.h"
 
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 #include "../scene/scene.h"
 
 #include <algorithm>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#include <xmmintrin.h>
-#endif
-
 namespace mvpt {
+
+void MvPendingSamples::clear() {
+    samples.clear();
+    entries = 0;
+    rays.clear(), states.clear(), samplers.clear(), media.clear(), dims.clear();
+    shadow_rays.clear();
+}
+
+size_t MvPendingSamples::add_entries(size_t n) {
+    const size_t first = entries;
+    entries += n;
+    if (entries > slot.size()) { // grow geometrically: no per-sample resizing (and zero fills)
+        const size_t size = std::max(entries, 2 * slot.size());
+        slot.resize(size), pixel.resize(size), film.resize(size), w.resize(size);
+        f_nee.resize(size + 1), f_bounce.resize(size + 1); // + 1: mv_splat.cpp reads 16 bytes per entry
+    }
+    return first;
+}
 
 Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w) {
     Spectrum L = t.nee ? f_nee * t.nee_weight : Spectrum(0.f);
@@ -21,73 +35,56 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
     return t.valid ? L * w : Spectrum(0.f);
 }
 
-// Per entry, the four values in the lanes of one vector, masked as mv_entry_value selects,
-// then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer (to nearest even) in its
-// low bits: exactly to_fixed's llrint when |v| < 2^21. Other values that fit take to_fixed per
-// channel.
+// Per entry, the four values W*L (RGB) and W in the lanes of one vector, masked as
+// mv_entry_value selects, then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer
+// (to nearest even) in its low bits: exactly to_fixed's llrint when |v| < 2^21. Other values
+// that fit take to_fixed per channel.
 MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
                                      const Spectrum *__restrict f_bounce, const float *__restrict w,
                                      const int *__restrict slots, const uint32_t *__restrict pixels,
                                      const Vec2f *__restrict films, uint64_t sample, size_t begin, size_t end,
                                      uint64_t *__restrict dropped) {
-    size_t lost = 0;
-#if !defined(__SSE2__) // not x86-64: entry by entry
-    for (size_t i = begin; i < end; ++i)
-        if (!cache.add(slots[i], pixels[i], films[i], sample, mv_entry_value(t, f_nee[i], f_bounce[i], w[i]), w[i]))
-            ++dropped[slots[i]], ++lost;
-#else
-    typedef double D4 __attribute__((vector_size(32)));
-    typedef int64_t I4 __attribute__((vector_size(32)));
+    using namespace simd;
     static_assert(sizeof(Spectrum) == 12, "entries are read as 16 bytes from each Spectrum");
-    const __m128i lanes3 = _mm_set_epi32(0, -1, -1, -1), lane3 = _mm_set_epi32(-1, 0, 0, 0);
-    const __m128 nee_mask = _mm_castsi128_ps(t.nee ? lanes3 : _mm_setzero_si128());
-    const __m128 bounce_mask = _mm_castsi128_ps(t.bounce ? lanes3 : _mm_setzero_si128());
-    const __m128 valid_mask = _mm_castsi128_ps(t.valid ? lanes3 : _mm_setzero_si128());
-    const __m128 nw = _mm_setr_ps(t.nee_weight[0], t.nee_weight[1], t.nee_weight[2], 0.f);
-    const __m128 bs = _mm_set1_ps(t.b_scale), sfx = _mm_setr_ps(t.suffix[0], t.suffix[1], t.suffix[2], 0.f);
-    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128 exact = _mm_set1_ps(0x1p21f), fits = _mm_set1_ps(float(SplatMax));
-    const D4 scale = {SplatScale, SplatScale, SplatScale, SplatScale};
-    const D4 magic = {0x1.8p52, 0x1.8p52, 0x1.8p52, 0x1.8p52};
-    I4 magic_bits;
-    __builtin_memcpy(&magic_bits, &magic, sizeof(magic));
+    const i32x4 rgb = {-1, -1, -1, 0}, none = {};
+    const i32x4 nee_mask = t.nee ? rgb : none, bounce_mask = t.bounce ? rgb : none, valid_mask = t.valid ? rgb : none;
+    const f32x4 nw = {t.nee_weight[0], t.nee_weight[1], t.nee_weight[2], 0.f};
+    const f32x4 sfx = {t.suffix[0], t.suffix[1], t.suffix[2], 0.f};
+    const f32x4 exact = f32x4{} + 0x1p21f, fits = f32x4{} + float(SplatMax);
+    const f64x4 scale = f64x4{} + SplatScale, magic = f64x4{} + 0x1.8p52;
+    const i64x4 magic_bits = bit_cast<i64x4>(magic);
+    auto masked = [](f32x4 v, i32x4 mask) { return bit_cast<f32x4>(bit_cast<i32x4>(v) & mask); };
+    auto all = [](i32x4 m) { return (m[0] & m[1] & m[2] & m[3]) != 0; };
+    size_t lost = 0;
     // In a large cache, the entries of the next few views are loaded while this one's is summed.
     const size_t ahead = cache.large() ? 8 : 0;
     for (size_t i = begin; i < std::min(end, begin + ahead); ++i) cache.prefetch(slots[i], films[i]);
     for (size_t i = begin; i < end; ++i) {
         if (ahead && i + ahead < end) cache.prefetch(slots[i + ahead], films[i + ahead]);
-        const __m128 fn = _mm_loadu_ps(&f_nee[i].r), fb = _mm_loadu_ps(&f_bounce[i].r);
-        const __m128 L = _mm_add_ps(_mm_and_ps(_mm_mul_ps(fn, nw), nee_mask),
-                                    _mm_and_ps(_mm_mul_ps(_mm_mul_ps(fb, bs), sfx), bounce_mask));
-        const __m128 wi = _mm_set1_ps(w[i]);
-        const __m128 v = _mm_or_ps(_mm_and_ps(_mm_mul_ps(L, wi), valid_mask), _mm_and_ps(wi, _mm_castsi128_ps(lane3)));
-        const __m128 mag = _mm_and_ps(v, abs_mask);
-        float f[4];
-        _mm_storeu_ps(f, v);
+        const f32x4 L = masked(load<f32x4>(&f_nee[i].r) * nw, nee_mask) +
+                        masked(load<f32x4>(&f_bounce[i].r) * t.b_scale * sfx, bounce_mask);
+        const f32x4 v = bit_cast<f32x4>(bit_cast<i32x4>(masked(L * w[i], valid_mask)) |
+                                        (bit_cast<i32x4>(f32x4{} + w[i]) & ~rgb)); // W*L, W
         if (!cache.is_box(slots[i])) { // spread over the pixels the view's filter covers
-            if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(f[0], f[1], f[2]), f[3]))
+            if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(v[0], v[1], v[2]), v[3]))
                 ++dropped[slots[i]], ++lost;
             continue;
         }
-        if (_mm_movemask_ps(_mm_cmplt_ps(mag, fits)) != 0xf) {
+        const f32x4 mag = bit_cast<f32x4>(bit_cast<i32x4>(v) & 0x7fffffff);
+        if (!all(mag < fits)) { // also NaN
             ++dropped[slots[i]], ++lost;
             continue;
         }
         SplatEntry &p = cache.at(slots[i], pixels[i], films[i]);
-        if (_mm_movemask_ps(_mm_cmplt_ps(mag, exact)) == 0xf) {
-            const D4 x = D4{f[0], f[1], f[2], f[3]} * scale + magic;
-            I4 fixed, sum;
-            __builtin_memcpy(&fixed, &x, sizeof(fixed));
-            __builtin_memcpy(&sum, &p, sizeof(sum));
-            sum += fixed - magic_bits;
-            __builtin_memcpy(static_cast<void *>(&p), &sum, sizeof(sum));
+        if (all(mag < exact)) {
+            const f64x4 x = __builtin_convertvector(v, f64x4) * scale + magic;
+            store(&p, load<i64x4>(&p) + (bit_cast<i64x4>(x) - magic_bits));
         } else {
-            for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(f[c]);
-            p.w += to_fixed(f[3]);
+            for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(v[c]);
+            p.w += to_fixed(v[3]);
         }
         ++p.count;
     }
-#endif
     return lost;
 }
 

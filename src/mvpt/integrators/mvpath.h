@@ -1,7 +1,8 @@
 // Multi-view path tracing (docs/multiview-path-tracing.md; Fraboni et al., EGSR 2019):
 // the configuration of the `mvpath` integrator. The work itself is split by concept:
 // mv_shift.* (prefix shift and validity tests, §3–§4), mv_selection.* (which views
-// share, §6), mv_sample.* (one native sample: densities §5, shared shading §7),
+// share, §6), mv_context.* (what a pass's samples share), mv_sample.* (one native sample:
+// densities §5, shared shading §7), mv_splat.* (its contributions splatted),
 // mv_adaptive.* (native-sample maps, §8) and renderer_multiview.cpp (passes, films).
 #pragma once
 

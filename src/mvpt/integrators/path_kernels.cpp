@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "../core/math.h"
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 #include "../core/warp.h"
 #include "../render/interaction.h"
 #include "kernel_helpers.h"

@@ -1,7 +1,7 @@
 // Vector kernels of the wavefront path tracer (path_batch.cpp) for its most common vertex:
 // a constant Lambertian BSDF (diffuse, or twosided around it). The vertices of a bounce are
 // gathered into structure-of-arrays columns, one lane per vertex, and processed by loops
-// compiled per instruction set (core/multi_isa.h). Each lane performs PathIntegrator::li's
+// compiled per instruction set (core/simd.h). Each lane performs PathIntegrator::li's
 // scalar operations in li's order (the build has no FMA contraction, and selects replace
 // branches), so the results are bit-identical to li's.
 #pragma once

@@ -9,7 +9,7 @@
 #include <cmath>
 
 #include "../core/math.h"
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 #include "../core/poly_math.h"
 #include "../core/warp.h"
 #include "../render/bsdfs/roughconductor.h"

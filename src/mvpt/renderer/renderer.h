@@ -1,10 +1,10 @@
 // Drives a render: progressive passes over all views, each pass one sample
 // per pixel, parallel over tiles; stops at a sample count, a time budget or
-// a cancel request (at a pass boundary).
+// a cancel request (between chunks of tiles, chunks.h).
 #pragma once
 
 #include "../render/integrator.h"
-#include "../integrators/mv_sample.h"
+#include "../integrators/mv_context.h"
 #include "mv_film.h"
 #include "../scene/scene.h"
 

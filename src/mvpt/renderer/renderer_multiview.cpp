@@ -5,6 +5,7 @@
 #include "chunks.h"
 
 #include "../integrators/mv_adaptive.h"
+#include "../integrators/mv_sample.h"
 #include "../integrators/mvpath.h"
 #include "../integrators/volpath.h"
 #include "../render/camera.h"

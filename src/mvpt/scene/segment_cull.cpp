@@ -6,7 +6,7 @@
 #include <cstring>
 #include <new>
 
-#include "../core/multi_isa.h"
+#include "../core/simd.h"
 #include "../render/shapes/mesh.h"
 #include "../render/shapes/sphere.h"
 
@@ -22,17 +22,11 @@ void cross3(const double *a, const double *b, double *out) {
 /// below the spawn offset of a visibility ray's origin (~5e-6, interaction.h).
 constexpr double Margin = 1e-9;
 
-// 8-lane vectors of the loops over segments. The helpers taking them are always inlined, so
-// the baseline clone's vector ABI (which GCC warns about) never applies.
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef float F8 __attribute__((vector_size(32)));
-typedef int32_t I8 __attribute__((vector_size(32)));
+// 8-lane vectors of the loops over segments.
+using F8 = simd::f32x8;
+using I8 = simd::i32x8;
 
-[[gnu::always_inline]] inline F8 load8(const float *p) {
-    F8 v;
-    std::memcpy(&v, p, sizeof(v));
-    return v;
-}
+[[gnu::always_inline]] inline F8 load8(const float *p) { return simd::load<F8>(p); }
 /// Horizontal minimum, maximum and sum of the 8 lanes (three shuffles each; the shuffle
 /// builtin GCC 12 and Clang share).
 [[gnu::always_inline]] inline F8 lane_min(F8 a, F8 b) { return a < b ? a : b; }
@@ -88,16 +82,16 @@ MVPT_MULTI_ISA SlopeRanges slope_ranges(const float *dx, const float *dy, const 
         const F8 inv = 1.f / (m ? h : zero + 1.f);
         const F8 su = x * inv, sv = y * inv;
         bad |= m & ~((h > 0.25f * t) & (t < inf));
-        su_lo = m & (su < su_lo) ? su : su_lo;
-        su_hi = m & (su > su_hi) ? su : su_hi;
-        sv_lo = m & (sv < sv_lo) ? sv : sv_lo;
-        sv_hi = m & (sv > sv_hi) ? sv : sv_hi;
-        h_max = m & (h > h_max) ? h : h_max;
-        t_hi = m & (t > t_hi) ? t : t_hi;
+        su_lo = (m & (su < su_lo)) ? su : su_lo;
+        su_hi = (m & (su > su_hi)) ? su : su_hi;
+        sv_lo = (m & (sv < sv_lo)) ? sv : sv_lo;
+        sv_hi = (m & (sv > sv_hi)) ? sv : sv_hi;
+        h_max = (m & (h > h_max)) ? h : h_max;
+        t_hi = (m & (t > t_hi)) ? t : t_hi;
         for (int c = 0; c < 3; ++c) {
             const F8 p = o[c] + e[c];
-            lo[c] = m & (p < lo[c]) ? p : lo[c];
-            hi[c] = m & (p > hi[c]) ? p : hi[c];
+            lo[c] = (m & (p < lo[c])) ? p : lo[c];
+            hi[c] = (m & (p > hi[c])) ? p : hi[c];
         }
     }
     SlopeRanges r;
@@ -429,8 +423,8 @@ template <class Keep, class LeafTest> bool OccluderBvh::walk(Keep keep, LeafTest
 }
 
 namespace {
-typedef float F4 __attribute__((vector_size(16)));
-typedef int32_t I4 __attribute__((vector_size(16)));
+using F4 = simd::f32x4;
+using I4 = simd::i32x4;
 
 /// A node's four child boxes (lo[3][4] then hi[3][4]) against a region's float box and
 /// half-spaces n.p <= limit (n split into its positive and negative parts): a box is cut off

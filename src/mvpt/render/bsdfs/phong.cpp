@@ -6,7 +6,7 @@
 #include "../../core/plugin.h"
 
 #include <algorithm>
-#include "../../core/multi_isa.h"
+#include "../../core/simd.h"
 #include "../../core/warp.h"
 #include "../bsdf.h"
 #include "../texture.h"

@@ -2,7 +2,7 @@
 // Fresnel term [Walter et al. 2007] (Mitsuba 3's `roughconductor`). One-sided.
 #include "roughconductor.h"
 
-#include "../../core/multi_isa.h"
+#include "../../core/simd.h"
 #include "../../core/plugin.h"
 #include "../bsdf.h"
 #include "../bsdf_views.h"

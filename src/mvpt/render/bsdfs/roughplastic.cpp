@@ -2,7 +2,7 @@
 // `roughplastic`): microfacet reflection plus a diffuse term attenuated by the
 // coating's precomputed rough transmittance and internal reflectance
 // [Weidlich and Wilkie 2007; Mitsuba's tabulation]. One-sided, isotropic.
-#include "../../core/multi_isa.h"
+#include "../../core/simd.h"
 #include "../../core/quadrature.h"
 #include "../../core/warp.h"
 #include "../../core/plugin.h"

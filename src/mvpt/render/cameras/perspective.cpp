@@ -1,7 +1,7 @@
 // Perspective (pinhole) and thin-lens cameras, Mitsuba's `perspective` and
 // `thinlens` sensors: camera space has +z forward, +x left, +y up. `to_world` may be
 // keyframed (<animation>): the pose is then evaluated at each ray's time.
-#include "../../core/multi_isa.h"
+#include "../../core/simd.h"
 #include "../../core/plugin.h"
 #include "../camera.h"
 #include "../camera_projection.h"

@@ -2,7 +2,7 @@
 // `to_world`; uv = (phi / 2pi, theta / pi) in object space. Light sampling
 // picks uniformly inside the visible cone from outside [Akalin, "Sampling the
 // visible sphere"], uniformly by area from inside.
-#include "../../core/multi_isa.h"
+#include "../../core/simd.h"
 #include "../../core/warp.h"
 #include "analytic.h"
 #include "instance.h"
