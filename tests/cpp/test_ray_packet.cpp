@@ -34,15 +34,18 @@ TEST(RayPacket, PacksRaysAndTheirValidity) {
             pack_ray16(rays.data() + start, m, ps, valid_s, false);
             for (uint32_t i = 0; i < 16; ++i) {
                 const Ray &r = rays[start + std::min(i, m - 1)]; // lanes from m on repeat the last ray
+                const bool active = i < m && embree_can_trace(rays[start + i]);
                 for (const RTCRay16 *p : {&pv, &ps}) {
-                    const float expect[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax};
+                    // Lanes left out are also inactive as a ray stream's (tnear 1 > tfar 0).
+                    const float expect[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, active ? r.tmin : 1.f,
+                                             active ? r.tmax : 0.f};
                     const float got[8] = {p->org_x[i], p->org_y[i], p->org_z[i], p->dir_x[i],
                                           p->dir_y[i], p->dir_z[i], p->tnear[i], p->tfar[i]};
                     for (int f = 0; f < 8; ++f)
                         ASSERT_EQ(std::bit_cast<uint32_t>(got[f]), std::bit_cast<uint32_t>(expect[f]))
                             << "m " << m << " lane " << i << " field " << f;
                 }
-                const int expect_valid = i < m && embree_can_trace(rays[start + i]) ? -1 : 0;
+                const int expect_valid = active ? -1 : 0;
                 EXPECT_EQ(valid_v[i], expect_valid) << "m " << m << " start " << start << " lane " << i;
                 EXPECT_EQ(valid_s[i], expect_valid) << "m " << m << " start " << start << " lane " << i;
             }

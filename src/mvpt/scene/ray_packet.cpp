@@ -32,7 +32,10 @@ namespace {
 
 void pack_ray16(const Ray *rays, uint32_t m, RTCRay16 &p, int *valid, bool vector) {
 #if MVPT_X86_SIMD
-    if (vector && cpu_has_avx512f()) return pack_avx512(rays, m, p, valid);
+    if (vector && cpu_has_avx512f()) {
+        pack_avx512(rays, m, p, valid);
+        return deactivate_invalid(p, valid);
+    }
 #endif
     for (uint32_t i = 0; i < 16; ++i) {
         const Ray &ray = rays[std::min(i, m - 1)];
@@ -42,6 +45,7 @@ void pack_ray16(const Ray *rays, uint32_t m, RTCRay16 &p, int *valid, bool vecto
         p.tfar[i] = ray.tmax;
     }
     packet_valid(p, m, valid);
+    deactivate_invalid(p, valid);
 }
 
 } // namespace mvpt

@@ -38,9 +38,19 @@ void packet_valid(const RayK &r, uint32_t m, int *valid) {
     }
 }
 
+/// Makes the lanes that `valid` leaves out inactive as Embree's ray streams see them (tnear >
+/// tfar). Where Embree has no 16-wide kernels for the CPU (no AVX-512), rtcIntersect16 and
+/// rtcOccluded16 trace the packet as a stream, which ignores the valid mask: those lanes would
+/// be traced (a NaN ray then trips Embree's checks).
+template <class RayK>
+void deactivate_invalid(RayK &r, const int *valid) {
+    for (uint32_t i = 0; i < 16; ++i)
+        if (!valid[i]) r.tnear[i] = 1.f, r.tfar[i] = 0.f;
+}
+
 /// Origin, direction, tnear and tfar of packet `p` from rays[0 .. m), 1 <= m <= 16 (lanes
 /// from m on repeat ray m - 1), and its valid mask (embree_can_trace; lanes from m
-/// inactive). Where the CPU has AVX-512, one gather per field: the packet is then written
+/// inactive), the lanes it leaves out deactivated (deactivate_invalid). Where the CPU has AVX-512, one gather per field: the packet is then written
 /// with whole-vector stores, which Embree's vector loads forward from (after 16 narrow
 /// stores per field they wait for them). `vector` = false takes the lane loop on any CPU.
 void pack_ray16(const Ray *rays, uint32_t m, RTCRay16 &p, int *valid, bool vector = true);

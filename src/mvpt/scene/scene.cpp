@@ -322,7 +322,6 @@ void Scene::occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const {
     const float *const cols[8] = {rays.ox, rays.oy, rays.oz, rays.dx, rays.dy, rays.dz, rays.t_max, rays.time};
     alignas(64) RTCRay16 p;
     for (size_t i = 0; i < Width; ++i) {
-        p.tnear[i] = 0.f;
         p.mask[i] = 0xffffffffu;
         p.flags[i] = 0;
         p.time[i] = 0.f;
@@ -348,8 +347,10 @@ void Scene::occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const {
         std::memcpy(p.tfar, src[6], sizeof(p.tfar));
         if (m_animated)
             for (size_t i = 0; i < Width; ++i) p.time[i] = m_motion.to_embree(src[7][i]);
+        std::fill(p.tnear, p.tnear + Width, 0.f);
         alignas(64) int valid[Width];
         packet_valid(p, uint32_t(m), valid);
+        deactivate_invalid(p, valid);
         rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
     }
