@@ -125,20 +125,20 @@ void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const floa
     const int e_channels = m_e_rgb ? 3 : 1;
     // Small taps by systematic sampling: the running sum of h / TapThreshold over them, shifted by
     // one uniform number u, keeps a tap when it crosses an integer (probability h / TapThreshold).
-    const float u = float(mix_bits(sample + m_tap_key[size_t(slot)]) >> 40) * 0x1p-24f;
-    float run = u;
+    float run = float(mix_bits(sample + m_tap_key[size_t(slot)]) >> 40) * 0x1p-24f; // u
+    float next = 1.f; // the integer after run (each step adds less than 1)
     const uint32_t wx0 = uint32_t(x0 - f.crop_x), wy0 = uint32_t(y0 - f.crop_y); // in the window
     for (int j = 0; j < ny; ++j) {
         const uint32_t row = (wy0 + uint32_t(j)) * uint32_t(f.width) + wx0;
         for (int i = 0; i < nx; ++i) {
             float h = wx[i] * wy[j];
             if (h < TapThreshold) {
-                const float before = run;
                 run += h * (1.f / TapThreshold);
-                if (floor_int(run) == floor_int(before)) { // not kept (h == 0 never is)
+                if (run < next) { // not kept (h == 0 never is)
                     if ((i == hx) & (j == hy)) at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j)).count += 1;
                     continue;
                 }
+                next += 1.f;
                 h = TapThreshold;
             }
             SplatEntry &entry = at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j));
