@@ -49,7 +49,7 @@ private:
         const float u_select = sampler.next_1d();
         const Vec2f u_light = sampler.next_2d();
         if (lights.empty()) return Spectrum(0.f);
-        const Light &light = *lights[std::min(size_t(u_select * float(lights.size())), lights.size() - 1)];
+        const Light &light = *lights[uniform_emitter_index(u_select, lights.size())];
         auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
         if (weight.is_black()) return Spectrum(0.f);
         auto [f, pdf] = bsdf.eval_pdf({}, si, si.wi, si.to_local(ls.d));

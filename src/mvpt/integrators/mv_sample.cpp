@@ -307,8 +307,8 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     Spectrum nee_weight(0.f); // light weight times MIS weight, zero when no view reflects the light
     int32_t nee_shadow = -1;  // its shadow ray, traced in mv_finish_samples
     if (!lights.empty()) {
-        size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
-        auto [ls, weight] = lights[idx]->sample_li(si.p, u_light, si.time);
+        const Light &light = *lights[uniform_emitter_index(u_light_select, lights.size())];
+        auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
         if (!weight.is_black()) {
             weight *= float(lights.size());
             Vec3f wo = si.to_local(ls.d);

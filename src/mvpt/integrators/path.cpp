@@ -87,8 +87,8 @@ Spectrum PathIntegrator::trace(const Scene &scene, Ray ray, PathState state, Sam
 
         // Next-event estimation.
         if (bsdf.has_smooth() && !lights.empty()) {
-            const size_t idx = std::min(size_t(u_light_select * float(lights.size())), lights.size() - 1);
-            const auto [ls, weight] = lights[idx]->sample_li(si.p, u_light, si.time);
+            const Light &light = *lights[uniform_emitter_index(u_light_select, lights.size())];
+            const auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
             Spectrum contribution;
             Ray shadow;
             if (nee_step(bsdf, ctx, si, state.throughput, ls, weight, float(lights.size()), contribution, shadow)) {

@@ -87,6 +87,13 @@ inline float mis_power(float a, float b) {
     return (a2 + b2) > 0.f ? a2 / (a2 + b2) : 0.f;
 }
 
+/// The emitter next-event estimation samples: one of `n_lights` (at least one) chosen
+/// uniformly by the number u (the choice's probability 1 / n_lights is divided out of the
+/// emitter's weight and enters emitter_sample_mis).
+inline size_t uniform_emitter_index(float u, size_t n_lights) {
+    return std::min(size_t(u * float(n_lights)), n_lights - 1);
+}
+
 /// MIS weight of next-event estimation's sample `ls` of a light chosen uniformly among
 /// `n_lights`, against sampling its direction with density `pdf_other` (a BSDF's, a phase
 /// function's or a mixture of them): the power heuristic, 1 for a delta light.

@@ -199,9 +199,8 @@ struct EmitterTables {
 
     /// Whether p is outside sphere emitter `row` (Sphere::sample_solid_angle's test).
     bool outside_sphere(int row, Point3f p) const {
-        const SphereTable &s = spheres;
-        const Vec3f dc = Point3f(s.v[SphereTable::Cx * SphereTable::Max + row], s.v[SphereTable::Cy * SphereTable::Max + row],
-                                 s.v[SphereTable::Cz * SphereTable::Max + row]) - p;
+        const size_t r = size_t(row);
+        const Vec3f dc = Point3f(spheres.at(SphereTable::Cx, r), spheres.at(SphereTable::Cy, r), spheres.at(SphereTable::Cz, r)) - p;
         return squared_norm(dc) > sphere_radius_adj2[row];
     }
 };
@@ -261,7 +260,7 @@ private:
     size_t emission(size_t active);
     void escaped(size_t active);
     void sample_emitters(size_t n_scatter);
-    bool emitter_kernel_lane(size_t j);
+    bool emitter_kernel_lane(size_t j, size_t light);
     void emitter_nee(size_t n_scatter);
     void sample_bsdfs(size_t n_scatter);
     void trace_shadow_rays();
@@ -502,13 +501,12 @@ void Wavefront::flush_conductor_sphere(size_t &n) {
     take_samples<rs_col::Ox, rs_col::Br>(csc, m_buf.conductor_sphere_index.data(), n);
 }
 
-/// Scattering vertex j, whose BSDF and chosen emitter a whole-vertex kernel handles, into that
-/// kernel's chunk (true); false leaves it to the scalar emitter sampling.
-bool Wavefront::emitter_kernel_lane(size_t j) {
+/// Scattering vertex j, whose BSDF and chosen emitter (the scene's `light`) a whole-vertex
+/// kernel handles, into that kernel's chunk (true); false leaves it to the scalar emitter sampling.
+bool Wavefront::emitter_kernel_lane(size_t j, size_t light) {
     ScatterVertex &v = m_buf.scatter[j];
     const Point3f p = m_buf.si[v.path].p;
-    const size_t idx = std::min(size_t(m_u[0][j] * m_lights_f), m_lights - 1);
-    const int quad = m_tables.quad_row[idx], sphere = m_tables.sphere_row[idx];
+    const int quad = m_tables.quad_row[light], sphere = m_tables.sphere_row[light];
     if (v.form->kind == BsdfForm::Lambert) {
         const LambertInfo &lam = v.form->lambert;
         if (quad >= 0) {
@@ -560,12 +558,13 @@ void Wavefront::sample_emitters(size_t n_scatter) {
         const SurfaceInteraction &si = sis[v.path];
         v.nee = v.bsdf->has_smooth() && m_lights != 0;
         if (!v.nee) continue;
-        if (emitter_kernel_lane(j)) {
+        const size_t idx = uniform_emitter_index(u[0][j], m_lights);
+        if (emitter_kernel_lane(j, idx)) {
             v.nee = false; // handled by the kernel, BSDF sampling too
             v.sampled = true;
             continue;
         }
-        const Light &light = *lights[std::min(size_t(u[0][j] * m_lights_f), m_lights - 1)];
+        const Light &light = *lights[idx];
         if (&light == m_env) {
             const size_t m = n_env++;
             buf.env_lane[m] = uint32_t(j);

@@ -114,6 +114,7 @@ struct SphereTable {
     enum : size_t { Cx, Cy, Cz, Radius, Flip, Lr, Lg, Lb, Params };
     alignas(64) float v[Params * Max] = {};
     float &at(size_t param, size_t sphere) { return v[param * Max + sphere]; }
+    float at(size_t param, size_t sphere) const { return v[param * Max + sphere]; }
 };
 
 /// `lambert_quad_nee_kernel` towards sphere emitters seen from outside (the Quad column holds the

@@ -20,9 +20,8 @@ Spectrum VolPathIntegrator::sample_emitter(const Scene &scene, Point3f p, const 
     Vec2f u_light = sampler.next_2d();
     RandomStream rs = sampler.next_stream();
     if (lights.empty()) return Spectrum(0.f);
-    size_t idx = std::min(size_t(u_select * float(lights.size())), lights.size() - 1);
     Spectrum weight;
-    std::tie(ls, weight) = lights[idx]->sample_li(p, u_light, time);
+    std::tie(ls, weight) = lights[uniform_emitter_index(u_select, lights.size())]->sample_li(p, u_light, time);
     if (weight.is_black()) return weight;
     Ray shadow;
     if (si) {
