@@ -15,8 +15,8 @@
 #define MVPT_MULTI_ISA
 #endif
 
-// Helpers that take or return vectors are always inlined, so the baseline clone's vector ABI
-// (which GCC warns about) never applies.
+// The helpers below (and those of the files using these types) take and return vectors and
+// are always inlined, so the baseline clone's vector ABI, which GCC warns about, never applies.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace mvpt::simd {

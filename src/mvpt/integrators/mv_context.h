@@ -77,9 +77,4 @@ struct MvContext {
     void prepare();
 };
 
-/// Scratch arrays only grow: resizing them to each sample's count would refill them.
-template <typename V> void grow_scratch(V &v, size_t n) {
-    if (v.size() < n) v.resize(n);
-}
-
 } // namespace mvpt

@@ -36,6 +36,11 @@ struct MvMediaWalks {
     }
 };
 
+/// Scratch arrays only grow: resizing them to each sample's count would refill them.
+template <typename V> void grow_scratch(V &v, size_t n) {
+    if (v.size() < n) v.resize(n);
+}
+
 /// Per-thread scratch space (kept between samples to avoid allocations).
 struct MvScratch {
     ViewShifts shifts;  ///< the shift of y to every view

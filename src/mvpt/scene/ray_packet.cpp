@@ -45,7 +45,6 @@ void pack_ray16(const Ray *rays, uint32_t m, RTCRay16 &p, int *valid, bool vecto
         p.tfar[i] = ray.tmax;
     }
     packet_valid(p, m, valid);
-    deactivate_invalid(p, valid);
 }
 
 } // namespace mvpt

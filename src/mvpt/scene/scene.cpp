@@ -350,7 +350,6 @@ void Scene::occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const {
         std::fill(p.tnear, p.tnear + Width, 0.f);
         alignas(64) int valid[Width];
         packet_valid(p, uint32_t(m), valid);
-        deactivate_invalid(p, valid);
         rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
     }
