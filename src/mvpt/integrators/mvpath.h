@@ -3,7 +3,7 @@
 // mv_shift.* (prefix shift and validity tests, §3–§4), mv_selection.* (which views
 // share, §6), mv_context.* (what a pass's samples share), mv_sample.* (one native sample:
 // densities §5, shared shading §7), mv_splat.* (its contributions splatted),
-// mv_adaptive.* (native-sample maps, §8) and renderer_multiview.cpp (passes, films).
+// mv_adaptive.* (native-sample maps, §8) and multiview_passes.cpp (passes, films).
 #pragma once
 
 #include "path.h"
@@ -28,7 +28,7 @@ enum class MvTotalVariation {
 struct MvConfig {
     MvEstimator estimator = MvEstimator::Balance;
     /// Balance estimator: add the control variate beta (1 - sum W) per pixel and pass (see
-    /// renderer_multiview.cpp); unbiased, removes the noise of the number of contributions.
+    /// multiview_passes.cpp); unbiased, removes the noise of the number of contributions.
     bool control_variate = true;
     /// Sum D_k only over the views selected for the sample (the published code; biased).
     bool mis_selected_only = false;

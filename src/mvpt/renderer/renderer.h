@@ -5,8 +5,10 @@
 
 #include "../render/integrator.h"
 #include "../integrators/mv_context.h"
-#include "mv_film.h"
+#include "film.h"
 #include "../scene/scene.h"
+
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <cstdint>
@@ -17,6 +19,8 @@
 #include <vector>
 
 namespace mvpt {
+
+class PassSchedule;
 
 /// Rendering method: the scene's integrator, independent path tracing of every view, or
 /// multi-view path tracing (docs/multiview-path-tracing.md).
@@ -107,11 +111,13 @@ struct RenderProgress {
     uint64_t samples = 0;
 };
 
+using ProgressFn = std::function<void(const RenderProgress &)>;
+
 class Renderer {
 public:
     Renderer(const Scene &scene, RenderOptions opts);
     /// Run to completion, cancellation, or budget; `progress` is called after each pass.
-    void render(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress = {});
+    void render(const std::atomic<bool> &cancel, const ProgressFn &progress = {});
     /// Instead of rendering: the sum of the state files of disjoint ranges (or seeds) of this
     /// render, added in the order given, developed into the results; `state_path`, if set, gets
     /// the merged state.
@@ -124,11 +130,6 @@ public:
     const std::vector<int> &views() const { return m_views; }
 
 private:
-    struct FilmBuffer {
-        std::vector<double> sum, sum_sq;
-        std::vector<uint32_t> count;
-        std::unique_ptr<std::atomic<uint64_t>> nonfinite = std::make_unique<std::atomic<uint64_t>>(0);
-    };
     /// 16x16 tiles of every rendered view's crop window (view_slot indexes m_views).
     struct Tile {
         int view_slot;
@@ -139,16 +140,19 @@ private:
     int spp_target() const;
     /// RenderStats::estimated_bytes.
     double estimate_peak_bytes() const;
-    /// Book-keeping after a pass: timings, sample count, and the progress callback with
-    /// `fraction` (of the sample target) raised to the share of the time budget used.
-    void finish_pass(int pass, uint64_t pass_samples, double pass_seconds, double elapsed, double fraction,
-                     const std::function<void(const RenderProgress &)> &progress);
+    /// Path tracing's and multi-view path tracing's parts in the pass loop.
+    class PathPasses;
+    class MultiviewPasses;
+    /// The pass loop of every method (pass_loop.cpp): steps of passes as `schedule` makes
+    /// them, until the sample target, the time budget or a cancel request.
+    void run_passes(PassSchedule &schedule, const std::atomic<bool> &cancel, const ProgressFn &progress);
     /// Calls `progress` (when set) with the pass, the seconds elapsed, the samples so far and
     /// `fraction` of the sample target, raised to the share of the time budget spent.
-    void report_progress(const std::function<void(const RenderProgress &)> &progress, int pass, double elapsed,
+    void report_progress(const ProgressFn &progress, int pass, double elapsed,
                          uint64_t samples, double fraction) const;
+    /// Every view's images from its film (each film freed once its images are made).
     void develop();
-    void render_multiview(const std::atomic<bool> &cancel, const std::function<void(const RenderProgress &)> &progress);
+    void render_multiview(tbb::task_arena &arena, const std::atomic<bool> &cancel, const ProgressFn &progress);
     /// Multi-view path tracing: the method's context, accumulators and native-sample maps of
     /// every view; returns where each view's contributions land.
     std::vector<SplatFootprint> prepare_multiview(const PathIntegrator *path, const VolPathIntegrator *volpath,
@@ -159,7 +163,6 @@ private:
     void fold_pass(MvPassFilm &pass_film);
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
-    void develop_multiview();
     /// The state file at a pass boundary: the next pass, the elapsed seconds, the last pass's
     /// seconds (what a time budget expects of the next), the ray counters so far and, for
     /// multi-view path tracing, its statistics and dropped contributions by slot.
@@ -180,8 +183,7 @@ private:
     RenderOptions m_opts;
     bool m_multiview = false; ///< multi-view path tracing (else independent path tracing)
     std::vector<int> m_views;
-    std::vector<FilmBuffer> m_films;
-    std::vector<MvFilm> m_mv_films;
+    std::vector<Film> m_films; ///< by slot
     MvContext m_mv;
     /// Where a resumed render starts: its first pass, the seconds and (multi-view) the mean
     /// native samples per pixel and the statistics of the runs before.

@@ -45,17 +45,15 @@ void Renderer::write_state(int next_pass, double elapsed, double last_pass, cons
     put_layout(out, m_multiview, m_views, m_scene);
     out.put(int32_t(next_pass)), out.put(elapsed), out.put(last_pass), out.put(m_stats.samples), out.put(counters);
     out.put(SampleKey{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x});
-    if (!m_multiview) {
-        for (const FilmBuffer &fb : m_films) out.put(fb.sum), out.put(fb.sum_sq), out.put(fb.count), out.put(fb.nonfinite->load());
-    } else {
-        out.put(m_native_done);
-        for (size_t s = 0; s < m_views.size(); ++s) {
+    if (m_multiview) out.put(m_native_done);
+    for (size_t s = 0; s < m_views.size(); ++s) {
+        if (m_multiview) {
             MvViewStats stats = m_mv_stats_before[s];
             if (s < mv_stats.size()) stats += mv_stats[s];
             out.put(stats);
             out.put(uint64_t(s < mv_dropped.size() ? mv_dropped[s] : 0));
-            m_mv_films[s].save(out);
         }
+        m_films[s].save(out);
     }
     out.commit();
 }
@@ -73,21 +71,13 @@ void Renderer::read_state(const std::string &path) {
     if (m_first_pass < 0 || !(m_elapsed_before >= 0.0) || !(m_last_pass_before >= 0.0))
         throw StateError("the state file '" + path + "' is corrupt");
     m_stats.passes = m_stats.first_pass = m_first_pass;
-    if (!m_multiview) {
-        for (FilmBuffer &fb : m_films) {
-            const size_t n = fb.count.size();
-            in.get(fb.sum, 3 * n), in.get(fb.sum_sq, 3 * n), in.get(fb.count, n);
-            *fb.nonfinite = in.get<uint64_t>();
-        }
-    } else {
-        m_native_done = in.get<double>();
-        for (size_t s = 0; s < m_views.size(); ++s) {
-            m_mv_stats_before[s] = in.get<MvViewStats>();
-            const uint64_t dropped = in.get<uint64_t>();
-            m_mv_films[s].load(in);
-            m_mv_films[s].nonfinite += dropped;
-            m_mv.native_map[s] = m_mv_films[s].map.data();
-        }
+    if (m_multiview) m_native_done = in.get<double>();
+    for (size_t s = 0; s < m_views.size(); ++s) {
+        uint64_t dropped = 0;
+        if (m_multiview) m_mv_stats_before[s] = in.get<MvViewStats>(), dropped = in.get<uint64_t>();
+        m_films[s].load(in);
+        m_films[s].nonfinite += dropped;
+        if (m_multiview) m_mv.native_map[s] = m_films[s].map.data();
     }
     in.finish();
 }
@@ -102,17 +92,10 @@ void Renderer::add_state(const Renderer &o) {
     keep_first(first, {o.m_stats.nonfinite_sample, o.m_stats.nonfinite_view, o.m_stats.nonfinite_y, o.m_stats.nonfinite_x});
     m_stats.nonfinite_sample = first[0], m_stats.nonfinite_view = first[1], m_stats.nonfinite_y = first[2];
     m_stats.nonfinite_x = first[3];
-    for (size_t s = 0; s < m_films.size(); ++s) {
-        FilmBuffer &a = m_films[s];
-        const FilmBuffer &b = o.m_films[s];
-        for (size_t i = 0; i < a.sum.size(); ++i) a.sum[i] += b.sum[i], a.sum_sq[i] += b.sum_sq[i];
-        for (size_t p = 0; p < a.count.size(); ++p) a.count[p] += b.count[p];
-        *a.nonfinite += b.nonfinite->load();
-    }
     m_native_done += o.m_native_done;
-    for (size_t s = 0; s < m_mv_films.size(); ++s) {
-        m_mv_films[s].merge(o.m_mv_films[s]);
-        m_mv_stats_before[s] += o.m_mv_stats_before[s];
+    for (size_t s = 0; s < m_films.size(); ++s) {
+        m_films[s].merge(o.m_films[s]);
+        if (m_multiview) m_mv_stats_before[s] += o.m_mv_stats_before[s];
     }
 }
 
@@ -140,11 +123,11 @@ void Renderer::merge(const std::vector<std::string> &paths, bool develop_images)
         develop();
         return;
     }
-    for (size_t s = 0; s < m_views.size(); ++s) { // contributions received, as render_multiview counts them
-        m_mv_stats_before[s].received += m_mv_films[s].nonfinite;
-        for (uint32_t r : m_mv_films[s].received) m_mv_stats_before[s].received += r;
+    for (size_t s = 0; s < m_views.size(); ++s) { // contributions received, as MultiviewPasses::finish counts them
+        m_mv_stats_before[s].received += m_films[s].nonfinite;
+        for (uint32_t r : m_films[s].received) m_mv_stats_before[s].received += r;
     }
-    develop_multiview();
+    develop();
     for (size_t s = 0; s < m_views.size(); ++s) {
         m_results[s].mv = m_mv_stats_before[s];
         m_stats.mv += m_mv_stats_before[s];

@@ -1,4 +1,4 @@
-#include "mv_film.h"
+#include "film.h"
 
 #include "render_state.h"
 
@@ -8,10 +8,15 @@
 
 namespace mvpt {
 
-MvFilm::MvFilm(int width_, int height_, int margin_, MvEstimator est, bool cv, bool adaptive)
-    : estimator(est), control_variate(cv), width(width_), height(height_), margin(margin_) {
+Film::Film(int width_, int height_) : width(width_), height(height_) {
     const size_t pixels = size_t(width) * size_t(height);
-    sum.assign(3 * pixels, 0.0), m2.assign(3 * pixels, 0.f), w_sum.assign(pixels, 0.f);
+    count.assign(pixels, 0), sum.assign(3 * pixels, 0.0), m2.assign(3 * pixels, 0.f);
+}
+
+Film::Film(int width_, int height_, int margin_, MvEstimator est, bool cv, bool adaptive) : Film(width_, height_) {
+    estimator = est, control_variate = cv, margin = margin_;
+    const size_t pixels = count.size();
+    w_sum.assign(pixels, 0.f);
     if (estimator == MvEstimator::Weighted) lw.assign(3 * pixels, 0.0), e.assign(3 * pixels, 0.0), w.assign(pixels, 0.0);
     if (adaptive) e_sum.assign(pixels, 0.f), e_sq.assign(pixels, 0.f), s_sq.assign(pixels, 0.f);
     native.assign(pixels, 0), received.assign(pixels, 0);
@@ -19,18 +24,20 @@ MvFilm::MvFilm(int width_, int height_, int margin_, MvEstimator est, bool cv, b
     map_total = pixels;
 }
 
-size_t MvFilm::bytes_per_pixel(MvEstimator estimator, bool adaptive) {
-    size_t b = 3 * sizeof(double) + 4 * sizeof(float) + 2 * sizeof(uint32_t) + sizeof(uint16_t);
+size_t Film::bytes_per_pixel(bool multiview, MvEstimator estimator, bool adaptive) {
+    size_t b = sizeof(uint32_t) + 3 * sizeof(double) + 3 * sizeof(float);
+    if (!multiview) return b;
+    b += sizeof(float) + 2 * sizeof(uint32_t) + sizeof(uint16_t);
     if (estimator == MvEstimator::Weighted) b += 7 * sizeof(double);
     if (adaptive) b += 3 * sizeof(float);
     return b;
 }
 
-void MvFilm::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
+void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
     const bool balance = estimator == MvEstimator::Balance, adaptive = !e_sum.empty();
-    const double k = double(passes); // earlier passes
     for (size_t p = begin; p < end; ++p) {
         const SplatEntry t = pass.take(offset + uint32_t(p));
+        const double k = double(count[p]); // earlier passes
         const double w_pass = double(t.w) / SplatScale;
         double v[3], e_mean = 0.0;
         if (balance) {
@@ -38,7 +45,7 @@ void MvFilm::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
             // E[sum W] = 1 exactly when D sums over every valid strategy, and beta, the mean of the
             // earlier passes' estimates, is independent of this pass, so the estimate stays
             // unbiased while the noise of how many contributions happened to land in the pixel cancels.
-            const bool cv = control_variate && passes > 0;
+            const bool cv = control_variate && k > 0.0;
             for (int c = 0; c < 3; ++c)
                 v[c] = double(t.lw[c]) / SplatScale + (cv ? sum[3 * p + c] / k * (1.0 - w_pass) : 0.0);
             e_mean = double(t.e[0]) / SplatScale;
@@ -52,17 +59,10 @@ void MvFilm::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
             }
             w[p] += w_pass;
         }
-        double v_mean = 0.0;
-        for (int c = 0; c < 3; ++c) {
-            // Welford: the deviation from the mean before and after this pass.
-            const double before = k > 0.0 ? sum[3 * p + c] / k : 0.0;
-            sum[3 * p + c] += v[c];
-            m2[3 * p + c] += float((v[c] - before) * (v[c] - sum[3 * p + c] / (k + 1.0)));
-            v_mean += v[c] / 3.0;
-        }
+        add(p, v);
         w_sum[p] += float(w_pass);
         if (adaptive) {
-            const double s = v_mean - e_mean;
+            const double s = (v[0] / 3.0 + v[1] / 3.0 + v[2] / 3.0) - e_mean;
             e_sum[p] += float(e_mean);
             e_sq[p] += float(e_mean * e_mean);
             s_sq[p] += float(s * s);
@@ -72,8 +72,8 @@ void MvFilm::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
     }
 }
 
-void MvFilm::develop(size_t p, float rgb[3], float variance[3]) const {
-    const double k = double(passes);
+void Film::develop(size_t p, float rgb[3], float variance[3]) const {
+    const double k = double(count[p]);
     for (int c = 0; c < 3; ++c) {
         double mean = k > 0.0 ? sum[3 * p + c] / k : 0.0;
         if (estimator == MvEstimator::Weighted && k > 0.0)
@@ -84,7 +84,7 @@ void MvFilm::develop(size_t p, float rgb[3], float variance[3]) const {
     }
 }
 
-void MvFilm::set_map(const std::vector<uint16_t> &crop) {
+void Film::set_map(const std::vector<uint16_t> &crop) {
     const size_t w = size_t(width + 2 * margin);
     for (size_t y = 0; y < size_t(height); ++y)
         std::copy_n(crop.begin() + long(y * size_t(width)), width, map.begin() + long((y + size_t(margin)) * w + size_t(margin)));
@@ -92,40 +92,53 @@ void MvFilm::set_map(const std::vector<uint16_t> &crop) {
     for (uint16_t v : crop) map_total += v;
 }
 
-void MvFilm::save(StateWriter &out) const {
+void Film::save(StateWriter &out) const {
+    out.put(int32_t(width)), out.put(int32_t(height)), out.put(nonfinite);
+    out.put(count), out.put(sum), out.put(m2);
+    if (!multiview()) return;
     out.put(uint32_t(estimator)), out.put(uint32_t(control_variate)), out.put(uint32_t(!e_sum.empty()));
-    out.put(int32_t(width)), out.put(int32_t(height)), out.put(int32_t(margin));
-    out.put(passes), out.put(level), out.put(nonfinite), out.put(map_total);
-    out.put(sum), out.put(m2), out.put(w_sum), out.put(lw), out.put(e), out.put(w);
+    out.put(int32_t(margin)), out.put(level), out.put(map_total);
+    out.put(w_sum), out.put(lw), out.put(e), out.put(w);
     out.put(e_sum), out.put(e_sq), out.put(s_sq), out.put(native), out.put(received), out.put(map);
 }
 
-void MvFilm::load(StateReader &in) {
+void Film::load(StateReader &in) {
     // The film was made for this render: the file's must have its kind and size.
+    const int32_t w_ = in.get<int32_t>(), h_ = in.get<int32_t>();
+    if (w_ != width || h_ != height)
+        throw StateError("the state has a view of " + std::to_string(w_) + "x" + std::to_string(h_) +
+                         " pixels where this render has " + std::to_string(width) + "x" + std::to_string(height));
+    nonfinite = in.get<uint64_t>();
+    const size_t n = pixels();
+    in.get(count, n), in.get(sum, 3 * n), in.get(m2, 3 * n);
+    if (!multiview()) return;
     const uint32_t est = in.get<uint32_t>(), cv = in.get<uint32_t>(), adaptive = in.get<uint32_t>();
-    const int32_t w_ = in.get<int32_t>(), h_ = in.get<int32_t>(), m_ = in.get<int32_t>();
+    const int32_t m_ = in.get<int32_t>();
     if (est != uint32_t(estimator) || cv != uint32_t(control_variate))
         throw StateError("the state was rendered with another multi-view estimator");
-    if (w_ != width || h_ != height || m_ != margin)
-        throw StateError("the state has a view of " + std::to_string(w_) + "x" + std::to_string(h_) + " pixels (margin " +
-                         std::to_string(m_) + ") where this render has " + std::to_string(width) + "x" +
-                         std::to_string(height) + " (margin " + std::to_string(margin) + ")");
-    passes = in.get<uint32_t>(), level = in.get<double>(), nonfinite = in.get<uint64_t>(), map_total = in.get<uint64_t>();
-    const size_t n = pixels();
-    in.get(sum, sum.size()), in.get(m2, m2.size()), in.get(w_sum, n), in.get(lw, lw.size()), in.get(e, e.size());
+    if (m_ != margin)
+        throw StateError("the state has a view whose filter reaches " + std::to_string(m_) + " pixels where this render's reaches " +
+                         std::to_string(margin));
+    level = in.get<double>(), map_total = in.get<uint64_t>();
+    in.get(w_sum, n), in.get(lw, lw.size()), in.get(e, e.size()), in.get(w, w.size());
     // The adaptive maps' statistics as the file has them (a range too short for maps has none).
     const size_t stats = adaptive ? n : 0;
-    in.get(w, w.size()), in.get(e_sum, stats), in.get(e_sq, stats), in.get(s_sq, stats);
+    in.get(e_sum, stats), in.get(e_sq, stats), in.get(s_sq, stats);
     in.get(native, n), in.get(received, n), in.get(map, map.size());
 }
 
-void MvFilm::merge(const MvFilm &o) {
-    const double na = passes, nb = o.passes, n = na + nb;
-    for (size_t i = 0; i < sum.size(); ++i) {
-        const double delta = (nb > 0.0 ? o.sum[i] / nb : 0.0) - (na > 0.0 ? sum[i] / na : 0.0);
-        m2[i] = float(double(m2[i]) + double(o.m2[i]) + (n > 0.0 ? delta * delta * na * nb / n : 0.0));
-        sum[i] += o.sum[i];
+void Film::merge(const Film &o) {
+    for (size_t p = 0; p < pixels(); ++p) {
+        const double na = count[p], nb = o.count[p], n = na + nb;
+        for (size_t i = 3 * p; i < 3 * p + 3; ++i) {
+            const double delta = (nb > 0.0 ? o.sum[i] / nb : 0.0) - (na > 0.0 ? sum[i] / na : 0.0);
+            m2[i] = float(double(m2[i]) + double(o.m2[i]) + (n > 0.0 ? delta * delta * na * nb / n : 0.0));
+            sum[i] += o.sum[i];
+        }
+        count[p] += o.count[p];
     }
+    nonfinite += o.nonfinite;
+    if (!multiview()) return;
     for (size_t i = 0; i < lw.size(); ++i) lw[i] += o.lw[i], e[i] += o.e[i];
     for (size_t p = 0; p < pixels(); ++p) {
         w_sum[p] += o.w_sum[p];
@@ -138,8 +151,6 @@ void MvFilm::merge(const MvFilm &o) {
         for (size_t p = 0; p < e_sum.size(); ++p) e_sum[p] += o.e_sum[p], e_sq[p] += o.e_sq[p], s_sq[p] += o.s_sq[p];
     else
         e_sum.clear(), e_sq.clear(), s_sq.clear();
-    passes += o.passes;
-    nonfinite += o.nonfinite;
 }
 
 } // namespace mvpt

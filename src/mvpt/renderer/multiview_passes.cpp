@@ -1,0 +1,387 @@
+// Multi-view path tracing's passes (docs/multiview-path-tracing.md): native samples of every
+// view, shared through mv_native_sample, splatted through per-thread caches into the pass's
+// fixed-point sums, which are folded into the accumulators once per pass; adaptive
+// native-sample maps between passes (§8).
+#include "pass_schedule.h"
+#include "renderer.h"
+
+#include "../integrators/mv_adaptive.h"
+#include "../integrators/mv_sample.h"
+#include "../integrators/mvpath.h"
+#include "../integrators/volpath.h"
+#include "../render/camera.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+#include <tuple>
+
+namespace mvpt {
+
+namespace {
+/// Per-thread state of the pass loop.
+struct MvThreadState {
+    SplatCache cache;
+    std::vector<MvViewStats> stats;
+    std::vector<uint64_t> dropped;
+    MvScratch scratch;
+    MvPrimaries primaries;
+    MvPendingSamples pending;
+    RayCounters counters;
+    SampleKey first_dropped = NoSample; ///< the first native sample with a contribution dropped
+    explicit MvThreadState(MvPassFilm &film) : cache(film), stats(film.views()), dropped(film.views(), 0) {}
+};
+
+/// The path tracers and method settings for a multi-view render of `scene`.
+struct MultiviewSettings {
+    const PathIntegrator *path = nullptr;
+    const VolPathIntegrator *volpath = nullptr; ///< set when the scene's media are rendered (§10)
+    MvConfig cfg;
+};
+
+MultiviewSettings multiview_settings(const Scene &scene) {
+    if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()))
+        return {&mv->path(), nullptr, mv->config()};
+    if (auto *pt = dynamic_cast<const PathIntegrator *>(&scene.integrator())) return {pt, nullptr, MvConfig{}};
+    if (auto *vp = dynamic_cast<const VolPathIntegrator *>(&scene.integrator())) // without media: the path tracer
+        return {&vp->surfaces(), scene.has_media() ? vp : nullptr, MvConfig{}};
+    throw std::runtime_error("multi-view path tracing needs a 'path' or 'mvpath' integrator, the scene has '" +
+                             scene.integrator().name() + "'");
+}
+} // namespace
+
+/// Multi-view path tracing's part in the pass loop (pass_schedule.h): one pass per step over
+/// every view's tiles, its splats folded into the accumulators between passes, then the next
+/// pass's native-sample maps.
+class Renderer::MultiviewPasses final : public PassSchedule {
+public:
+    /// Prepares the method and `r`'s accumulators, and reads the state a render resumes from.
+    MultiviewPasses(Renderer &r, tbb::task_arena &arena);
+    bool done(int pass) const override;
+    int step_end(int pass, double fit, double) override { return fit >= 1.0 ? pass + 1 : pass; }
+    StepTiles begin_step(int pass, int end) override;
+    uint64_t render(size_t t) override { return render_tile(m_state.local(), m_tiles[t]); }
+    /// Every view takes part in every pass: an unfinished pass cannot enter the estimates.
+    bool can_abandon(double, double) const override { return true; }
+    uint64_t kept(const ChunksDone &done) const override { return done.finished ? m_pass_samples : 0; }
+    void abandon() override {
+        for (MvThreadState &ts : m_state) ts.cache.discard();
+    }
+    void end_step() override;
+    double fraction(uint64_t samples) const override;
+    double fraction_after(int pass) const override;
+    void save(int next_pass, double elapsed, double last_pass) override;
+    /// After the loop: the statistics into the render's, the images developed.
+    void finish();
+
+private:
+    uint64_t render_tile(MvThreadState &ts, const Tile &tile);
+    /// The statistics of the threads, summed by slot (the ray counters with the runs' before);
+    /// the first native sample with a dropped contribution goes to the render's statistics.
+    RayCounters thread_sums(std::vector<MvViewStats> &stats, std::vector<uint64_t> &dropped);
+
+    Renderer &m_r;
+    MvConfig m_cfg;
+    std::vector<SplatFootprint> m_footprints;
+    bool m_adaptive = false;
+    // Target: spp native samples per pixel on average, the same for every view (all views take
+    // part in every pass, n >= 1, since each view's D needs its own strategy). Passes take one
+    // native sample per pixel until the adaptive maps start, then `adaptive_budget` per pixel.
+    // A range renders its passes; its pixels' native samples are numbered from first_pass times
+    // the most a pixel takes in a pass, its margins' from first_pass (one per pass).
+    int m_spp_target = 0;
+    bool m_range = false, m_unbounded = false;
+    uint32_t m_sample0 = 0, m_margin0 = 0;
+    uint64_t m_pixels_total = 0;
+    std::vector<Tile> m_tiles;
+    std::unique_ptr<MvPassFilm> m_pass_film;
+    tbb::enumerable_thread_specific<MvThreadState> m_state;
+    // The current pass and its native samples (of the crop windows).
+    int m_pass = 0;
+    uint64_t m_pass_samples = 0;
+};
+
+Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
+    : PassSchedule(arena), m_r(r), m_footprints(r.prepare_multiview_render(m_cfg)),
+      m_state([this] { return MvThreadState(*m_pass_film); }) {
+    const RenderOptions &o = r.m_opts;
+    m_adaptive = r.adaptive_maps(m_cfg);
+    if (!o.resume_path.empty()) r.read_state(o.resume_path);
+    m_spp_target = r.spp_target();
+    m_range = o.pass_count > 0;
+    m_unbounded = m_range || (o.time_budget > 0.0 && o.spp == 0);
+    const uint64_t per_pass = m_adaptive ? uint64_t(m_cfg.adaptive_max) : 1;
+    if ((uint64_t(o.first_pass) + uint64_t(o.pass_count)) * per_pass > UINT32_MAX)
+        throw std::invalid_argument("the pass range numbers samples beyond 2^32");
+    m_sample0 = uint32_t(uint64_t(o.first_pass) * per_pass), m_margin0 = uint32_t(o.first_pass);
+    for (const Film &mf : r.m_films) m_pixels_total += mf.pixels();
+    m_tiles = r.multiview_tiles();
+    m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted);
+}
+
+bool Renderer::MultiviewPasses::done(int pass) const {
+    if (m_range) return pass >= m_r.m_opts.pass_count;
+    return !m_unbounded && !(m_r.m_native_done < double(m_spp_target) - 1e-6);
+}
+
+StepTiles Renderer::MultiviewPasses::begin_step(int pass, int) {
+    m_pass = pass;
+    m_pass_samples = 0;
+    for (const Film &mf : m_r.m_films) m_pass_samples += mf.map_total;
+    return {m_tiles.size(), double(m_pass_samples)};
+}
+
+uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &tile) {
+    const MvContext &mv = m_r.m_mv;
+    MvSplatSink sink{ts.cache, ts.dropped.data(), &ts.first_dropped};
+    const SampleWindow &w = mv.windows[tile.view_slot];
+    const Film &mf = m_r.m_films[tile.view_slot];
+    MvPrimaries &prim = ts.primaries;
+    prim.clear();
+    for (int y = tile.y0; y < tile.y1; ++y)
+        for (int x = tile.x0; x < tile.x1; ++x) {
+            // Inside the crop window: the pixel's next native samples; in the margin: one
+            // sample per pass.
+            const int cx = x - w.margin, cy = y - w.margin;
+            const bool inside = cx >= 0 && cy >= 0 && cx < mf.width && cy < mf.height;
+            const uint32_t first = inside ? m_sample0 + mf.native[size_t(cy) * size_t(mf.width) + size_t(cx)]
+                                          : m_margin0 + uint32_t(m_pass);
+            const uint16_t n = mf.map[size_t(y) * size_t(w.width()) + size_t(x)];
+            for (uint32_t j = 0; j < n; ++j) prim.push(x + w.x0, y + w.y0, first + j);
+        }
+    // The tile's camera rays as one stream, then each native sample.
+    mv_trace_primaries(mv, tile.view_slot, prim);
+    for (size_t i = 0; i < prim.size(); ++i)
+        mv_native_sample(mv, tile.view_slot, prim, i, ts.scratch, ts.pending, sink, ts.counters, ts.stats.data());
+    // The tile's suffixes as one wavefront of the path tracer.
+    mv_finish_samples(mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
+    return prim.size();
+}
+
+void Renderer::MultiviewPasses::end_step() {
+    using clock = std::chrono::steady_clock;
+    const auto t0 = clock::now();
+    arena().execute([&] {
+        // What the caches still hold goes to the pass sums (exact integer sums).
+        tbb::parallel_for(m_state.range(1), [](auto &r) {
+            for (MvThreadState &ts : r) ts.cache.flush();
+        });
+        m_r.fold_pass(*m_pass_film);
+    });
+    m_r.m_native_done += double(m_pass_samples) / double(m_pixels_total);
+    // Native-sample maps of the next pass (§8), frozen during it. Their statistics change by
+    // about 1/passes per pass, so after 16 passes a map serves passes/8 passes (a map costs
+    // about as much as folding a pass), except that the last pass's map spends only what is
+    // left of the sample target. The schedule depends on the pass index alone.
+    const int done = m_pass + 1;
+    if (m_adaptive && done >= std::max(2, m_cfg.adaptive_warmup)) {
+        const double left = double(m_spp_target) - m_r.m_native_done;
+        double per_pixel = m_cfg.adaptive_budget;
+        const bool last = !m_unbounded && left < 2.0 * per_pixel;
+        if (!m_unbounded) per_pixel = std::min(per_pixel, left);
+        if (done <= 16 || done % (done / 8) == 0 || last)
+            arena().execute([&] { m_r.update_native_maps(done, std::max(per_pixel, 1.0)); });
+    }
+    m_r.m_stats.between_passes_seconds += std::chrono::duration<double>(clock::now() - t0).count();
+}
+
+double Renderer::MultiviewPasses::fraction(uint64_t samples) const {
+    if (m_range) return (m_pass + double(samples) / double(m_pass_samples)) / m_r.m_opts.pass_count;
+    if (m_unbounded) return 0.0;
+    return std::min(1.0, (m_r.m_native_done + double(samples) / double(m_pixels_total)) / m_spp_target);
+}
+
+double Renderer::MultiviewPasses::fraction_after(int pass) const {
+    if (m_range) return double(pass + 1) / m_r.m_opts.pass_count;
+    return m_unbounded ? 0.0 : std::min(1.0, m_r.m_native_done / double(m_spp_target));
+}
+
+RayCounters Renderer::MultiviewPasses::thread_sums(std::vector<MvViewStats> &stats, std::vector<uint64_t> &dropped) {
+    RenderStats &st = m_r.m_stats;
+    RayCounters counters = st.counters;
+    const size_t views = m_r.m_views.size();
+    stats.assign(views, MvViewStats{});
+    dropped.assign(views, 0);
+    SampleKey first{st.nonfinite_sample, st.nonfinite_view, st.nonfinite_y, st.nonfinite_x};
+    for (MvThreadState &ts : m_state) {
+        keep_first(first, ts.first_dropped);
+        counters += ts.counters;
+        for (size_t s = 0; s < views; ++s) stats[s] += ts.stats[s], dropped[s] += ts.dropped[s];
+    }
+    st.nonfinite_sample = first[0], st.nonfinite_view = first[1], st.nonfinite_y = first[2], st.nonfinite_x = first[3];
+    return counters;
+}
+
+void Renderer::MultiviewPasses::save(int next_pass, double elapsed, double last_pass) {
+    std::vector<MvViewStats> stats;
+    std::vector<uint64_t> dropped;
+    RayCounters counters = thread_sums(stats, dropped);
+    for (uint64_t d : dropped) counters.nonfinite += d;
+    m_r.write_state(next_pass, elapsed, last_pass, counters, stats, dropped);
+}
+
+void Renderer::MultiviewPasses::finish() {
+    std::vector<MvViewStats> per_view;
+    std::vector<uint64_t> dropped;
+    m_r.m_stats.counters = thread_sums(per_view, dropped);
+    for (size_t s = 0; s < m_r.m_views.size(); ++s) {
+        Film &mf = m_r.m_films[s];
+        per_view[s] += m_r.m_mv_stats_before[s];
+        mf.nonfinite += dropped[s];
+        m_r.m_stats.counters.nonfinite += dropped[s];
+        // Contributions received: those in the film plus those dropped as not finite (counted
+        // from the films rather than per splat).
+        per_view[s].received += mf.nonfinite;
+        for (uint32_t c : mf.received) per_view[s].received += c;
+    }
+    m_state.clear(); // the threads' caches
+    m_pass_film.reset();
+    arena().execute([&] { m_r.develop(); });
+    for (size_t s = 0; s < m_r.m_views.size(); ++s) {
+        m_r.m_results[s].mv = per_view[s];
+        m_r.m_stats.mv += per_view[s];
+    }
+}
+
+void Renderer::render_multiview(tbb::task_arena &arena, const std::atomic<bool> &cancel, const ProgressFn &progress) {
+    MultiviewPasses schedule(*this, arena);
+    run_passes(schedule, cancel, progress);
+    schedule.finish();
+}
+
+bool Renderer::adaptive_maps(const MvConfig &cfg) const {
+    // The adaptive maps' statistics are kept only if a map will be made (after the warm-up).
+    const int warmup = std::max(2, cfg.adaptive_warmup);
+    if (m_opts.pass_count > 0) return cfg.adaptive && m_opts.pass_count > warmup;
+    return cfg.adaptive && (m_opts.time_budget > 0.0 || spp_target() > warmup);
+}
+
+std::vector<SplatFootprint> Renderer::prepare_multiview_render(MvConfig &cfg) {
+    const MultiviewSettings settings = multiview_settings(m_scene);
+    cfg = settings.cfg;
+    m_stats.method = "mvpt";
+    m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
+                                                              : (cfg.mis_selected_only ? "weighted-selected" : "weighted");
+    m_mv_stats_before.assign(m_views.size(), MvViewStats{});
+    return prepare_multiview(settings.path, settings.volpath, cfg, adaptive_maps(cfg));
+}
+
+std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *path, const VolPathIntegrator *volpath,
+                                                        const MvConfig &cfg, bool adaptive) {
+    const auto &cams = m_scene.cameras();
+    // The method's context: views by slot, their seeds, the maps of the current pass.
+    m_mv = MvContext{};
+    m_mv.scene = &m_scene;
+    m_mv.path = path;
+    m_mv.volpath = volpath;
+    m_mv.cfg = cfg;
+    // Moving shapes or lights: a shared sample keeps its time (§3 test 1).
+    m_mv.scene_moves = m_scene.is_animated();
+    for (const auto &light : m_scene.lights()) m_mv.scene_moves |= light->moves();
+    m_films.clear();
+    for (int v : m_views) {
+        const Camera &cam = *cams[v];
+        m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
+        m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
+        if (!cam.film.filter->is_box() && cam.film.filter->radius() > float(SplatFootprint::MaxRadius))
+            throw std::runtime_error("view '" + cam.id + "': multi-view path tracing splats with filters of radius up to " +
+                                     std::to_string(SplatFootprint::MaxRadius) + " pixels");
+    }
+    m_mv.prepare(); // the sample windows: crop windows grown by the filters' reach
+    // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
+    const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
+    std::vector<SplatFootprint> footprints;
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        const FilmDesc &f = m_mv.views[slot].camera->film;
+        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
+                                                Sampler::dimension_key(DimSplatBase + m_mv.views[slot].scene_index)));
+        m_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
+        m_mv.native_map.push_back(m_films.back().map.data());
+    }
+    m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
+    m_mv.rig.reset();
+    // (Through media every camera segment is walked for its transmittance: no cells.)
+    if (m_mv.static_shift && m_scene.occluder_bvh() && m_mv.views.size() >= 2 && !volpath) {
+        // Lens points of every view: the corners of the square around each lens disk.
+        std::vector<Point3f> lens;
+        for (const MvView &v : m_mv.views)
+            for (Vec2f xi : {Vec2f(-1.f, -1.f), Vec2f(1.f, -1.f), Vec2f(-1.f, 1.f), Vec2f(1.f, 1.f)})
+                lens.push_back(v.camera->lens_point(v.t0, xi));
+        if (cfg.rig_cells > 0)
+            m_mv.rig = std::make_shared<RigVisibility>(*m_scene.occluder_bvh(), lens, m_mv.across, cfg.rig_cells);
+    }
+
+    return footprints;
+}
+
+std::vector<Renderer::Tile> Renderer::multiview_tiles() const {
+    // Tiles by image region, then view: consecutive tiles render the same region of every
+    // view, whose native samples splat into overlapping neighbourhoods of the other views, so
+    // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
+    // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
+    // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
+    // (Tiles cover the sample windows, in window coordinates.)
+    std::vector<Tile> tiles;
+    for (size_t slot = 0; slot < m_views.size(); ++slot) {
+        constexpr int TileSize = 16;
+        const SampleWindow &w = m_mv.windows[slot];
+        for (int y = 0; y < w.height(); y += TileSize)
+            for (int x = 0; x < w.width(); x += TileSize)
+                tiles.push_back({int(slot), x, y, std::min(x + TileSize, w.width()), std::min(y + TileSize, w.height())});
+    }
+    std::stable_sort(tiles.begin(), tiles.end(),
+                     [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
+    return tiles;
+}
+
+void Renderer::fold_pass(MvPassFilm &pass_film) {
+    // Each pixel's pass estimate into the accumulators, in blocks of pixels of one view.
+    constexpr size_t Block = 4096;
+    std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
+    for (size_t slot = 0; slot < m_views.size(); ++slot)
+        for (size_t p = 0; p < m_films[slot].pixels(); p += Block) blocks.emplace_back(slot, p);
+    tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
+        const auto [slot, begin] = blocks[b];
+        Film &mf = m_films[slot];
+        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block));
+    });
+}
+
+void Renderer::update_native_maps(int passes, double per_pixel) {
+    // Views in groups of about 2^22 pixels, the views of a group in parallel and each view's
+    // map in parallel over its pixels: the temporary arrays of the maps stay within a fixed
+    // size however many threads run.
+    constexpr size_t GroupPixels = size_t(1) << 22;
+    for (size_t first = 0; first < m_views.size();) {
+        size_t last = first, group = 0;
+        while (last < m_views.size() && (last == first || group + m_films[last].pixels() <= GroupPixels))
+            group += m_films[last++].pixels();
+        tbb::parallel_for(first, last, [&](size_t slot) {
+            const FilmDesc &f = m_mv.views[slot].camera->film;
+            Film &mf = m_films[slot];
+            AdaptiveInput in;
+            in.width = f.crop_width;
+            in.height = f.crop_height;
+            in.passes = passes;
+            in.v_sum = mf.sum.data();
+            in.e_sum = mf.e_sum.data();
+            in.e_sq = mf.e_sq.data();
+            in.s_sq = mf.s_sq.data();
+            in.native = mf.native.data();
+            in.received = mf.received.data();
+            in.previous_level = mf.level;
+            in.eps = m_mv.cfg.adaptive_eps;
+            std::vector<uint16_t> map;
+            mf.level = adapt_native_map(in, m_mv.cfg.adaptive_max, per_pixel * double(mf.pixels()), map);
+            mf.set_map(map);
+        });
+        first = last;
+    }
+}
+
+} // namespace mvpt

@@ -1,0 +1,59 @@
+// A rendering method's part in the pass loop that every method shares (Renderer::run_passes,
+// pass_loop.cpp): which passes a step renders, its tiles, and what happens between steps. The
+// loop answers cancellation, the time budget, progress and checkpoints the same way for all.
+#pragma once
+
+#include "chunks.h"
+
+#include <tbb/task_arena.h>
+
+#include <cstddef>
+#include <cstdint>
+
+namespace mvpt {
+
+/// The tiles of a step and about how many samples they hold (what sizes its chunks).
+struct StepTiles {
+    size_t tiles = 0;
+    double samples = 0.0;
+};
+
+class PassSchedule {
+public:
+    explicit PassSchedule(tbb::task_arena &arena) : m_arena(arena) {}
+    virtual ~PassSchedule() = default;
+    PassSchedule(const PassSchedule &) = delete;
+    PassSchedule &operator=(const PassSchedule &) = delete;
+
+    tbb::task_arena &arena() const { return m_arena; }
+    /// Whether the sample target is reached before `pass`.
+    virtual bool done(int pass) const = 0;
+    /// The end of the step that starts at `pass` (it renders passes [pass, end)), given how
+    /// many passes still fit in the time budget (`fit`: infinite without a budget, below 1 or
+    /// not a number when none fits) and the seconds of the last pass; `pass` ends the render.
+    virtual int step_end(int pass, double fit, double last_pass) = 0;
+    /// Starts step [pass, end): its tiles.
+    virtual StepTiles begin_step(int pass, int end) = 0;
+    /// Renders tile `t` of the step; returns its samples.
+    virtual uint64_t render(size_t t) = 0;
+    /// Whether a stop request (Ctrl-C, the end of the time budget) may abandon the step's
+    /// tiles not begun, `in_step` seconds into the step.
+    virtual bool can_abandon(double last_pass, double in_step) const = 0;
+    /// The step's samples that the images keep (`done`: what its tiles rendered).
+    virtual uint64_t kept(const ChunksDone &done) const = 0;
+    /// After a step abandoned, and after a step finished (the work between passes).
+    virtual void abandon() {}
+    virtual void end_step() {}
+    /// The share of the sample target reached after `samples` of the step's samples, and
+    /// after pass `pass`.
+    virtual double fraction(uint64_t samples) const = 0;
+    virtual double fraction_after(int pass) const = 0;
+    /// Writes the state file at a pass boundary: the next pass, the seconds elapsed, the last
+    /// pass's seconds.
+    virtual void save(int next_pass, double elapsed, double last_pass) = 0;
+
+private:
+    tbb::task_arena &m_arena;
+};
+
+} // namespace mvpt
