@@ -6,6 +6,7 @@
 //
 //   python bench/profile_paths.py cbox-rgb --res 64 --write-xml /tmp/cbox.xml   # prints BASE
 //   build/prof/mvpt_embree_rays /tmp/cbox.xml BASE 4                           # 4 spp of camera rays
+#include "mvpt/loader/load_scene.h"
 #include "mvpt/renderer/renderer.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/render/bsdf.h"

@@ -4,6 +4,7 @@
 //   valgrind --tool=callgrind build/prof/mvpt_profile /tmp/cbox.xml BASE_DIR 64
 //
 // Prints the camera path count and an FNV-1a hash of the float image (bit-identity checks).
+#include "mvpt/loader/load_scene.h"
 #include "mvpt/renderer/renderer.h"
 
 #include <chrono>

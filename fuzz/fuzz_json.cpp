@@ -1,5 +1,5 @@
 // The JSON reader of camera-path key files on arbitrary text.
-#include "mvpt/scene/json.h"
+#include "mvpt/loader/json.h"
 
 #include <cstdint>
 #include <string>

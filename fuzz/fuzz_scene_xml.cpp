@@ -1,6 +1,6 @@
 // The scene loader on arbitrary XML: substitutions, includes, every plugin's parameters.
 // Bad input must end in a SceneError (or another exception), never a crash or a hang.
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <cstdint>
 #include <string>

@@ -4,7 +4,7 @@
 #include "mvpt/io/multiview_exr.h"
 #include "mvpt/renderer/render_state.h"
 #include "mvpt/renderer/renderer.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>

@@ -3,7 +3,7 @@
 
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/accel/scene.h"
 
 #include <gtest/gtest.h>
 

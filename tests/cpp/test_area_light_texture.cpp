@@ -3,7 +3,7 @@
 // its own coordinates, on a rectangle whose uv is ((x+1)/2, (y+1)/2) locally.
 #include "mvpt/render/texture.h"
 #include "mvpt/core/plugin.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

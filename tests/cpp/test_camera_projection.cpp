@@ -7,7 +7,7 @@
 #include "mvpt/integrators/mv_candidates.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/render/camera_projection.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include "mvpt/render/lights/area.h"
 #include "mvpt/render/shape.h"
 #include "mvpt/render/shapes/sphere.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

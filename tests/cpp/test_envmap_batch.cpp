@@ -9,7 +9,7 @@
 #include "mvpt/integrators/path.h"
 #include "mvpt/io/image_io.h"
 #include "mvpt/render/light.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -6,8 +6,8 @@
 #include "mvpt/integrators/mv_candidates.h"
 #include "mvpt/integrators/mv_sample.h"
 #include "mvpt/render/interaction.h"
-#include "mvpt/scene/scene.h"
-#include "mvpt/scene/segment_cull.h"
+#include "mvpt/loader/load_scene.h"
+#include "mvpt/accel/segment_cull.h"
 
 #include <gtest/gtest.h>
 

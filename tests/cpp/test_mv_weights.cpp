@@ -8,7 +8,7 @@
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/mv_sample.h"
 #include "mvpt/render/interaction.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The XML front end reports errors at the right file:line:col (the '<' of an element, or
 // the name of the offending attribute) without needing the Python layer.
 #include "mvpt/core/suggest.h"
-#include "mvpt/scene/xml_parser.h"
+#include "mvpt/loader/xml_parser.h"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 #include "mvpt/core/simd_x86.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include "mvpt/integrators/path.h"
 #include "mvpt/render/bsdf.h"
 #include "mvpt/render/bsdfs/bsdf_form.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

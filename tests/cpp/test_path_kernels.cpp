@@ -7,7 +7,7 @@
 #include "mvpt/integrators/path.h"
 #include "mvpt/integrators/path_kernels.h"
 #include "mvpt/render/camera.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

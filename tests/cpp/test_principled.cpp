@@ -2,7 +2,7 @@
 // (same random numbers give the same lobe, direction, pdf and weight), the
 // roughness() heuristic, and parameter errors.
 #include "mvpt/render/bsdf.h"
-#include "mvpt/scene/xml_parser.h"
+#include "mvpt/loader/xml_parser.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
-// pack_ray16 (scene/ray_packet.cpp): 16-wide Embree packets from consecutive rays, by the
+// pack_ray16 (accel/ray_packet.cpp): 16-wide Embree packets from consecutive rays, by the
 // AVX-512 gathers and by the lane loop, against the rays and embree_can_trace.
-#include "mvpt/scene/ray_packet.h"
+#include "mvpt/accel/ray_packet.h"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-// Cells that see a static camera rig (scene/rig_visibility.*): a cell is declared unblocked
+// Cells that see a static camera rig (accel/rig_visibility.*): a cell is declared unblocked
 // only if Embree finds every segment from a vertex in it to any lens point of the rig (on the
 // vertex's camera side) unblocked, and the cache answers the way a fresh evaluation does.
 #include "mvpt/render/interaction.h"
-#include "mvpt/scene/rig_visibility.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/accel/rig_visibility.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

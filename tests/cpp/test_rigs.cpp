@@ -1,9 +1,9 @@
-// Camera rigs and shots (scene/rig.h, scene/camera_path.h): the poses and frusta of every
+// Camera rigs and shots (loader/rig.h, loader/camera_path.h): the poses and frusta of every
 // rig type, the shared focal plane of off-axis grids, per-frame shutters of path rigs, the
 // --rig option, and one clear error for each kind of bad input.
 #include "mvpt/render/camera.h"
-#include "mvpt/scene/camera_path.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/camera_path.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,10 @@
-// Culling of visibility-segment bundles (scene/segment_cull.*): a bundle is declared free of
+// Culling of visibility-segment bundles (accel/segment_cull.*): a bundle is declared free of
 // occluders only if Embree finds every one of its segments unblocked, the pyramid holds
 // its segments, and the culling actually fires on the bundles multi-view sampling makes.
 #include "mvpt/core/warp.h"
 #include "mvpt/render/interaction.h"
-#include "mvpt/scene/scene.h"
-#include "mvpt/scene/segment_cull.h"
+#include "mvpt/loader/load_scene.h"
+#include "mvpt/accel/segment_cull.h"
 
 #include <gtest/gtest.h>
 

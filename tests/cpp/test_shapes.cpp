@@ -2,7 +2,7 @@
 // robustness for large/far spheres, instance transforms, and the sphere's
 // visible-cone sampling (chi^2 and analytic irradiance); meshes' flat-normal test.
 #include "mvpt/render/shapes/instance.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -5,7 +5,7 @@
 #include "mvpt/core/sampler.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/render/shapes/analytic.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <embree3/rtcore_ray.h>
 #include <gtest/gtest.h>

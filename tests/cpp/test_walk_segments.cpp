@@ -4,7 +4,7 @@
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/transmittance.h"
 #include "mvpt/render/camera.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[2] / "src"
 # Lowest first: a file may include its own folder and the folders before it.
-LAYERS = ["core", "io", "render", "scene", "integrators", "renderer"]
+LAYERS = ["core", "io", "render", "accel", "loader", "integrators", "renderer"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
 

@@ -186,7 +186,7 @@ def _with_rig_cells(name: str, cells: int):
 
 @pytest.mark.parametrize("name", ["cornell_phong9", "thin_lens_row"])
 def test_rig_visibility_cells_change_no_pixel(name):
-    """Cells proven to see the whole rig (scene/rig_visibility.h) skip only visibility rays
+    """Cells proven to see the whole rig (accel/rig_visibility.h) skip only visibility rays
     that Embree finds unblocked: the images equal those traced ray by ray, bit for bit, for
     one and two threads. (Declaring every cell unblocked fails this test on both scenes.)"""
     a = mvpt.render(_with_rig_cells(name, 0), spp=4, seed=9, threads=2, method="mvpt")

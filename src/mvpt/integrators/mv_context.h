@@ -9,7 +9,7 @@
 #include "mvpath.h"
 
 #include "../render/camera_projection.h"
-#include "../scene/rig_visibility.h"
+#include "../accel/rig_visibility.h"
 
 #include <cstdint>
 #include <memory>

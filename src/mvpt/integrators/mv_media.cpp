@@ -4,7 +4,7 @@
 
 #include "../render/camera.h"
 #include "../render/shape.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <algorithm>
 

@@ -10,7 +10,7 @@
 #include "../render/light.h"
 #include "../render/medium.h"
 #include "../render/shape.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <algorithm>
 

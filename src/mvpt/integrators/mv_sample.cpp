@@ -10,7 +10,7 @@
 #include "../render/bsdf.h"
 #include "../render/light.h"
 #include "../render/shape.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <algorithm>
 #include <climits>

@@ -5,7 +5,7 @@
 #include "volpath.h"
 
 #include "../core/simd.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <algorithm>
 

@@ -3,7 +3,8 @@
 // mv_shift.* (prefix shift and validity tests, §3–§4), mv_selection.* (which views
 // share, §6), mv_context.* (what a pass's samples share), mv_sample.* (one native sample:
 // densities §5, shared shading §7), mv_splat.* (its contributions splatted),
-// mv_adaptive.* (native-sample maps, §8) and multiview_passes.cpp (passes, films).
+// mv_estimator.h (a pixel's estimate in a pass, §5), mv_adaptive.* (native-sample maps, §8);
+// renderer/multiview_passes.cpp runs the passes, renderer/film.* accumulates them.
 #pragma once
 
 #include "path.h"
@@ -28,18 +29,18 @@ enum class MvTotalVariation {
 struct MvConfig {
     MvEstimator estimator = MvEstimator::Balance;
     /// Balance estimator: add the control variate beta (1 - sum W) per pixel and pass (see
-    /// multiview_passes.cpp); unbiased, removes the noise of the number of contributions.
+    /// mv_estimator.h); unbiased, removes the noise of the number of contributions.
     bool control_variate = true;
     /// Sum D_k only over the views selected for the sample (the published code; biased).
     bool mis_selected_only = false;
     /// Selection terms of §6 (each 1 when off). s_J is off by default except with
     /// mis_set=selected (the published method): with D_k summed over every valid view the
     /// balance weights already bound each contribution by L_k / n_k, and a selection draw only
-    /// discards shares whose visibility was traced anyway (README, "Multi-view path tracing":
+    /// discards shares whose visibility was traced anyway (docs/multiview-path-tracing.md §6:
     /// 6 % lower error per native sample on the glossy Cornell box, 4 % on the light field).
     bool select_jacobian = false;
     /// Off by default: it costs two BSDF densities per pair of views (O(V^2) per sample) and
-    /// on our scenes it lowered efficiency (README, "Multi-view path tracing": on the 5x5
+    /// on our scenes it lowered efficiency (docs/multiview-path-tracing.md §6: on the 5x5
     /// light field 3.4x, on the glossy Cornell box 1.5x, with equal or higher error).
     bool select_material = false;
     MvTotalVariation tv = MvTotalVariation::PeakRatio;
@@ -55,7 +56,7 @@ struct MvConfig {
     /// by default the eps of the relMSE that `mvpt compare` and the benchmarks report, so
     /// that pixels darker than ~0.1 count by absolute error there as well.
     float adaptive_eps = 0.01f;
-    /// Visibility cells (scene/rig_visibility.h) along the scene's longest side; 0 turns them
+    /// Visibility cells (accel/rig_visibility.h) along the scene's longest side; 0 turns them
     /// off. Static scenes and cameras only.
     int rig_cells = 128;
 };

@@ -5,7 +5,7 @@
 #include "../render/light.h"
 #include "../render/shape.h"
 #include "../core/plugin.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <climits>
 

@@ -19,7 +19,7 @@
 #include "../render/lights/area.h"
 #include "../render/shape.h"
 #include "../render/texture.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <array>
 #include <climits>

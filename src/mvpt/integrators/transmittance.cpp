@@ -3,7 +3,7 @@
 #include "../render/bsdf.h"
 #include "../render/medium.h"
 #include "../render/shape.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 namespace mvpt {
 

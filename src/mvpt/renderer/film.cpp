@@ -1,4 +1,7 @@
+// The film of a view (film.h): estimates added and folded, developed, saved, loaded and merged.
 #include "film.h"
+
+#include "../integrators/mv_estimator.h"
 
 #include "render_state.h"
 
@@ -34,37 +37,25 @@ size_t Film::bytes_per_pixel(bool multiview, MvEstimator estimator, bool adaptiv
 }
 
 void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
-    const bool balance = estimator == MvEstimator::Balance, adaptive = !e_sum.empty();
+    const bool weighted = estimator == MvEstimator::Weighted, adaptive = !e_sum.empty();
     for (size_t p = begin; p < end; ++p) {
-        const SplatEntry t = pass.take(offset + uint32_t(p));
         const double k = double(count[p]); // earlier passes
-        const double w_pass = double(t.w) / SplatScale;
-        double v[3], e_mean = 0.0;
-        if (balance) {
-            // The balance estimate of this pass, W*L + E, plus the control variate beta (1 - sum W):
-            // E[sum W] = 1 exactly when D sums over every valid strategy, and beta, the mean of the
-            // earlier passes' estimates, is independent of this pass, so the estimate stays
-            // unbiased while the noise of how many contributions happened to land in the pixel cancels.
-            const bool cv = control_variate && k > 0.0;
-            for (int c = 0; c < 3; ++c)
-                v[c] = double(t.lw[c]) / SplatScale + (cv ? sum[3 * p + c] / k * (1.0 - w_pass) : 0.0);
-            e_mean = double(t.e[0]) / SplatScale;
-        } else {
-            for (int c = 0; c < 3; ++c) {
-                const double e_c = double(t.e[c]) / SplatScale;
-                v[c] = double(t.lw[c]) / SplatScale;
-                lw[3 * p + c] += double(t.lw[c] - t.e[c]) / SplatScale;
-                e[3 * p + c] += e_c;
-                e_mean += e_c / 3.0;
-            }
-            w[p] += w_pass;
+        double beta[3];
+        const bool cv = !weighted && control_variate && k > 0.0;
+        if (cv)
+            for (int c = 0; c < 3; ++c) beta[c] = sum[3 * p + c] / k;
+        const SplatEntry t = pass.take(offset + uint32_t(p));
+        const MvPassEstimate est = mv_pass_estimate(t, estimator, cv ? beta : nullptr);
+        if (weighted) {
+            for (int c = 0; c < 3; ++c) lw[3 * p + c] += est.lw[c], e[3 * p + c] += est.e[c];
+            w[p] += est.w;
         }
-        add(p, v);
-        w_sum[p] += float(w_pass);
+        add(p, est.v);
+        w_sum[p] += float(est.w);
         if (adaptive) {
-            const double s = (v[0] / 3.0 + v[1] / 3.0 + v[2] / 3.0) - e_mean;
-            e_sum[p] += float(e_mean);
-            e_sq[p] += float(e_mean * e_mean);
+            const double s = (est.v[0] / 3.0 + est.v[1] / 3.0 + est.v[2] / 3.0) - est.e_mean;
+            e_sum[p] += float(est.e_mean);
+            e_sq[p] += float(est.e_mean * est.e_mean);
             s_sq[p] += float(s * s);
         }
         received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));

@@ -6,7 +6,7 @@
 #include "../render/integrator.h"
 #include "../integrators/mv_context.h"
 #include "film.h"
-#include "../scene/scene.h"
+#include "../accel/scene.h"
 
 #include <tbb/task_arena.h>
 

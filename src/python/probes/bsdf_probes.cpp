@@ -6,7 +6,7 @@
 #include "mvpt/render/bsdf.h"
 #include "mvpt/render/medium.h"
 #include "mvpt/render/phase.h"
-#include "mvpt/scene/xml_parser.h"
+#include "mvpt/loader/xml_parser.h"
 
 #include "arrays.h"
 #include "scene_errors.h"

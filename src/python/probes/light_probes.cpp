@@ -3,7 +3,7 @@
 #include "mvpt/core/sampler.h"
 #include "mvpt/render/light.h"
 #include "mvpt/render/shape.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include "arrays.h"
 #include "scene_errors.h"

@@ -3,7 +3,7 @@
 #include "mvpt/core/sampler.h"
 #include "mvpt/integrators/transmittance.h"
 #include "mvpt/render/camera.h"
-#include "mvpt/scene/scene.h"
+#include "mvpt/loader/load_scene.h"
 
 #include "arrays.h"
 #include "scene_errors.h"

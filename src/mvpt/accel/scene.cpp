@@ -1,8 +1,6 @@
 #include "scene.h"
 
-#include "../core/plugin.h"
 #include "ray_packet.h"
-#include "rig.h"
 
 #include <algorithm>
 #include <cstring>
@@ -30,54 +28,15 @@ Scene::~Scene() {
     if (m_device) rtcReleaseDevice(m_device);
 }
 
-void Scene::build(const SceneTree &tree) {
-    const Properties &props = tree.props;
-    m_source_files = tree.source_files;
-    m_notes = tree.notes;
-    for (const ChildObject &c : props.children()) {
-        c.queried = true;
-        bool owned_elsewhere = !c.id.empty() && tree.referenced_ids.count(c.id);
-        if (c.kind == "shape") {
-            if (owned_elsewhere) continue; // e.g. shapes inside a shapegroup reached by <ref>
-            auto shape = std::static_pointer_cast<Shape>(c.object);
-            if (shape->is_shapegroup()) continue; // rendered only through instances
-            m_shapes.push_back(shape);
-        } else if (c.kind == "emitter") {
-            auto light = std::static_pointer_cast<Light>(c.object);
-            if (light->is_area()) {
-                if (!owned_elsewhere)
-                    throw SceneError(c.loc, "an 'area' emitter must be placed inside a <shape> (or referenced from one)");
-                continue;
-            }
-            if (owned_elsewhere) continue;
-            if (light->is_environment()) {
-                if (m_environment) throw SceneError(c.loc, "the scene has more than one environment emitter");
-                m_environment = light.get();
-            }
-            m_lights.push_back(light);
-        } else if (c.kind == "sensor") {
-            auto cam = std::static_pointer_cast<Camera>(c.object);
-            if (cam->id.empty()) cam->id = std::to_string(m_cameras.size());
-            for (auto &other : m_cameras)
-                if (other->id == cam->id) throw SceneError(c.loc, "two sensors have the id '" + cam->id + "'");
-            m_cameras.push_back(cam);
-        } else if (c.kind == "integrator") {
-            if (m_integrator) throw SceneError(c.loc, "the scene has more than one <integrator>");
-            m_integrator = std::static_pointer_cast<Integrator>(c.object);
-        } else if (c.kind == "bsdf" || c.kind == "texture" || c.kind == "medium" || c.kind == "phase" ||
-                   c.kind == "volume" || owned_elsewhere) {
-            // Declared for <ref> use (materials, textures, or a sampler/film shared by
-            // several sensors); unreferenced materials and textures are simply unused.
-        } else {
-            throw SceneError(c.loc, "a <" + c.kind + "> cannot be placed directly in <scene>");
-        }
-    }
-    props.check_all_queried();
-    if (m_cameras.empty()) throw SceneError(props.loc(), "the scene has no <sensor>: nothing to render");
-    if (!m_integrator) {
-        Properties ip("integrator", "path", props.loc());
-        m_integrator = std::static_pointer_cast<Integrator>((*PluginRegistry::find("integrator", "path"))(ip, {}));
-    }
+void Scene::build(SceneParts parts) {
+    m_shapes = std::move(parts.shapes);
+    m_lights = std::move(parts.lights);
+    m_cameras = std::move(parts.cameras);
+    m_integrator = std::move(parts.integrator);
+    m_source_files = std::move(parts.source_files);
+    m_notes = std::move(parts.notes);
+    for (const auto &light : m_lights)
+        if (light->is_environment()) m_environment = light.get();
 
     // One scene-time -> Embree-time map covering every animated shape's keyframes.
     bool animated = false;
@@ -353,28 +312,6 @@ void Scene::occluded(const RayColumns &rays, size_t n, uint8_t *blocked) const {
         rtcOccluded16(valid, m_scene, &ctx, &p);
         for (size_t i = 0; i < m; ++i) blocked[b + i] = (valid[i] != 0) & (p.tfar[i] < 0.f);
     }
-}
-
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path, const std::map<std::string, std::string> &defines,
-                                       const std::string &rig) {
-    XmlNode root = parse_scene_file(path, defines);
-    if (!rig.empty()) apply_rig_option(root, rig);
-    SceneTree tree = instantiate_scene(root, std::filesystem::absolute(path).parent_path());
-    auto scene = std::make_unique<Scene>();
-    scene->build(tree);
-    scene->set_load_options(defines, rig);
-    return scene;
-}
-
-std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
-                                         const std::map<std::string, std::string> &defines, const std::string &rig) {
-    XmlNode root = parse_scene_string(xml, base_dir, defines);
-    if (!rig.empty()) apply_rig_option(root, rig);
-    SceneTree tree = instantiate_scene(root, std::filesystem::absolute(base_dir));
-    auto scene = std::make_unique<Scene>();
-    scene->build(tree);
-    scene->set_load_options(defines, rig);
-    return scene;
 }
 
 } // namespace mvpt

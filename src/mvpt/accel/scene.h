@@ -1,4 +1,5 @@
-// The scene: shapes in an Embree BVH, lights, cameras (views), integrator.
+// The scene: shapes in an Embree BVH, lights, cameras (views), integrator; its ray queries.
+// Scene files are read into it by the loader (loader/load_scene.h).
 #pragma once
 
 #include "../render/integrator.h"
@@ -6,7 +7,6 @@
 #include "../render/light.h"
 #include "../render/shape.h"
 #include "segment_cull.h"
-#include "xml_parser.h"
 
 #include <embree3/rtcore.h>
 
@@ -24,6 +24,16 @@ struct RayColumns {
     const float *ox, *oy, *oz, *dx, *dy, *dz, *t_max, *time;
 };
 
+/// What a scene is made of, as the loader found it in a scene file.
+struct SceneParts {
+    std::vector<std::shared_ptr<Shape>> shapes;  ///< rendered (shape groups only through instances)
+    std::vector<std::shared_ptr<Light>> lights;  ///< besides the shapes' area emitters
+    std::vector<std::shared_ptr<Camera>> cameras;
+    std::shared_ptr<Integrator> integrator;
+    std::vector<std::filesystem::path> source_files;
+    std::vector<std::string> notes;
+};
+
 class Scene {
 public:
     Scene();
@@ -31,8 +41,8 @@ public:
     Scene(const Scene &) = delete;
     Scene &operator=(const Scene &) = delete;
 
-    /// Build from an instantiated scene tree (validates and commits the BVH).
-    void build(const SceneTree &tree);
+    /// Takes the parts over and commits the BVH of the shapes.
+    void build(SceneParts parts);
 
     /// Closest hit along `ray` within [tmin, tmax) at `ray.time`.
     bool intersect(const Ray &ray, SurfaceInteraction &si) const;
@@ -113,15 +123,5 @@ private:
     std::map<std::string, std::string> m_defines;
     std::string m_rig;
 };
-
-/// Load a Mitsuba 3 XML scene; `defines` override its <default> values. A non-empty `rig`
-/// (e.g. "grid:5x5,spacing=0.05", see scene/rig.h) replaces the sensors by the views it
-/// generates from the scene's first sensor.
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path &path,
-                                       const std::map<std::string, std::string> &defines = {},
-                                       const std::string &rig = {});
-std::unique_ptr<Scene> load_scene_string(const std::string &xml, const std::filesystem::path &base_dir,
-                                         const std::map<std::string, std::string> &defines = {},
-                                         const std::string &rig = {});
 
 } // namespace mvpt
