@@ -58,10 +58,11 @@ struct Film {
     /// deviations from the mean before and after it.
     void add(size_t p, const double v[3]) {
         const double k = double(count[p]);
+        const double to_before = k > 0.0 ? 1.0 / k : 0.0, to_after = 1.0 / (k + 1.0);
         for (int c = 0; c < 3; ++c) {
-            const double before = k > 0.0 ? sum[3 * p + c] / k : 0.0;
+            const double before = sum[3 * p + c] * to_before;
             sum[3 * p + c] += v[c];
-            m2[3 * p + c] += float((v[c] - before) * (v[c] - sum[3 * p + c] / (k + 1.0)));
+            m2[3 * p + c] += float((v[c] - before) * (v[c] - sum[3 * p + c] * to_after));
         }
         ++count[p];
     }

@@ -175,28 +175,30 @@ void Renderer::PathPasses::render_group(const Tile &tile, int pass0, int pass1, 
         rc.camera_rays += n;
         m_r.m_scene.integrator().li_batch(m_r.m_scene, tb.rays.data(), tb.samplers.data(), tb.radiance.data(), n, rc,
                                           cam.medium.get());
-        for (size_t i = 0; i < n; ++i) add_sample(tile.view_slot, int(sx[i]), int(sy[i]), int(sq[i]), tb.radiance[i], rc);
+        Film &f = m_r.m_films[tile.view_slot];
+        const uint32_t x0 = uint32_t(cam.film.crop_x), y0 = uint32_t(cam.film.crop_y);
+        for (size_t i = 0; i < n; ++i) {
+            Spectrum L = tb.radiance[i];
+            if (!L.is_finite()) [[unlikely]] {
+                // Never reaches the film: counted, and the first one kept for replay.
+                drop_nonfinite(f, view, int(sx[i]), int(sy[i]), int(sq[i]), rc);
+                L = Spectrum(0.f);
+            }
+            const double v[3] = {L[0], L[1], L[2]};
+            f.add(size_t(sy[i] - y0) * size_t(f.width) + size_t(sx[i] - x0), v);
+        }
     }
 }
 
-void Renderer::PathPasses::add_sample(int slot, int px, int py, int pass, Spectrum L, RayCounters &rc) {
-    const int view = m_r.m_views[slot];
-    const FilmDesc &film = m_r.m_scene.cameras()[view]->film;
-    Film &f = m_r.m_films[slot];
-    if (!L.is_finite()) {
-        // Never reaches the film: counted, and the first one kept for replay.
-        ++rc.nonfinite;
-        std::atomic_ref<uint64_t>(f.nonfinite).fetch_add(1, std::memory_order_relaxed);
-        RenderStats &st = m_r.m_stats;
-        std::lock_guard<std::mutex> lock(m_nonfinite_mutex);
-        const auto key = std::make_tuple(int64_t(pass), int64_t(view), int64_t(py), int64_t(px));
-        if (st.nonfinite_view < 0 ||
-            key < std::make_tuple(st.nonfinite_sample, st.nonfinite_view, st.nonfinite_y, st.nonfinite_x))
-            std::tie(st.nonfinite_sample, st.nonfinite_view, st.nonfinite_y, st.nonfinite_x) = key;
-        L = Spectrum(0.f);
-    }
-    const double v[3] = {L[0], L[1], L[2]};
-    f.add(size_t(py - film.crop_y) * size_t(film.crop_width) + size_t(px - film.crop_x), v);
+void Renderer::PathPasses::drop_nonfinite(Film &film, int view, int px, int py, int pass, RayCounters &rc) {
+    ++rc.nonfinite;
+    std::atomic_ref<uint64_t>(film.nonfinite).fetch_add(1, std::memory_order_relaxed);
+    RenderStats &st = m_r.m_stats;
+    std::lock_guard<std::mutex> lock(m_nonfinite_mutex);
+    const auto key = std::make_tuple(int64_t(pass), int64_t(view), int64_t(py), int64_t(px));
+    if (st.nonfinite_view < 0 ||
+        key < std::make_tuple(st.nonfinite_sample, st.nonfinite_view, st.nonfinite_y, st.nonfinite_x))
+        std::tie(st.nonfinite_sample, st.nonfinite_view, st.nonfinite_y, st.nonfinite_x) = key;
 }
 
 std::vector<Renderer::Tile> Renderer::make_tiles() const {

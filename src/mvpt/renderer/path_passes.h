@@ -38,8 +38,9 @@ private:
 
     /// Passes [pass0, pass1) of a tile as batches of paths through the integrator.
     void render_group(const Tile &tile, int pass0, int pass1, RayCounters &rc);
-    /// One sample into its pixel's sums (a non-finite one counted and recorded instead).
-    void add_sample(int slot, int px, int py, int pass, Spectrum L, RayCounters &rc);
+    /// A non-finite sample of pixel (px, py), pass `pass`: counted, and the first one (in
+    /// pass, view, y, x order) recorded for replay.
+    void drop_nonfinite(Film &film, int view, int px, int py, int pass, RayCounters &rc);
 
     Renderer &m_r;
     std::vector<Tile> m_tiles;
