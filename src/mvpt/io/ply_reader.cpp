@@ -129,17 +129,32 @@ private:
     const FileLoc &m_loc;
 };
 
-} // namespace
+/// A property line of the header after its keyword: a list or a scalar property.
+template <typename Fail> PlyProperty read_property(std::istringstream &ls, const std::string &line, Fail &&fail) {
+    PlyProperty prop;
+    std::string t;
+    ls >> t;
+    if (t == "list") {
+        std::string ct, it;
+        ls >> ct >> it >> prop.name;
+        prop.is_list = true;
+        if (!parse_type(ct, prop.count_type) || !is_integer(prop.count_type) || !parse_type(it, prop.type))
+            fail("malformed list property '" + line + "'");
+    } else {
+        ls >> prop.name;
+        if (!parse_type(t, prop.type)) fail("unknown property type '" + t + "'");
+    }
+    if (prop.name.empty()) fail("property without a name: '" + line + "'");
+    return prop;
+}
 
-MeshData read_ply(const std::filesystem::path &path, const FileLoc &loc) {
-    const std::string file = path.string();
-    auto fail = [&](const std::string &msg) -> void { throw SceneError(loc, "PLY file '" + file + "': " + msg); };
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail("cannot open file");
-    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+/// The header: the body's format and its elements (`pos` is left at the body's first byte).
+struct PlyHeader {
+    PlyFormat format = PlyFormat::Ascii;
+    std::vector<PlyElement> elements;
+};
 
-    // ---------------- Header ----------------
-    size_t pos = 0;
+template <typename Fail> PlyHeader read_header(const std::string &data, size_t &pos, Fail &&fail) {
     auto next_line = [&](std::string &line) {
         if (pos >= data.size()) return false;
         size_t e = data.find('\n', pos);
@@ -151,21 +166,21 @@ MeshData read_ply(const std::filesystem::path &path, const FileLoc &loc) {
     };
     std::string line;
     if (!next_line(line) || line != "ply") fail("not a PLY file (missing 'ply' magic line)");
-    std::vector<PlyElement> elements;
-    PlyFormat fmt = PlyFormat::Ascii;
+    PlyHeader h;
     bool have_format = false, have_end = false;
-    while (next_line(line)) {
+    while (!have_end && next_line(line)) {
         std::istringstream ls(line);
         std::string kw;
         ls >> kw;
         if (kw.empty() || kw == "comment" || kw == "obj_info") continue;
-        if (kw == "end_header") { have_end = true; break; }
-        if (kw == "format") {
+        if (kw == "end_header") {
+            have_end = true;
+        } else if (kw == "format") {
             std::string f, ver;
             ls >> f >> ver;
-            if (f == "ascii") fmt = PlyFormat::Ascii;
-            else if (f == "binary_little_endian") fmt = PlyFormat::BinaryLE;
-            else if (f == "binary_big_endian") fmt = PlyFormat::BinaryBE;
+            if (f == "ascii") h.format = PlyFormat::Ascii;
+            else if (f == "binary_little_endian") h.format = PlyFormat::BinaryLE;
+            else if (f == "binary_big_endian") h.format = PlyFormat::BinaryBE;
             else fail("unknown format '" + f + "'");
             have_format = true;
         } else if (kw == "element") {
@@ -175,117 +190,126 @@ MeshData read_ply(const std::filesystem::path &path, const FileLoc &loc) {
             auto [p, ec] = std::from_chars(count.data(), count.data() + count.size(), el.count);
             if (el.name.empty() || ec != std::errc() || p != count.data() + count.size())
                 fail("malformed element line '" + line + "'");
-            elements.push_back(el);
+            h.elements.push_back(el);
         } else if (kw == "property") {
-            if (elements.empty()) fail("'property' before any 'element' in the header");
-            PlyProperty prop;
-            std::string t;
-            ls >> t;
-            if (t == "list") {
-                std::string ct, it;
-                ls >> ct >> it >> prop.name;
-                prop.is_list = true;
-                if (!parse_type(ct, prop.count_type) || !is_integer(prop.count_type) || !parse_type(it, prop.type))
-                    fail("malformed list property '" + line + "'");
-            } else {
-                ls >> prop.name;
-                if (!parse_type(t, prop.type)) fail("unknown property type '" + t + "'");
-            }
-            if (prop.name.empty()) fail("property without a name: '" + line + "'");
-            elements.back().props.push_back(prop);
+            if (h.elements.empty()) fail("'property' before any 'element' in the header");
+            h.elements.back().props.push_back(read_property(ls, line, fail));
         } else {
             fail("unexpected header line '" + line + "'");
         }
     }
     if (!have_end) fail("the header has no 'end_header' line");
     if (!have_format) fail("the header has no 'format' line");
+    return h;
+}
 
-    // ---------------- Body ----------------
-    PlyBody body(data, pos, fmt, file, loc);
+/// The vertex element: positions, and normals and uvs where it has all their properties.
+void read_vertices(PlyBody &body, const PlyElement &el, MeshData &mesh) {
+    // Property slots: 0-2 position, 3-5 normal, 6-7 uv.
+    std::vector<int> slot(el.props.size(), -1);
+    for (size_t i = 0; i < el.props.size(); ++i) {
+        const std::string &n = el.props[i].name;
+        static const char *names[8][3] = {{"x"}, {"y"}, {"z"}, {"nx"}, {"ny"}, {"nz"},
+                                          {"u", "s", "texture_u"}, {"v", "t", "texture_v"}};
+        for (int s = 0; s < 8; ++s)
+            for (const char *alias : names[s])
+                if (alias && n == alias && !el.props[i].is_list) slot[i] = s;
+    }
+    bool has[8] = {};
+    for (int s : slot)
+        if (s >= 0) has[s] = true;
+    if (!has[0] || !has[1] || !has[2]) body.fail("the vertex element lacks x, y or z");
+    const bool normals = has[3] && has[4] && has[5], uvs = has[6] && has[7];
+    mesh.positions.resize(size_t(el.count));
+    if (normals) mesh.normals.resize(size_t(el.count));
+    if (uvs) mesh.uvs.resize(size_t(el.count));
+    for (size_t v = 0; v < el.count; ++v) {
+        float val[8] = {};
+        for (size_t i = 0; i < el.props.size(); ++i) {
+            const PlyProperty &p = el.props[i];
+            if (p.is_list) {
+                double n = body.read(p.count_type, "a list length");
+                if (n < 0) body.fail("negative list length in element 'vertex'");
+                body.skip(p.type, uint64_t(n), p.name.c_str());
+            } else if (slot[i] >= 0) {
+                val[slot[i]] = float(body.read(p.type, p.name.c_str()));
+            } else {
+                body.skip(p.type, 1, p.name.c_str());
+            }
+        }
+        mesh.positions[v] = {val[0], val[1], val[2]};
+        if (normals) mesh.normals[v] = {val[3], val[4], val[5]};
+        if (uvs) mesh.uvs[v] = {val[6], val[7]};
+    }
+}
+
+/// The face element's vertex index lists, fan-triangulated (convex polygons).
+void read_faces(PlyBody &body, const PlyElement &el, MeshData &mesh) {
+    int index_prop = -1;
+    for (size_t i = 0; i < el.props.size(); ++i)
+        if (el.props[i].is_list && (el.props[i].name == "vertex_indices" || el.props[i].name == "vertex_index"))
+            index_prop = int(i);
+    if (index_prop < 0) body.fail("the face element has no 'vertex_indices' list");
+    if (!is_integer(el.props[size_t(index_prop)].type)) body.fail("face vertex indices must be integers");
+    std::vector<uint32_t> poly;
+    for (size_t f = 0; f < el.count; ++f) {
+        for (size_t i = 0; i < el.props.size(); ++i) {
+            const PlyProperty &p = el.props[i];
+            if (!p.is_list) { body.skip(p.type, 1, p.name.c_str()); continue; }
+            double n = body.read(p.count_type, "a list length");
+            if (n < 0) body.fail("negative list length in element 'face'");
+            if (int(i) != index_prop) { body.skip(p.type, uint64_t(n), p.name.c_str()); continue; }
+            if (uint64_t(n) > body.remaining() / body.min_bytes(p.type))
+                body.fail("a face declares " + std::to_string(uint64_t(n)) + " vertices, more than the file can hold (truncated or corrupt)");
+            poly.resize(size_t(n));
+            for (auto &idx : poly) {
+                double d = body.read(p.type, "a vertex index");
+                if (d < 0 || d > double(UINT32_MAX)) body.fail("invalid vertex index " + std::to_string(int64_t(d)));
+                idx = uint32_t(d);
+            }
+            for (size_t k = 2; k < poly.size(); ++k) mesh.indices.insert(mesh.indices.end(), {poly[0], poly[k - 1], poly[k]});
+        }
+    }
+}
+
+/// Any other element, skipped value by value.
+void skip_element(PlyBody &body, const PlyElement &el) {
+    for (size_t e = 0; e < el.count; ++e)
+        for (const PlyProperty &p : el.props) {
+            if (!p.is_list) { body.skip(p.type, 1, p.name.c_str()); continue; }
+            double n = body.read(p.count_type, "a list length");
+            if (n < 0) body.fail("negative list length in element '" + el.name + "'");
+            body.skip(p.type, uint64_t(n), p.name.c_str());
+        }
+}
+
+} // namespace
+
+MeshData read_ply(const std::filesystem::path &path, const FileLoc &loc) {
+    const std::string file = path.string();
+    auto fail = [&](const std::string &msg) -> void { throw SceneError(loc, "PLY file '" + file + "': " + msg); };
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail("cannot open file");
+    const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    size_t pos = 0;
+    const PlyHeader header = read_header(data, pos, fail);
+    PlyBody body(data, pos, header.format, file, loc);
     MeshData mesh;
     bool have_vertices = false;
-    for (const PlyElement &el : elements) {
+    for (const PlyElement &el : header.elements) {
         if (el.props.empty()) continue;
         size_t min_size = 0;
         for (auto &p : el.props) min_size += body.min_bytes(p.is_list ? p.count_type : p.type);
         if (el.count > body.remaining() / std::max<size_t>(min_size, 1))
             body.fail("element '" + el.name + "' declares " + std::to_string(el.count) +
                       " entries, more than the file can hold (truncated or corrupt)");
-
         if (el.name == "vertex") {
             have_vertices = true;
-            // Property slots: 0-2 position, 3-5 normal, 6-7 uv.
-            std::vector<int> slot(el.props.size(), -1);
-            for (size_t i = 0; i < el.props.size(); ++i) {
-                const std::string &n = el.props[i].name;
-                static const char *names[8][3] = {{"x"}, {"y"}, {"z"}, {"nx"}, {"ny"}, {"nz"},
-                                                  {"u", "s", "texture_u"}, {"v", "t", "texture_v"}};
-                for (int s = 0; s < 8; ++s)
-                    for (const char *alias : names[s])
-                        if (alias && n == alias && !el.props[i].is_list) slot[i] = s;
-            }
-            bool has[8] = {};
-            for (int s : slot)
-                if (s >= 0) has[s] = true;
-            if (!has[0] || !has[1] || !has[2]) body.fail("the vertex element lacks x, y or z");
-            bool normals = has[3] && has[4] && has[5], uvs = has[6] && has[7];
-            mesh.positions.resize(size_t(el.count));
-            if (normals) mesh.normals.resize(size_t(el.count));
-            if (uvs) mesh.uvs.resize(size_t(el.count));
-            for (size_t v = 0; v < el.count; ++v) {
-                float val[8] = {};
-                for (size_t i = 0; i < el.props.size(); ++i) {
-                    const PlyProperty &p = el.props[i];
-                    if (p.is_list) {
-                        double n = body.read(p.count_type, "a list length");
-                        if (n < 0) body.fail("negative list length in element 'vertex'");
-                        body.skip(p.type, uint64_t(n), p.name.c_str());
-                    } else if (slot[i] >= 0) {
-                        val[slot[i]] = float(body.read(p.type, p.name.c_str()));
-                    } else {
-                        body.skip(p.type, 1, p.name.c_str());
-                    }
-                }
-                mesh.positions[v] = {val[0], val[1], val[2]};
-                if (normals) mesh.normals[v] = {val[3], val[4], val[5]};
-                if (uvs) mesh.uvs[v] = {val[6], val[7]};
-            }
+            read_vertices(body, el, mesh);
         } else if (el.name == "face") {
-            int index_prop = -1;
-            for (size_t i = 0; i < el.props.size(); ++i)
-                if (el.props[i].is_list && (el.props[i].name == "vertex_indices" || el.props[i].name == "vertex_index"))
-                    index_prop = int(i);
-            if (index_prop < 0) body.fail("the face element has no 'vertex_indices' list");
-            if (!is_integer(el.props[size_t(index_prop)].type)) body.fail("face vertex indices must be integers");
-            std::vector<uint32_t> poly;
-            for (size_t f = 0; f < el.count; ++f) {
-                for (size_t i = 0; i < el.props.size(); ++i) {
-                    const PlyProperty &p = el.props[i];
-                    if (!p.is_list) { body.skip(p.type, 1, p.name.c_str()); continue; }
-                    double n = body.read(p.count_type, "a list length");
-                    if (n < 0) body.fail("negative list length in element 'face'");
-                    if (int(i) != index_prop) { body.skip(p.type, uint64_t(n), p.name.c_str()); continue; }
-                    if (uint64_t(n) > body.remaining() / body.min_bytes(p.type))
-                        body.fail("a face declares " + std::to_string(uint64_t(n)) + " vertices, more than the file can hold (truncated or corrupt)");
-                    poly.resize(size_t(n));
-                    for (auto &idx : poly) {
-                        double d = body.read(p.type, "a vertex index");
-                        if (d < 0 || d > double(UINT32_MAX)) body.fail("invalid vertex index " + std::to_string(int64_t(d)));
-                        idx = uint32_t(d);
-                    }
-                    // Fan triangulation of convex polygons.
-                    for (size_t k = 2; k < poly.size(); ++k)
-                        mesh.indices.insert(mesh.indices.end(), {poly[0], poly[k - 1], poly[k]});
-                }
-            }
+            read_faces(body, el, mesh);
         } else {
-            for (size_t e = 0; e < el.count; ++e)
-                for (const PlyProperty &p : el.props) {
-                    if (!p.is_list) { body.skip(p.type, 1, p.name.c_str()); continue; }
-                    double n = body.read(p.count_type, "a list length");
-                    if (n < 0) body.fail("negative list length in element '" + el.name + "'");
-                    body.skip(p.type, uint64_t(n), p.name.c_str());
-                }
+            skip_element(body, el);
         }
     }
     if (!have_vertices) fail("the file has no 'vertex' element");

@@ -1,6 +1,7 @@
-// Drives a render: progressive passes over all views, each pass one sample
-// per pixel, parallel over tiles; stops at a sample count, a time budget or
-// a cancel request (between chunks of tiles, chunks.h).
+// Drives a render: progressive passes over all views, parallel over tiles, in one pass loop
+// for every method (pass_loop.cpp); stops at a sample count, a time budget or a cancel
+// request (between chunks of tiles, chunks.h); keeps each view's film (film.h) and can save,
+// resume and merge its state (renderer_state.cpp).
 #pragma once
 
 #include "../render/integrator.h"
@@ -130,21 +131,21 @@ public:
     const std::vector<int> &views() const { return m_views; }
 
 private:
-    /// 16x16 tiles of every rendered view's crop window (view_slot indexes m_views).
+    /// 16x16 tiles of the views (view_slot indexes m_views).
     struct Tile {
         int view_slot;
         int x0, y0, x1, y1; // crop-window pixel range
     };
-    std::vector<Tile> make_tiles() const;
     /// The largest sample target of the rendered views (option or sensors).
     int spp_target() const;
     /// RenderStats::estimated_bytes.
     double estimate_peak_bytes() const;
-    /// Path tracing's and multi-view path tracing's parts in the pass loop.
-    class PathPasses;
-    class MultiviewPasses;
-    /// The pass loop of every method (pass_loop.cpp): steps of passes as `schedule` makes
-    /// them, until the sample target, the time budget or a cancel request.
+
+    // The pass loop of every method (pass_loop.cpp) and each method's part in it.
+    class PathPasses;      // path_passes.h
+    class MultiviewPasses; // multiview_passes.cpp
+    /// Steps of passes as `schedule` makes them, until the sample target, the time budget or
+    /// a cancel request.
     void run_passes(PassSchedule &schedule, const std::atomic<bool> &cancel, const ProgressFn &progress);
     /// Calls `progress` (when set) with the pass, the seconds elapsed, the samples so far and
     /// `fraction` of the sample target, raised to the share of the time budget spent.
@@ -152,17 +153,28 @@ private:
                          uint64_t samples, double fraction) const;
     /// Every view's images from its film (each film freed once its images are made).
     void develop();
+
+    /// Path tracing: 16x16 tiles of every view's crop window.
+    std::vector<Tile> make_tiles() const;
+
+    /// Multi-view path tracing: the whole render, in `arena`.
     void render_multiview(tbb::task_arena &arena, const std::atomic<bool> &cancel, const ProgressFn &progress);
+    /// Multi-view path tracing: the method's settings, context, accumulators and maps.
+    std::vector<SplatFootprint> prepare_multiview_render(MvConfig &cfg);
     /// Multi-view path tracing: the method's context, accumulators and native-sample maps of
     /// every view; returns where each view's contributions land.
     std::vector<SplatFootprint> prepare_multiview(const PathIntegrator *path, const VolPathIntegrator *volpath,
                                                   const MvConfig &cfg, bool adaptive);
+    /// Multi-view path tracing: whether this render makes adaptive native-sample maps.
+    bool adaptive_maps(const MvConfig &cfg) const;
     /// Multi-view path tracing: 16x16 tiles of every view's sample window, region by region.
     std::vector<Tile> multiview_tiles() const;
     /// Multi-view path tracing: one pass's sums into every view's accumulators.
     void fold_pass(MvPassFilm &pass_film);
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
+
+    // State files (renderer_state.cpp).
     /// The state file at a pass boundary: the next pass, the elapsed seconds, the last pass's
     /// seconds (what a time budget expects of the next), the ray counters so far and, for
     /// multi-view path tracing, its statistics and dropped contributions by slot.
@@ -172,11 +184,7 @@ private:
     void read_state(const std::string &path);
     /// Adds another renderer's loaded state to this one's.
     void add_state(const Renderer &other);
-    /// Multi-view path tracing: whether this render makes adaptive native-sample maps.
-    bool adaptive_maps(const MvConfig &cfg) const;
-    /// Multi-view path tracing: the method's settings, context, accumulators and maps.
-    std::vector<SplatFootprint> prepare_multiview_render(MvConfig &cfg);
-    /// Writes the state file when a checkpoint is due (`last`: the time of the previous one).
+    /// Whether a checkpoint is due (`last`: the time of the previous one, set when it is).
     bool checkpoint_due(double elapsed, double &last) const;
 
     const Scene &m_scene;
