@@ -2,7 +2,7 @@
 #pragma once
 
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/path.h"
+#include "mvpt/integrators/path/path.h"
 #include "mvpt/accel/scene.h"
 
 #include <gtest/gtest.h>

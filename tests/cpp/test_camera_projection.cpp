@@ -4,7 +4,7 @@
 // to the film area of a surface patch. Cameras differ in fov, fov_axis, resolution and
 // lens radius; two of them move during the shutter.
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/mv_candidates.h"
+#include "mvpt/integrators/multiview/mv_candidates.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/render/camera_projection.h"
 #include "mvpt/loader/load_scene.h"

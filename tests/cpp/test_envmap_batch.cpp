@@ -6,7 +6,7 @@
 #include "batch_checks.h"
 #include "mvpt/core/sampler.h"
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/path.h"
+#include "mvpt/integrators/path/path.h"
 #include "mvpt/io/image_io.h"
 #include "mvpt/render/light.h"
 #include "mvpt/loader/load_scene.h"

@@ -1,8 +1,8 @@
-// gather_lambert_lanes (integrators/lane_gather.cpp): the Lambertian kernels' input columns
+// gather_lambert_lanes (integrators/path/lane_gather.cpp): the Lambertian kernels' input columns
 // gathered from the wavefront's records, by the AVX-512 loop and by the scalar one, against
 // the records' fields themselves.
-#include "mvpt/integrators/lane_gather.h"
-#include "mvpt/integrators/path_kernels.h"
+#include "mvpt/integrators/path/lane_gather.h"
+#include "mvpt/integrators/path/path_kernels.h"
 #include "mvpt/render/interaction.h"
 
 #include <gtest/gtest.h>

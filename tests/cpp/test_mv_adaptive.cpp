@@ -1,8 +1,8 @@
-// Adaptive native-sample maps (integrators/mv_adaptive.*, docs/multiview-path-tracing.md §8):
+// Adaptive native-sample maps (integrators/multiview/mv_adaptive.*, docs/multiview-path-tracing.md §8):
 // the map spends the budget, stays in [1, max_n], gives every pixel the rounded root of
 // its own equation at the level it returns, puts more samples where the relative
 // variance is higher, and a search started from the last pass's level finds the same map.
-#include "mvpt/integrators/mv_adaptive.h"
+#include "mvpt/integrators/multiview/mv_adaptive.h"
 
 #include <gtest/gtest.h>
 

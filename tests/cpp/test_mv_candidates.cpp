@@ -1,10 +1,10 @@
-// The vector loops over views of multi-view path tracing (integrators/mv_candidates.*):
+// The vector loops over views of multi-view path tracing (integrators/multiview/mv_candidates.*):
 // they run in the clone for this CPU's instruction set and must give exactly what the
 // scalar per-camera code gives (the build has no FMA contraction), and the visibility
 // packets must agree with one-ray queries.
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/mv_candidates.h"
-#include "mvpt/integrators/mv_sample.h"
+#include "mvpt/integrators/multiview/mv_candidates.h"
+#include "mvpt/integrators/multiview/mv_sample.h"
 #include "mvpt/render/interaction.h"
 #include "mvpt/loader/load_scene.h"
 #include "mvpt/accel/segment_cull.h"

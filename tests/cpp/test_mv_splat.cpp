@@ -1,7 +1,7 @@
 // mv_splat_entries (one vector per entry, rounded by adding 1.5 * 2^52) against
 // mv_entry_value + SplatCache::add (llrint per channel): the same integers in every channel,
 // the same contributions dropped, for values that take each of its three paths.
-#include "mvpt/integrators/mv_sample.h"
+#include "mvpt/integrators/multiview/mv_sample.h"
 
 #include <gtest/gtest.h>
 

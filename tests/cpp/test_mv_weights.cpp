@@ -6,7 +6,7 @@
 // term: the native sample of every view that sees y yields the same set of sharing views
 // and the same D_k for each of them.
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/mv_sample.h"
+#include "mvpt/integrators/multiview/mv_sample.h"
 #include "mvpt/render/interaction.h"
 #include "mvpt/loader/load_scene.h"
 

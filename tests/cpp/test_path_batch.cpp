@@ -5,7 +5,7 @@
 #include "batch_checks.h"
 #include "mvpt/core/simd_x86.h"
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/path.h"
+#include "mvpt/integrators/path/path.h"
 #include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>

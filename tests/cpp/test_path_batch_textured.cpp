@@ -4,7 +4,7 @@
 // reflectance (quad and sphere emitters, other emitters, BSDF sampling).
 #include "batch_checks.h"
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/path.h"
+#include "mvpt/integrators/path/path.h"
 #include "mvpt/render/bsdf.h"
 #include "mvpt/render/bsdfs/bsdf_form.h"
 #include "mvpt/loader/load_scene.h"

@@ -1,11 +1,11 @@
-// The wavefront's vector kernels for Lambertian vertices (integrators/path_kernels.cpp) against
+// The wavefront's vector kernels for Lambertian vertices (integrators/path/path_kernels.cpp) against
 // PathIntegrator::li, bit for bit, in the cases that pick their branches: both sides of a
 // twosided diffuse, one-sided diffuse seen from behind, quad and sphere emitters (flipped
 // normals, a reference point inside a sphere, a back-facing quad), several emitters of each kind.
 #include "batch_checks.h"
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/path.h"
-#include "mvpt/integrators/path_kernels.h"
+#include "mvpt/integrators/path/path.h"
+#include "mvpt/integrators/path/path_kernels.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/loader/load_scene.h"
 

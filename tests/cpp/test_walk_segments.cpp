@@ -2,7 +2,7 @@
 // against walk_segment, one segment at a time: the same walk, bit for bit, for both null rules,
 // through nested media, a mask, a null-BSDF emitter and an opaque floor.
 #include "mvpt/core/warp.h"
-#include "mvpt/integrators/transmittance.h"
+#include "mvpt/integrators/path/transmittance.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/loader/load_scene.h"
 

@@ -7,6 +7,8 @@ from pathlib import Path
 SRC = Path(__file__).resolve().parents[2] / "src"
 # Lowest first: a file may include its own folder and the folders before it.
 LAYERS = ["core", "io", "render", "accel", "loader", "integrators", "renderer"]
+# Inside a layer, folders in the same order: multi-view path tracing builds on the path tracers.
+SUBLAYERS = {"integrators": ["path", "multiview"]}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
 
@@ -41,6 +43,12 @@ def layer_violations(graph: dict) -> list:
                 out.append(f"{f} includes {d}, outside the library's layers")
             elif LAYERS.index(dp[1]) > LAYERS.index(parts[1]):
                 out.append(f"{f} ({parts[1]}) includes {d} ({dp[1]}), a higher layer")
+            elif dp[1] == parts[1] and (order := SUBLAYERS.get(parts[1])):
+                here, there = (p[2] if len(p) > 3 else None for p in (parts, dp))
+                if here not in order or there not in order:
+                    out.append(f"{f} or {d}: outside the folders {order} of {parts[1]}/")
+                elif order.index(there) > order.index(here):
+                    out.append(f"{f} ({parts[1]}/{here}) includes {d} ({parts[1]}/{there}), a higher folder")
     return out
 
 
@@ -76,7 +84,8 @@ def test_no_include_cycles():
 def test_the_checks_see_violations(tmp_path):
     """The checks fail on a tree with an upward include and a cycle."""
     for name, text in {"core/a.h": '#include "../render/b.h"\n', "render/b.h": '#include "c.h"\n',
-                       "render/c.h": '#include "b.h"\n', "render/d.cpp": '#include "../../python/x.h"\n'}.items():
+                       "render/c.h": '#include "b.h"\n', "render/d.cpp": '#include "../../python/x.h"\n',
+                       "integrators/path/e.h": '#include "../multiview/f.h"\n', "integrators/multiview/f.h": ""}.items():
         (tmp_path / "mvpt" / name).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / "mvpt" / name).write_text(text)
     (tmp_path / "python").mkdir()
@@ -85,5 +94,6 @@ def test_the_checks_see_violations(tmp_path):
     problems = layer_violations(graph)
     assert any("core/a.h (core) includes mvpt/render/b.h" in p for p in problems), problems
     assert any("outside the library's layers" in p for p in problems), problems
+    assert any("integrators/path/e.h (integrators/path) includes" in p for p in problems), problems
     assert include_cycle(graph) in (["mvpt/render/b.h", "mvpt/render/c.h", "mvpt/render/b.h"],
                                     ["mvpt/render/c.h", "mvpt/render/b.h", "mvpt/render/c.h"])

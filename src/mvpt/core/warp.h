@@ -17,7 +17,7 @@ inline Vec2f sincos_quarter_turn(float a) {
 /// (sin 2πu, cos 2πu) for u in [0, 1) without libm: the nearest quarter turn q/4 is taken
 /// out exactly (u is a multiple of 2^-24), the rest (|angle| <= pi/4) goes to
 /// sincos_quarter_turn, and the quadrant rotates the pair. Branch-free, so vector loops
-/// (integrators/path_kernels.cpp) compute the same bits as scalar code.
+/// (integrators/path/path_kernels.cpp) compute the same bits as scalar code.
 inline Vec2f sincos_turn(float u) {
     int quadrant = int(4.f * u + 0.5f); // the nearest quarter turn (u >= 0)
     Vec2f sc = sincos_quarter_turn((2.f * Pi) * (u - 0.25f * float(quadrant)));

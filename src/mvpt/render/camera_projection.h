@@ -2,7 +2,7 @@
 // docs/multiview-path-tracing.md §3–§4 computed from it. It is the one implementation
 // behind PerspectiveCamera::shift_geometry, and lets multi-view path tracing shift a
 // sample to every static view in one loop over contiguous data, without a virtual call
-// or a pose evaluation per view (integrators/mv_candidates.*).
+// or a pose evaluation per view (integrators/multiview/mv_candidates.*).
 #pragma once
 
 #include "camera.h"

@@ -1,7 +1,7 @@
 // The film of a view (film.h): estimates added and folded, developed, saved, loaded and merged.
 #include "film.h"
 
-#include "../integrators/mv_estimator.h"
+#include "../integrators/multiview/mv_estimator.h"
 
 #include "render_state.h"
 

@@ -6,7 +6,7 @@
 // what its estimators and adaptive maps (§8) need of the passes so far.
 #pragma once
 
-#include "../integrators/mvpath.h"
+#include "../integrators/multiview/mvpath.h"
 #include "../render/splat_film.h"
 
 #include <cstdint>

@@ -5,10 +5,10 @@
 #include "pass_schedule.h"
 #include "renderer.h"
 
-#include "../integrators/mv_adaptive.h"
-#include "../integrators/mv_sample.h"
-#include "../integrators/mvpath.h"
-#include "../integrators/volpath.h"
+#include "../integrators/multiview/mv_adaptive.h"
+#include "../integrators/multiview/mv_sample.h"
+#include "../integrators/multiview/mvpath.h"
+#include "../integrators/path/volpath.h"
 #include "../render/camera.h"
 
 #include <tbb/enumerable_thread_specific.h>

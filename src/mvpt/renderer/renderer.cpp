@@ -4,7 +4,7 @@
 #include "path_passes.h"
 
 #include "../core/memory.h"
-#include "../integrators/mvpath.h"
+#include "../integrators/multiview/mvpath.h"
 #include "../render/camera.h"
 
 #include <tbb/parallel_for.h>

@@ -5,7 +5,7 @@
 #pragma once
 
 #include "../render/integrator.h"
-#include "../integrators/mv_context.h"
+#include "../integrators/multiview/mv_context.h"
 #include "film.h"
 #include "../accel/scene.h"
 

@@ -1,8 +1,8 @@
 // Test probes: evaluate and sample single plugins (BSDFs) from Python, for
 // the chi-square and energy tests.
 #include "mvpt/core/sampler.h"
-#include "mvpt/integrators/mv_mixture.h"
-#include "mvpt/integrators/mv_selection.h"
+#include "mvpt/integrators/multiview/mv_mixture.h"
+#include "mvpt/integrators/multiview/mv_selection.h"
 #include "mvpt/render/bsdf.h"
 #include "mvpt/render/medium.h"
 #include "mvpt/render/phase.h"

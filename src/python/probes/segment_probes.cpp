@@ -1,7 +1,7 @@
 // Test probes for camera segments through media: the free flight of multi-view path tracing's
 // medium vertices (transmittance.h), in a small scene given as XML, for its chi-square test.
 #include "mvpt/core/sampler.h"
-#include "mvpt/integrators/transmittance.h"
+#include "mvpt/integrators/path/transmittance.h"
 #include "mvpt/render/camera.h"
 #include "mvpt/loader/load_scene.h"
 

@@ -1,7 +1,7 @@
 // The rough conductor's lobe (Mitsuba 3's `roughconductor`) at one pair of directions,
 // written without branches: RoughConductor evaluates it per call and as one vector loop over
 // the sharing views of multi-view path tracing, and the wavefront path tracer's kernels per
-// lane (integrators/path_kernels_conductor.cpp).
+// lane (integrators/path/path_kernels_conductor.cpp).
 #pragma once
 
 #include "../fresnel.h"

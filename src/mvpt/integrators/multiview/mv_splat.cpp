@@ -1,0 +1,154 @@
+// The end of a tile's native samples (§7): their suffixes traced as one wavefront, their
+// shared NEE's shadow rays as packets, and each sharing view's contribution W·L splatted.
+#include "mv_splat.h"
+#include "../path/path.h"
+#include "../path/volpath.h"
+
+#include "../../core/simd.h"
+#include "../../accel/scene.h"
+
+#include <algorithm>
+
+namespace mvpt {
+
+void MvPendingSamples::clear() {
+    samples.clear();
+    entries = 0;
+    rays.clear(), states.clear(), samplers.clear(), media.clear(), dims.clear();
+    shadow_rays.clear();
+}
+
+size_t MvPendingSamples::add_entries(size_t n) {
+    const size_t first = entries;
+    entries += n;
+    if (entries > slot.size()) { // grow geometrically: no per-sample resizing (and zero fills)
+        const size_t size = std::max(entries, 2 * slot.size());
+        slot.resize(size), pixel.resize(size), film.resize(size), w.resize(size);
+        f_nee.resize(size + 1), f_bounce.resize(size + 1); // + 1: mv_splat.cpp reads 16 bytes per entry
+    }
+    return first;
+}
+
+Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w) {
+    Spectrum L = t.nee ? f_nee * t.nee_weight : Spectrum(0.f);
+    if (t.bounce) L += f_bounce * t.b_scale * t.suffix;
+    return t.valid ? L * w : Spectrum(0.f);
+}
+
+// Per entry, the four values W*L (RGB) and W in the lanes of one vector, masked as
+// mv_entry_value selects, then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer
+// (to nearest even) in its low bits: exactly to_fixed's llrint when |v| < 2^21. Other values
+// that fit take to_fixed per channel.
+MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
+                                     const Spectrum *__restrict f_bounce, const float *__restrict w,
+                                     const int *__restrict slots, const uint32_t *__restrict pixels,
+                                     const Vec2f *__restrict films, uint64_t sample, size_t begin, size_t end,
+                                     uint64_t *__restrict dropped) {
+    using namespace simd;
+    static_assert(sizeof(Spectrum) == 12, "entries are read as 16 bytes from each Spectrum");
+    const i32x4 rgb = {-1, -1, -1, 0}, none = {};
+    const i32x4 nee_mask = t.nee ? rgb : none, bounce_mask = t.bounce ? rgb : none, valid_mask = t.valid ? rgb : none;
+    const f32x4 nw = {t.nee_weight[0], t.nee_weight[1], t.nee_weight[2], 0.f};
+    const f32x4 sfx = {t.suffix[0], t.suffix[1], t.suffix[2], 0.f};
+    const f32x4 exact = f32x4{} + 0x1p21f, fits = f32x4{} + float(SplatMax);
+    const f64x4 scale = f64x4{} + SplatScale, magic = f64x4{} + 0x1.8p52;
+    const i64x4 magic_bits = bit_cast<i64x4>(magic);
+    auto masked = [](f32x4 v, i32x4 mask) { return bit_cast<f32x4>(bit_cast<i32x4>(v) & mask); };
+    auto all = [](i32x4 m) { return (m[0] & m[1] & m[2] & m[3]) != 0; };
+    size_t lost = 0;
+    // In a large cache, the entries of the next few views are loaded while this one's is summed.
+    const size_t ahead = cache.large() ? 8 : 0;
+    for (size_t i = begin; i < std::min(end, begin + ahead); ++i) cache.prefetch(slots[i], films[i]);
+    for (size_t i = begin; i < end; ++i) {
+        if (ahead && i + ahead < end) cache.prefetch(slots[i + ahead], films[i + ahead]);
+        const f32x4 L = masked(load<f32x4>(&f_nee[i].r) * nw, nee_mask) +
+                        masked(load<f32x4>(&f_bounce[i].r) * t.b_scale * sfx, bounce_mask);
+        const f32x4 v = bit_cast<f32x4>(bit_cast<i32x4>(masked(L * w[i], valid_mask)) |
+                                        (bit_cast<i32x4>(f32x4{} + w[i]) & ~rgb)); // W*L, W
+        if (!cache.is_box(slots[i])) { // spread over the pixels the view's filter covers
+            if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(v[0], v[1], v[2]), v[3]))
+                ++dropped[slots[i]], ++lost;
+            continue;
+        }
+        const f32x4 mag = bit_cast<f32x4>(bit_cast<i32x4>(v) & 0x7fffffff);
+        if (!all(mag < fits)) { // also NaN
+            ++dropped[slots[i]], ++lost;
+            continue;
+        }
+        SplatEntry &p = cache.at(slots[i], pixels[i], films[i]);
+        if (all(mag < exact)) {
+            const f64x4 x = __builtin_convertvector(v, f64x4) * scale + magic;
+            store(&p, load<i64x4>(&p) + (bit_cast<i64x4>(x) - magic_bits));
+        } else {
+            for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(v[c]);
+            p.w += to_fixed(v[3]);
+        }
+        ++p.count;
+    }
+    return lost;
+}
+
+void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
+                       RayCounters &counters, MvViewStats *stats) {
+    const size_t n_suffix = pending.rays.size();
+    pending.radiance.resize(n_suffix);
+    pending.valid.resize(n_suffix);
+    const uint64_t rays_before = counters.rays + counters.shadow_rays;
+    if (ctx.volpath) // through media: one path at a time
+        for (size_t i = 0; i < n_suffix; ++i) {
+            pending.radiance[i] = ctx.volpath->trace(*ctx.scene, pending.rays[i], pending.media[i], pending.states[i],
+                                                     pending.samplers[i], counters, VolPathPart::All, pending.dims[i]);
+            pending.valid[i] = 1;
+        }
+    else if (n_suffix > 0)
+        ctx.path->trace_batch(*ctx.scene, pending.rays.data(), pending.states.data(), pending.samplers.data(),
+                              pending.radiance.data(), pending.valid.data(), n_suffix, counters);
+    stats[slot].rays += counters.rays + counters.shadow_rays - rays_before;
+    // The shared NEE's shadow rays as packets (counted when queued).
+    pending.shadow_blocked.resize(pending.shadow_rays.size());
+    if (!pending.shadow_rays.empty())
+        ctx.scene->occluded(pending.shadow_rays.data(), pending.shadow_rays.size(), pending.shadow_blocked.data());
+
+    for (const MvPendingSamples::Sample &rec : pending.samples) {
+        const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
+        const bool bounce = !suffix.is_black();
+        const MvSplatTerms t{rec.nee_weight, suffix, rec.b_scale, rec.nee && (rec.shadow < 0 || !pending.shadow_blocked[rec.shadow]),
+                            bounce && rec.delta_view < 0, rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
+        const uint32_t first = rec.first, n = rec.count;
+        const Spectrum *f_nee = pending.f_nee.data() + first, *f_bounce = pending.f_bounce.data() + first;
+        const float *w = pending.w.data() + first;
+        const int *slots = pending.slot.data() + first;
+        const uint32_t *pixels = pending.pixel.data() + first;
+        const Vec2f *films = pending.film.data() + first;
+        if (rec.medium) { // a medium vertex's contributions are native-only radiance of each view (W = 0)
+            size_t lost = 0;
+            for (uint32_t i = 0; i < n; ++i)
+                lost += !sink.native(slots[i], pixels[i], films[i], rec.hash, Spectrum(0.f), 0.f,
+                                     mv_entry_value(t, f_nee[i], f_bounce[i], w[i]));
+            if (lost) sink.lost(rec.key);
+            continue;
+        }
+        // Two entries on their own: a delta lobe's direction serves its view only, and the
+        // native view's entry (i = 0) also carries E.
+        const int delta = bounce ? rec.delta_view : -1;
+        auto value = [&](int i) {
+            if (i != delta) return mv_entry_value(t, f_nee[i], f_bounce[i], w[i]);
+            Spectrum L = t.nee ? f_nee[i] * rec.nee_weight : Spectrum(0.f);
+            L += rec.delta_bounce * suffix;
+            return t.valid ? L * w[i] : Spectrum(0.f);
+        };
+        size_t lost = !sink.native(slots[0], pixels[0], films[0], rec.hash, value(0), w[0], rec.e);
+        if (delta > 0) {
+            lost += !sink.shared(slots[delta], pixels[delta], films[delta], rec.hash, value(delta), w[delta]);
+            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1,
+                                     size_t(delta), sink.dropped);
+            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash,
+                                     size_t(delta) + 1, n, sink.dropped);
+        } else
+            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, n, sink.dropped);
+        if (lost) sink.lost(rec.key);
+    }
+    pending.clear();
+}
+
+} // namespace mvpt
