@@ -75,43 +75,31 @@ private:
     std::function<void(const std::string &)> m_fail;
 };
 
-} // namespace
+using Fail = std::function<void(const std::string &)>;
 
-MeshData read_serialized(const std::filesystem::path &path, int shape_index, const FileLoc &loc) {
-    const std::string file = path.string();
-    auto fail = [&](const std::string &msg) { throw SceneError(loc, "serialized file '" + file + "': " + msg); };
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail("cannot open file");
-    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+/// Where mesh `shape_index` starts, from the dictionary at the end of the file.
+size_t mesh_offset(const std::string &data, uint16_t version, int shape_index, const Fail &fail) {
+    if (shape_index == 0) return 0;
     auto bytes = [&](size_t off) { return (const unsigned char *)data.data() + off; };
+    if (data.size() < 8) fail("file is truncated (no offset dictionary)");
+    const uint32_t count = load_le<uint32_t>(bytes(data.size() - 4));
+    if (uint32_t(shape_index) >= count)
+        fail("shape_index " + std::to_string(shape_index) + " is out of range (the file holds " + std::to_string(count) +
+             " meshes)");
+    const size_t entry = version == 4 ? 8 : 4;
+    if (uint64_t(count) * entry + 4 > data.size()) fail("corrupt offset dictionary");
+    const size_t at = data.size() - 4 - entry * size_t(count - uint32_t(shape_index));
+    const uint64_t off = version == 4 ? load_le<uint64_t>(bytes(at)) : load_le<uint32_t>(bytes(at));
+    if (off > data.size() - 4) fail("offset of mesh " + std::to_string(shape_index) + " lies outside the file");
+    if (load_le<uint16_t>(bytes(size_t(off))) != kFormatId)
+        fail("mesh " + std::to_string(shape_index) + " does not start with a valid header");
+    return size_t(off);
+}
 
-    if (data.size() < 4) fail("file is truncated (no header)");
-    if (load_le<uint16_t>(bytes(0)) != kFormatId) fail("not a Mitsuba serialized mesh (bad format identifier)");
-    uint16_t version = load_le<uint16_t>(bytes(2));
-    if (version != 3 && version != 4) fail("unsupported version " + std::to_string(version) + " (expected 3 or 4)");
-    if (shape_index < 0) fail("shape_index must be non-negative");
-
-    // ---------------- Locate the mesh via the end-of-file dictionary ----------------
-    size_t offset = 0;
-    if (shape_index > 0) {
-        if (data.size() < 8) fail("file is truncated (no offset dictionary)");
-        uint32_t count = load_le<uint32_t>(bytes(data.size() - 4));
-        if (uint32_t(shape_index) >= count)
-            fail("shape_index " + std::to_string(shape_index) + " is out of range (the file holds " +
-                 std::to_string(count) + " meshes)");
-        size_t entry = version == 4 ? 8 : 4;
-        if (uint64_t(count) * entry + 4 > data.size()) fail("corrupt offset dictionary");
-        size_t at = data.size() - 4 - entry * size_t(count - uint32_t(shape_index));
-        uint64_t off = version == 4 ? load_le<uint64_t>(bytes(at)) : load_le<uint32_t>(bytes(at));
-        if (off > data.size() - 4) fail("offset of mesh " + std::to_string(shape_index) + " lies outside the file");
-        offset = size_t(off);
-        if (load_le<uint16_t>(bytes(offset)) != kFormatId)
-            fail("mesh " + std::to_string(shape_index) + " does not start with a valid header");
-    }
-
-    // ---------------- Compressed mesh ----------------
-    Inflater z(data, offset + 4, fail);
-    uint32_t flags = z.get<uint32_t>("flags");
+/// The vertex and face counts after the flags (and, in version 4, the shape's name), checked
+/// against what `file_size` bytes can inflate to.
+void read_counts(Inflater &z, uint16_t version, size_t fsize, size_t file_size, uint64_t &vertices, uint64_t &faces,
+                 const Fail &fail) {
     if (version == 4) {
         // Null-terminated shape name (bounded: a name is short).
         for (int i = 0;; ++i) {
@@ -121,55 +109,77 @@ MeshData read_serialized(const std::filesystem::path &path, int shape_index, con
             if (c == 0) break;
         }
     }
-    uint64_t vertex_count = z.get<uint64_t>("vertex count"), face_count = z.get<uint64_t>("face count");
-    const bool dp = (flags & kDoublePrecision) != 0;
-    const size_t fsize = dp ? 8 : 4;
-    const uint64_t budget = uint64_t(data.size()) * kMaxInflateRatio;
-    if (vertex_count == 0 || face_count == 0) fail("the mesh is empty");
-    if (vertex_count > budget / (3 * fsize) || face_count > budget / 12)
-        fail("vertex/face counts (" + std::to_string(vertex_count) + ", " + std::to_string(face_count) +
+    vertices = z.get<uint64_t>("vertex count"), faces = z.get<uint64_t>("face count");
+    const uint64_t budget = uint64_t(file_size) * kMaxInflateRatio;
+    if (vertices == 0 || faces == 0) fail("the mesh is empty");
+    if (vertices > budget / (3 * fsize) || faces > budget / 12)
+        fail("vertex/face counts (" + std::to_string(vertices) + ", " + std::to_string(faces) +
              ") are larger than the file can hold (corrupt)");
-    const bool index64 = vertex_count > UINT32_MAX;
-    if (index64) fail("meshes with more than 2^32 vertices are not supported");
+    if (vertices > UINT32_MAX) fail("meshes with more than 2^32 vertices are not supported");
+}
 
-    auto read_floats = [&](size_t dim, const char *what) {
-        std::vector<float> out(size_t(vertex_count) * dim);
-        if (dp) {
-            std::vector<double> tmp(out.size());
-            z.read(tmp.data(), tmp.size() * 8, what);
-            for (size_t i = 0; i < out.size(); ++i) out[i] = float(load_le<double>((const unsigned char *)&tmp[i]));
-        } else {
-            z.read(out.data(), out.size() * 4, what);
-            if constexpr (std::endian::native == std::endian::big)
-                for (auto &f : out) f = load_le<float>((const unsigned char *)&f);
-        }
-        return out;
-    };
+/// `count` x `dim` floats (stored as doubles when `dp`).
+std::vector<float> read_floats(Inflater &z, bool dp, uint64_t count, size_t dim, const char *what) {
+    std::vector<float> out(size_t(count) * dim);
+    if (dp) {
+        std::vector<double> tmp(out.size());
+        z.read(tmp.data(), tmp.size() * 8, what);
+        for (size_t i = 0; i < out.size(); ++i) out[i] = float(load_le<double>((const unsigned char *)&tmp[i]));
+    } else {
+        z.read(out.data(), out.size() * 4, what);
+        if constexpr (std::endian::native == std::endian::big)
+            for (auto &f : out) f = load_le<float>((const unsigned char *)&f);
+    }
+    return out;
+}
 
+/// The mesh's vertex attributes and faces, after its counts.
+MeshData read_mesh(Inflater &z, uint32_t flags, uint64_t vertices, uint64_t faces, const Fail &fail) {
+    const bool dp = (flags & kDoublePrecision) != 0;
     MeshData mesh;
-    std::vector<float> p = read_floats(3, "vertex positions");
-    mesh.positions.resize(size_t(vertex_count));
+    const std::vector<float> p = read_floats(z, dp, vertices, 3, "vertex positions");
+    mesh.positions.resize(size_t(vertices));
     for (size_t i = 0; i < mesh.positions.size(); ++i) mesh.positions[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
     if (flags & kHasNormals) {
-        std::vector<float> n = read_floats(3, "vertex normals");
-        mesh.normals.resize(size_t(vertex_count));
+        const std::vector<float> n = read_floats(z, dp, vertices, 3, "vertex normals");
+        mesh.normals.resize(size_t(vertices));
         for (size_t i = 0; i < mesh.normals.size(); ++i) mesh.normals[i] = {n[3 * i], n[3 * i + 1], n[3 * i + 2]};
     }
     if (flags & kHasTexcoords) {
-        std::vector<float> t = read_floats(2, "texture coordinates");
-        mesh.uvs.resize(size_t(vertex_count));
+        const std::vector<float> t = read_floats(z, dp, vertices, 2, "texture coordinates");
+        mesh.uvs.resize(size_t(vertices));
         for (size_t i = 0; i < mesh.uvs.size(); ++i) mesh.uvs[i] = {t[2 * i], t[2 * i + 1]};
     }
-    if (flags & kHasColors) read_floats(3, "vertex colours"); // read and ignored (as Mitsuba does)
-
-    mesh.indices.resize(size_t(face_count) * 3);
+    if (flags & kHasColors) read_floats(z, dp, vertices, 3, "vertex colours"); // read and ignored (as Mitsuba does)
+    mesh.indices.resize(size_t(faces) * 3);
     z.read(mesh.indices.data(), mesh.indices.size() * 4, "face indices");
     if constexpr (std::endian::native == std::endian::big)
         for (auto &i : mesh.indices) i = load_le<uint32_t>((const unsigned char *)&i);
     for (uint32_t i : mesh.indices)
-        if (i >= vertex_count)
-            fail("a face refers to vertex " + std::to_string(i) + " but there are only " + std::to_string(vertex_count));
+        if (i >= vertices)
+            fail("a face refers to vertex " + std::to_string(i) + " but there are only " + std::to_string(vertices));
     return mesh;
+}
+
+} // namespace
+
+MeshData read_serialized(const std::filesystem::path &path, int shape_index, const FileLoc &loc) {
+    const std::string file = path.string();
+    const Fail fail = [&](const std::string &msg) { throw SceneError(loc, "serialized file '" + file + "': " + msg); };
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail("cannot open file");
+    const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (data.size() < 4) fail("file is truncated (no header)");
+    auto header = [&](size_t off) { return load_le<uint16_t>((const unsigned char *)data.data() + off); };
+    if (header(0) != kFormatId) fail("not a Mitsuba serialized mesh (bad format identifier)");
+    const uint16_t version = header(2);
+    if (version != 3 && version != 4) fail("unsupported version " + std::to_string(version) + " (expected 3 or 4)");
+    if (shape_index < 0) fail("shape_index must be non-negative");
+    Inflater z(data, mesh_offset(data, version, shape_index, fail) + 4, fail);
+    const uint32_t flags = z.get<uint32_t>("flags");
+    uint64_t vertices = 0, faces = 0;
+    read_counts(z, version, (flags & kDoublePrecision) ? 8 : 4, data.size(), vertices, faces, fail);
+    return read_mesh(z, flags, vertices, faces, fail);
 }
 
 } // namespace mvpt
