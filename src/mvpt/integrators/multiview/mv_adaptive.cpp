@@ -75,19 +75,22 @@ MVPT_MULTI_ISA int64_t native_total(double c, double top, const double *__restri
     for (size_t i = 0; i < n; ++i) s += native_count(c, a[i], u[i], r[i], top);
     return s;
 }
-} // namespace
+/// The budget spread evenly, the remainder to the first pixels.
+void even_map(size_t n, double budget, std::vector<uint16_t> &map) {
+    const size_t each = size_t(budget / double(n)), extra = size_t(budget) - each * n;
+    for (size_t i = 0; i < n; ++i) map[i] = uint16_t(each + (i < extra ? 1 : 0));
+}
 
-double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::vector<uint16_t> &map) {
+/// Per pixel, the terms of the relative variance after `passes` passes, blurred: a (of the
+/// native-only part E, times the native samples), unit (a plus b, b of the shared part S times
+/// the contributions received: the relative variance of one more native sample) and others
+/// (the contributions from other views per pass).
+struct PixelTerms {
+    std::vector<double> a, unit, others;
+};
+
+PixelTerms pixel_terms(const AdaptiveInput &in) {
     const size_t n = size_t(in.width) * in.height;
-    map.assign(n, 1);
-    if (n == 0) return 0.0;
-    budget = std::clamp(budget, double(n), double(n) * max_n);
-    if (in.passes < 2) {
-        // Even spread of the budget, the remainder to the first pixels.
-        size_t each = size_t(budget / double(n)), extra = size_t(budget) - each * n;
-        for (size_t i = 0; i < n; ++i) map[i] = uint16_t(each + (i < extra ? 1 : 0));
-        return 0.0;
-    }
     const double k = in.passes;
     std::vector<double> mean(n), a(n), b(n), others(n);
     auto variance = [k](double sum, double sq) { return std::max(0.0, (sq - sum * sum / k) / (k - 1.0)); };
@@ -115,47 +118,27 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
             b[i] = std::isfinite(b[i] * scale) ? b[i] * scale : 0.0;
         }
     });
-    a = blur3(a, in.width, in.height);
+    PixelTerms t;
+    t.a = blur3(a, in.width, in.height);
     b = blur3(b, in.width, in.height);
-    others = blur3(others, in.width, in.height);
-    std::vector<double> &unit = mean; // relative variance of one more native sample
+    t.others = blur3(others, in.width, in.height);
+    t.unit = std::move(mean);
     for_blocks(n, [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) unit[i] = a[i] + b[i];
+        for (size_t i = begin; i < end; ++i) t.unit[i] = t.a[i] + b[i];
     });
-    b = {};
+    return t;
+}
 
-    const double top = double(max_n);
-    auto total = [&](double c) {
-        if (n <= BlockPixels) return double(native_total(c, top, a.data(), unit.data(), others.data(), n));
-        return double(tbb::parallel_reduce(
-            tbb::blocked_range<size_t>(0, n, BlockPixels), int64_t(0),
-            [&](const tbb::blocked_range<size_t> &r, int64_t s) {
-                return s + native_total(c, top, a.data() + r.begin(), unit.data() + r.begin(), others.data() + r.begin(),
-                                        r.size());
-            },
-            [](int64_t x, int64_t y) { return x + y; })); // integer sums: the order does not matter
-    };
-    double hi = 0.0;
-    for (double u : unit) hi = std::max(hi, u);
-    if (!(hi > 0.0)) {
-        AdaptiveInput none = in;
-        none.passes = 0;
-        adapt_native_map(none, max_n, budget, map);
-        return 0.0;
-    }
-    // total(c) decreases in c: bisect on log c for the smallest c with total(c) <= budget, to
-    // 1% (finer changes a count only where its rounding is a coin toss; each step costs a pass
-    // over the pixels). The bracket starts around the last pass's c (the statistics change
-    // little between passes), else around the c of a/n = c with every n free, and is widened
-    // until it holds the answer.
-    const double sum_unit = sum_blocks(n, [&](size_t begin, size_t end) {
-        double s = 0.0;
-        for (size_t i = begin; i < end; ++i) s += unit[i];
-        return s;
-    });
+/// The smallest level c (to 1 %) whose native samples total(c) fit in `budget`, `hi` the
+/// largest unit term. total(c) decreases in c: bisect on log c (finer changes a count only
+/// where its rounding is a coin toss; each step costs a pass over the pixels). The bracket
+/// starts around the last pass's c (the statistics change little between passes), else around
+/// the c of a/n = c with every n free, and is widened until it holds the answer.
+template <typename Total>
+double solve_level(Total &&total, double budget, double hi, double sum_unit, double previous_level) {
     const double lowest = hi * 1e-12, highest = hi * 2.0; // total(2 hi) = n
-    const bool warm = in.previous_level >= lowest && in.previous_level <= highest;
-    const double guess = warm ? in.previous_level : std::clamp(sum_unit / budget, lowest, highest);
+    const bool warm = previous_level >= lowest && previous_level <= highest;
+    const double guess = warm ? previous_level : std::clamp(sum_unit / budget, lowest, highest);
     const double spread = warm ? 1.1 : 16.0;
     double lo_c = guess / spread, hi_c = guess * spread;
     while (lo_c > lowest && total(lo_c) <= budget) lo_c = std::max(lo_c / 256.0, lowest);
@@ -166,10 +149,47 @@ double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::
         if (total(mid) <= budget) hi_c = mid;
         else lo_c = mid;
     }
-    for_blocks(n, [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) map[i] = uint16_t(native_count(hi_c, a[i], unit[i], others[i], top));
-    });
     return hi_c;
+}
+} // namespace
+
+double adapt_native_map(const AdaptiveInput &in, int max_n, double budget, std::vector<uint16_t> &map) {
+    const size_t n = size_t(in.width) * in.height;
+    map.assign(n, 1);
+    if (n == 0) return 0.0;
+    budget = std::clamp(budget, double(n), double(n) * max_n);
+    if (in.passes < 2) {
+        even_map(n, budget, map);
+        return 0.0;
+    }
+    const PixelTerms t = pixel_terms(in);
+    double hi = 0.0;
+    for (double u : t.unit) hi = std::max(hi, u);
+    if (!(hi > 0.0)) {
+        even_map(n, budget, map);
+        return 0.0;
+    }
+    const double top = double(max_n);
+    auto total = [&](double c) {
+        if (n <= BlockPixels) return double(native_total(c, top, t.a.data(), t.unit.data(), t.others.data(), n));
+        return double(tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, n, BlockPixels), int64_t(0),
+            [&](const tbb::blocked_range<size_t> &r, int64_t s) {
+                return s + native_total(c, top, t.a.data() + r.begin(), t.unit.data() + r.begin(),
+                                        t.others.data() + r.begin(), r.size());
+            },
+            [](int64_t x, int64_t y) { return x + y; })); // integer sums: the order does not matter
+    };
+    const double sum_unit = sum_blocks(n, [&](size_t begin, size_t end) {
+        double s = 0.0;
+        for (size_t i = begin; i < end; ++i) s += t.unit[i];
+        return s;
+    });
+    const double c = solve_level(total, budget, hi, sum_unit, in.previous_level);
+    for_blocks(n, [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) map[i] = uint16_t(native_count(c, t.a[i], t.unit[i], t.others[i], top));
+    });
+    return c;
 }
 
 } // namespace mvpt
