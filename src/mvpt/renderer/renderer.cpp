@@ -11,7 +11,6 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <cfloat>
 #include <stdexcept>
 #include <vector>
 
