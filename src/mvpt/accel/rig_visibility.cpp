@@ -186,13 +186,13 @@ bool RigVisibility::evaluate(const int64_t idx[3], int shift, int64_t own) const
     m_evaluated.fetch_add(1, std::memory_order_relaxed);
     // The cell, widened beyond the float rounding of the lookup.
     const double size = m_size * double(int64_t(1) << shift);
-    double lo[3], hi[3], centre[3], coord = 0;
+    double lo[3], hi[3], coord = 0;
     for (int c = 0; c < 3; ++c) {
         lo[c] = m_lo[c] + double(idx[c]) * size, hi[c] = lo[c] + size;
         coord = std::max({coord, std::abs(lo[c]), std::abs(hi[c])});
     }
     const double pad = 1e-5 * (1.0 + coord);
-    for (int c = 0; c < 3; ++c) lo[c] -= pad, hi[c] += pad, centre[c] = 0.5 * (lo[c] + hi[c]);
+    for (int c = 0; c < 3; ++c) lo[c] -= pad, hi[c] += pad;
 
     // The segments lie in the hull of the cell and the rig's box.
     ConvexRegion r;
@@ -201,61 +201,68 @@ bool RigVisibility::evaluate(const int64_t idx[3], int shift, int64_t own) const
         r.add_vertex(p);
     }
     for (int i = 0; i < 8; ++i) r.add_vertex(m_rig[i]);
-    // Bounding half-spaces: a wedge around the axis a from the cell to the rig (its sides
-    // from the slopes of the rig's corners seen from the cell's centre), and caps along a.
+    add_wedge(lo, hi, r);
+    add_own_plane(lo, hi, own, r);
+    r.finish();
+    return !m_occ.may_block(r, own);
+}
+
+void RigVisibility::add_wedge(const double lo[3], const double hi[3], ConvexRegion &r) const {
+    // A wedge around the axis a from the cell's centre to the rig's (its sides from the slopes
+    // of the rig's corners seen from the cell's centre), and caps along a.
+    const double centre[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     double a[3] = {m_rig_centre[0] - centre[0], m_rig_centre[1] - centre[1], m_rig_centre[2] - centre[2]};
-    if (normalize3(a)) {
-        double u[3], v[3];
-        orthonormal(m_across, a, u);
-        cross3(a, u, v);
-        double su_lo = INFINITY, su_hi = -INFINITY, sv_lo = INFINITY, sv_hi = -INFINITY;
-        bool wedge = true;
-        for (int i = 0; i < 8 && wedge; ++i) {
-            const double q[3] = {m_rig[i][0] - centre[0], m_rig[i][1] - centre[1], m_rig[i][2] - centre[2]};
-            const double h = dot3(q, a);
-            wedge = h > 0.25 * std::sqrt(dot3(q, q));
-            const double su = dot3(q, u) / h, sv = dot3(q, v) / h;
-            su_lo = std::min(su_lo, su), su_hi = std::max(su_hi, su);
-            sv_lo = std::min(sv_lo, sv), sv_hi = std::max(sv_hi, sv);
-        }
-        if (wedge) {
-            double n[4][3];
-            for (int c = 0; c < 3; ++c) {
-                n[0][c] = u[c] - su_hi * a[c], n[1][c] = su_lo * a[c] - u[c];
-                n[2][c] = v[c] - sv_hi * a[c], n[3][c] = sv_lo * a[c] - v[c];
-            }
-            for (auto &nk : n) r.add_support_plane(nk);
-        }
-        const double minus_a[3] = {-a[0], -a[1], -a[2]};
-        r.add_support_plane(a);
-        r.add_support_plane(minus_a);
+    if (!normalize3(a)) return;
+    double u[3], v[3];
+    orthonormal(m_across, a, u);
+    cross3(a, u, v);
+    double su_lo = INFINITY, su_hi = -INFINITY, sv_lo = INFINITY, sv_hi = -INFINITY;
+    bool wedge = true;
+    for (int i = 0; i < 8 && wedge; ++i) {
+        const double q[3] = {m_rig[i][0] - centre[0], m_rig[i][1] - centre[1], m_rig[i][2] - centre[2]};
+        const double h = dot3(q, a);
+        wedge = h > 0.25 * std::sqrt(dot3(q, q));
+        const double su = dot3(q, u) / h, sv = dot3(q, v) / h;
+        su_lo = std::min(su_lo, su), su_hi = std::max(su_hi, su);
+        sv_lo = std::min(sv_lo, sv), sv_hi = std::max(sv_hi, sv);
     }
-    // The plane of a triangle that y lies on: when the whole rig is strictly on one side of
+    if (wedge) {
+        double n[4][3];
+        for (int c = 0; c < 3; ++c) {
+            n[0][c] = u[c] - su_hi * a[c], n[1][c] = su_lo * a[c] - u[c];
+            n[2][c] = v[c] - sv_hi * a[c], n[3][c] = sv_lo * a[c] - v[c];
+        }
+        for (auto &nk : n) r.add_support_plane(nk);
+    }
+    const double minus_a[3] = {-a[0], -a[1], -a[2]};
+    r.add_support_plane(a);
+    r.add_support_plane(minus_a);
+}
+
+void RigVisibility::add_own_plane(const double lo[3], const double hi[3], int64_t own, ConvexRegion &r) const {
+    // The plane of the triangle that y lies on: when the whole rig is strictly on one side of
     // it, so is every segment (it leaves y offset towards its lens point, by at least
     // ~4e-6 (1 + |y|), interaction.h), so the segments keep above a height tol.
     double tp[3][3], tn[3], tn_len;
-    if (m_occ.triangle(own, tp, tn, &tn_len) && tn_len > 0) {
-        double lo_coord = 0;
-        for (int c = 0; c < 3; ++c)
-            if (lo[c] > 0 || hi[c] < 0) lo_coord = std::max(lo_coord, std::min(std::abs(lo[c]), std::abs(hi[c])));
-        const double tol = 1e-6 * (1.0 + lo_coord);
-        double nh[3] = {tn[0] / tn_len, tn[1] / tn_len, tn[2] / tn_len};
-        double h_min = INFINITY, h_max = -INFINITY;
-        for (const auto &p : m_rig) {
-            const double q[3] = {p[0] - tp[0][0], p[1] - tp[0][1], p[2] - tp[0][2]};
-            h_min = std::min(h_min, dot3(nh, q)), h_max = std::max(h_max, dot3(nh, q));
-        }
-        if (h_max < 0) { // orient towards the rig
-            for (double &c : nh) c = -c;
-            h_min = -h_max;
-        }
-        if (h_min > 2 * tol) {
-            const double below[3] = {-nh[0], -nh[1], -nh[2]}; // -h <= -tol
-            r.add_plane(below, -(dot3(nh, tp[0]) + tol));
-        }
+    if (!m_occ.triangle(own, tp, tn, &tn_len) || !(tn_len > 0)) return;
+    double lo_coord = 0;
+    for (int c = 0; c < 3; ++c)
+        if (lo[c] > 0 || hi[c] < 0) lo_coord = std::max(lo_coord, std::min(std::abs(lo[c]), std::abs(hi[c])));
+    const double tol = 1e-6 * (1.0 + lo_coord);
+    double nh[3] = {tn[0] / tn_len, tn[1] / tn_len, tn[2] / tn_len};
+    double h_min = INFINITY, h_max = -INFINITY;
+    for (const auto &p : m_rig) {
+        const double q[3] = {p[0] - tp[0][0], p[1] - tp[0][1], p[2] - tp[0][2]};
+        h_min = std::min(h_min, dot3(nh, q)), h_max = std::max(h_max, dot3(nh, q));
     }
-    r.finish();
-    return !m_occ.may_block(r, own);
+    if (h_max < 0) { // orient towards the rig
+        for (double &c : nh) c = -c;
+        h_min = -h_max;
+    }
+    if (h_min > 2 * tol) {
+        const double below[3] = {-nh[0], -nh[1], -nh[2]}; // -h <= -tol
+        r.add_plane(below, -(dot3(nh, tp[0]) + tol));
+    }
 }
 
 } // namespace mvpt

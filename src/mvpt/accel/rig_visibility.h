@@ -52,6 +52,12 @@ private:
     /// The proof for the cell `idx` of size 2^shift finest cells (exact in double precision up
     /// to OccluderBvh's margin).
     bool evaluate(const int64_t idx[3], int shift, int64_t own) const;
+    /// Half-spaces that bound the segments from the cell [lo, hi] to the rig: a wedge around
+    /// the axis from the cell to the rig, and caps along it.
+    void add_wedge(const double lo[3], const double hi[3], ConvexRegion &r) const;
+    /// The half-space above the plane of occluder `own` (the triangle that the segments start
+    /// on), when the whole rig is strictly on one side of it.
+    void add_own_plane(const double lo[3], const double hi[3], int64_t own, ConvexRegion &r) const;
 
     const OccluderBvh &m_occ;
     /// The corners of a box around the lens points (in the rig's frame), and its centre.

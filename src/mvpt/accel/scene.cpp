@@ -68,20 +68,32 @@ void Scene::build(SceneParts parts) {
     for (auto &l : m_lights) l->set_scene_bounds(center, std::max(radius, 1e-3f));
 }
 
+RTCRayHit Scene::to_embree(const Ray &ray) const {
+    RTCRayHit r;
+    if (embree_can_trace(ray)) {
+        r.ray.org_x = ray.o.x; r.ray.org_y = ray.o.y; r.ray.org_z = ray.o.z;
+        r.ray.dir_x = ray.d.x; r.ray.dir_y = ray.d.y; r.ray.dir_z = ray.d.z;
+        r.ray.tnear = ray.tmin;
+        r.ray.tfar = ray.tmax;
+    } else { // inactive: tnear > tfar
+        r.ray.org_x = r.ray.org_y = r.ray.org_z = 0.f;
+        r.ray.dir_x = r.ray.dir_y = 0.f; r.ray.dir_z = 1.f;
+        r.ray.tnear = 1.f;
+        r.ray.tfar = 0.f;
+    }
+    r.ray.time = m_animated ? m_motion.to_embree(ray.time) : 0.f;
+    r.ray.mask = 0xffffffffu;
+    r.ray.flags = 0;
+    r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return r;
+}
+
 bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
     if (!embree_can_trace(ray)) return false;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = ray.o.x; rh.ray.org_y = ray.o.y; rh.ray.org_z = ray.o.z;
-    rh.ray.dir_x = ray.d.x; rh.ray.dir_y = ray.d.y; rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = ray.tmin;
-    rh.ray.tfar = ray.tmax;
-    rh.ray.time = m_animated ? m_motion.to_embree(ray.time) : 0.f;
-    rh.ray.mask = 0xffffffffu;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = to_embree(ray);
     rtcIntersect1(m_scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     fill_hit(ray, rh.ray.tfar, rh.hit.geomID, rh.hit.instID[0], rh.hit.primID, {rh.hit.u, rh.hit.v}, si);
@@ -119,46 +131,33 @@ bool Scene::occluded(const Ray &ray) const {
 }
 
 void Scene::intersect(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit, bool coherent) const {
+    if (coherent) intersect_stream(rays, n, si, hit);
+    else intersect_packets(rays, n, si, hit);
+}
+
+void Scene::intersect_stream(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    if (coherent) {
-        // One stream: Embree traces coherent rays (a tile's camera rays) as packets of its choice.
-        constexpr size_t Chunk = 256;
-        RTCRayHit rh[Chunk];
-        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-        for (size_t b = 0; b < n; b += Chunk) {
-            size_t m = std::min(Chunk, n - b);
-            for (size_t i = 0; i < m; ++i) {
-                const Ray &ray = rays[b + i];
-                RTCRayHit &r = rh[i];
-                if (embree_can_trace(ray)) {
-                    r.ray.org_x = ray.o.x; r.ray.org_y = ray.o.y; r.ray.org_z = ray.o.z;
-                    r.ray.dir_x = ray.d.x; r.ray.dir_y = ray.d.y; r.ray.dir_z = ray.d.z;
-                    r.ray.tnear = ray.tmin;
-                    r.ray.tfar = ray.tmax;
-                } else { // inactive: tnear > tfar
-                    r.ray.org_x = r.ray.org_y = r.ray.org_z = 0.f;
-                    r.ray.dir_x = r.ray.dir_y = 0.f; r.ray.dir_z = 1.f;
-                    r.ray.tnear = 1.f;
-                    r.ray.tfar = 0.f;
-                }
-                r.ray.time = m_animated ? m_motion.to_embree(ray.time) : 0.f;
-                r.ray.mask = 0xffffffffu;
-                r.ray.flags = 0;
-                r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-            }
-            rtcIntersect1M(m_scene, &ctx, rh, unsigned(m), sizeof(RTCRayHit));
-            for (size_t i = 0; i < m; ++i) {
-                const RTCRayHit &r = rh[i];
-                hit[b + i] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-                if (hit[b + i])
-                    fill_hit(rays[b + i], r.ray.tfar, r.hit.geomID, r.hit.instID[0], r.hit.primID, {r.hit.u, r.hit.v},
-                             si[b + i]);
-            }
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    constexpr size_t Chunk = 256;
+    RTCRayHit rh[Chunk];
+    for (size_t b = 0; b < n; b += Chunk) {
+        size_t m = std::min(Chunk, n - b);
+        for (size_t i = 0; i < m; ++i) rh[i] = to_embree(rays[b + i]);
+        rtcIntersect1M(m_scene, &ctx, rh, unsigned(m), sizeof(RTCRayHit));
+        for (size_t i = 0; i < m; ++i) {
+            const RTCRayHit &r = rh[i];
+            hit[b + i] = r.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            if (hit[b + i])
+                fill_hit(rays[b + i], r.ray.tfar, r.hit.geomID, r.hit.instID[0], r.hit.primID, {r.hit.u, r.hit.v},
+                         si[b + i]);
         }
-        return;
     }
+}
+
+void Scene::intersect_packets(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
     alignas(64) RTCRayHit16 p;
     alignas(64) int valid[16];
     for (size_t i = 0; i < 16; ++i) {

@@ -98,6 +98,12 @@ public:
     RTCScene embree_scene() const { return m_scene; }
 
 private:
+    /// `ray` as Embree's record, before the hit; an untraceable ray as an inactive one (tnear > tfar).
+    RTCRayHit to_embree(const Ray &ray) const;
+    /// Coherent rays (a tile's camera rays) as one stream, in packets of Embree's choice.
+    void intersect_stream(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit) const;
+    /// Incoherent rays as 16-wide packets.
+    void intersect_packets(const Ray *rays, size_t n, SurfaceInteraction *si, uint8_t *hit) const;
     /// Completes a hit reported by Embree (geometry ids, primitive, barycentrics).
     void fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
                   SurfaceInteraction &si) const;

@@ -236,93 +236,101 @@ void add_occluders(const Shape &shape, OccluderList &out) {
         out.boxes.push_back(shape.bounds());
     }
 }
+
+/// Box `b` grown by `pad` and rounded outwards to float, so that it holds its primitive exactly.
+/// Coordinates are kept out of [-1e-10, 1e-10]: a side at 0 would round out to a denormal,
+/// and products with denormals take the slow microcode path in the node tests.
+BoundingBox outward(BoundingBox b, double pad) {
+    for (int c = 0; c < 3; ++c) {
+        float lo = std::nextafter(float((&b.min.x)[c] - pad), -INFINITY);
+        float hi = std::nextafter(float((&b.max.x)[c] + pad), INFINITY);
+        (&b.min.x)[c] = std::abs(lo) < 1e-10f ? -1e-10f : lo;
+        (&b.max.x)[c] = std::abs(hi) < 1e-10f ? 1e-10f : hi;
+    }
+    return b;
+}
+
+/// Whether index[i0..i1) are valid and consecutive: a shape's occluders in primitive order.
+bool contiguous(const std::vector<int64_t> &index, size_t i0, size_t i1) {
+    for (size_t i = i0; i < i1; ++i)
+        if (index[i] < 0 || index[i] != index[i0] + int64_t(i - i0)) return false;
+    return i1 > i0;
+}
 } // namespace
 
 OccluderBvh::OccluderBvh(RTCDevice device, const std::vector<std::shared_ptr<Shape>> &shapes) {
     OccluderList list;
-    struct Range {
-        const Shape *shape;
-        size_t tri0, tri1, sph0, sph1;
-    };
-    std::vector<Range> ranges;
+    std::vector<ShapeRange> ranges;
     for (const auto &s : shapes) {
         const size_t tri0 = list.triangles.size(), sph0 = list.spheres.size();
         add_occluders(*s, list);
         ranges.push_back({s.get(), tri0, list.triangles.size(), sph0, list.spheres.size()});
     }
     std::vector<RTCBuildPrimitive> build;
-    auto add = [&](Prim p, BoundingBox b) -> int64_t {
-        if (!(b.min.x <= b.max.x)) return -1; // empty or NaN
-        RTCBuildPrimitive r;
-        r.lower_x = b.min.x, r.lower_y = b.min.y, r.lower_z = b.min.z;
-        r.upper_x = b.max.x, r.upper_y = b.max.y, r.upper_z = b.max.z;
-        r.geomID = 0;
-        r.primID = uint32_t(m_prims.size());
-        build.push_back(r);
-        p.lo[0] = b.min.x, p.lo[1] = b.min.y, p.lo[2] = b.min.z;
-        p.hi[0] = b.max.x, p.hi[1] = b.max.y, p.hi[2] = b.max.z;
-        m_prims.push_back(p);
-        m_extent = std::max({m_extent, std::abs(b.min.x), std::abs(b.min.y), std::abs(b.min.z), std::abs(b.max.x),
-                             std::abs(b.max.y), std::abs(b.max.z)});
-        for (int c = 0; c < 3; ++c) {
-            const double l = (&b.min.x)[c], h = (&b.max.x)[c];
-            m_lo[c] = m_prims.size() == 1 ? l : std::min(m_lo[c], l);
-            m_hi[c] = m_prims.size() == 1 ? h : std::max(m_hi[c], h);
-        }
-        return int64_t(m_prims.size()) - 1;
-    };
     std::vector<int64_t> tri_prim, sph_prim; // occluder index by list index
-    // Boxes in float, rounded outwards: each holds its primitive exactly. Coordinates are kept
-    // out of [-1e-10, 1e-10] (a box side at 0 would round out to a denormal, and products with
-    // denormals take the slow microcode path in the node tests).
-    auto outward = [](BoundingBox b, double pad) {
-        for (int c = 0; c < 3; ++c) {
-            float lo = std::nextafter(float((&b.min.x)[c] - pad), -INFINITY);
-            float hi = std::nextafter(float((&b.max.x)[c] + pad), INFINITY);
-            (&b.min.x)[c] = std::abs(lo) < 1e-10f ? -1e-10f : lo;
-            (&b.max.x)[c] = std::abs(hi) < 1e-10f ? 1e-10f : hi;
-        }
-        return b;
-    };
     for (const auto &t : list.triangles) {
-        Prim p{Kind::Triangle, {}, {}, 0, {}, {}};
         BoundingBox b;
-        for (int v = 0; v < 3; ++v) {
-            p.p[v][0] = t[v].x, p.p[v][1] = t[v].y, p.p[v][2] = t[v].z;
-            b.expand(t[v]);
-        }
-        const double e1[3] = {p.p[1][0] - p.p[0][0], p.p[1][1] - p.p[0][1], p.p[1][2] - p.p[0][2]};
-        const double e2[3] = {p.p[2][0] - p.p[0][0], p.p[2][1] - p.p[0][1], p.p[2][2] - p.p[0][2]};
-        p.n[0] = e1[1] * e2[2] - e1[2] * e2[1], p.n[1] = e1[2] * e2[0] - e1[0] * e2[2], p.n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        p.n_len = std::sqrt(dot3(p.n, p.n));
-        tri_prim.push_back(add(p, outward(b, 0.0)));
+        for (const Point3f &v : t) b.expand(v);
+        tri_prim.push_back(add(triangle_prim(t), outward(b, 0.0), build));
     }
     for (const auto &[c, r] : list.spheres) {
-        Prim p{Kind::Sphere, {{c.x, c.y, c.z}, {r, 0, 0}, {}}, {}, 0, {}, {}};
         BoundingBox b;
         b.min = b.max = c;
-        sph_prim.push_back(add(p, outward(b, r)));
+        sph_prim.push_back(add({Kind::Sphere, {{c.x, c.y, c.z}, {r, 0, 0}, {}}, {}, 0, {}, {}}, outward(b, r), build));
     }
-    // A shape's triangles (in primitive order) or its sphere, when they are all occluders.
-    auto contiguous = [](const std::vector<int64_t> &index, size_t i0, size_t i1) {
-        for (size_t i = i0; i < i1; ++i)
-            if (index[i] < 0 || index[i] != index[i0] + int64_t(i - i0)) return false;
-        return i1 > i0;
-    };
-    for (const Range &r : ranges) {
-        if (r.sph1 == r.sph0 && contiguous(tri_prim, r.tri0, r.tri1))
-            m_shape_occluders[r.shape] = {tri_prim[r.tri0], uint32_t(r.tri1 - r.tri0)};
-        else if (r.tri1 == r.tri0 && r.sph1 == r.sph0 + 1 && sph_prim[r.sph0] >= 0)
-            m_shape_occluders[r.shape] = {sph_prim[r.sph0], 1};
-    }
+    index_shapes(ranges, tri_prim, sph_prim);
     for (const BoundingBox &box : list.boxes) {
         // Bounds of analytic shapes and instances are computed in float: pad them relatively.
         double pad = 1e-5 * (1.0 + std::max({std::abs(box.min.x), std::abs(box.min.y), std::abs(box.min.z),
                                                std::abs(box.max.x), std::abs(box.max.y), std::abs(box.max.z)}));
         BoundingBox b = outward(box, pad);
-        add({Kind::Box, {{b.min.x, b.min.y, b.min.z}, {b.max.x, b.max.y, b.max.z}, {}}, {}, 0, {}, {}}, b);
+        add({Kind::Box, {{b.min.x, b.min.y, b.min.z}, {b.max.x, b.max.y, b.max.z}, {}}, {}, 0, {}, {}}, b, build);
     }
-    if (build.empty()) return;
+    if (!build.empty()) build_tree(device, build);
+}
+
+OccluderBvh::Prim OccluderBvh::triangle_prim(const std::array<Point3f, 3> &t) {
+    Prim p{Kind::Triangle, {}, {}, 0, {}, {}};
+    for (int v = 0; v < 3; ++v) p.p[v][0] = t[v].x, p.p[v][1] = t[v].y, p.p[v][2] = t[v].z;
+    const double e1[3] = {p.p[1][0] - p.p[0][0], p.p[1][1] - p.p[0][1], p.p[1][2] - p.p[0][2]};
+    const double e2[3] = {p.p[2][0] - p.p[0][0], p.p[2][1] - p.p[0][1], p.p[2][2] - p.p[0][2]};
+    p.n[0] = e1[1] * e2[2] - e1[2] * e2[1], p.n[1] = e1[2] * e2[0] - e1[0] * e2[2], p.n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    p.n_len = std::sqrt(dot3(p.n, p.n));
+    return p;
+}
+
+int64_t OccluderBvh::add(Prim p, const BoundingBox &b, std::vector<RTCBuildPrimitive> &build) {
+    if (!(b.min.x <= b.max.x)) return -1; // empty or NaN
+    RTCBuildPrimitive r;
+    r.lower_x = b.min.x, r.lower_y = b.min.y, r.lower_z = b.min.z;
+    r.upper_x = b.max.x, r.upper_y = b.max.y, r.upper_z = b.max.z;
+    r.geomID = 0;
+    r.primID = uint32_t(m_prims.size());
+    build.push_back(r);
+    p.lo[0] = b.min.x, p.lo[1] = b.min.y, p.lo[2] = b.min.z;
+    p.hi[0] = b.max.x, p.hi[1] = b.max.y, p.hi[2] = b.max.z;
+    m_prims.push_back(p);
+    m_extent = std::max({m_extent, std::abs(b.min.x), std::abs(b.min.y), std::abs(b.min.z), std::abs(b.max.x),
+                         std::abs(b.max.y), std::abs(b.max.z)});
+    for (int c = 0; c < 3; ++c) {
+        const double l = (&b.min.x)[c], h = (&b.max.x)[c];
+        m_lo[c] = m_prims.size() == 1 ? l : std::min(m_lo[c], l);
+        m_hi[c] = m_prims.size() == 1 ? h : std::max(m_hi[c], h);
+    }
+    return int64_t(m_prims.size()) - 1;
+}
+
+void OccluderBvh::index_shapes(const std::vector<ShapeRange> &ranges, const std::vector<int64_t> &tri_prim,
+                               const std::vector<int64_t> &sph_prim) {
+    for (const ShapeRange &r : ranges) {
+        if (r.sph1 == r.sph0 && contiguous(tri_prim, r.tri0, r.tri1))
+            m_shape_occluders[r.shape] = {tri_prim[r.tri0], uint32_t(r.tri1 - r.tri0)};
+        else if (r.tri1 == r.tri0 && r.sph1 == r.sph0 + 1 && sph_prim[r.sph0] >= 0)
+            m_shape_occluders[r.shape] = {sph_prim[r.sph0], 1};
+    }
+}
+
+void OccluderBvh::build_tree(RTCDevice device, std::vector<RTCBuildPrimitive> &build) {
     m_bvh = rtcNewBVH(device);
     RTCBuildArguments args = rtcDefaultBuildArguments();
     args.buildQuality = RTC_BUILD_QUALITY_HIGH;

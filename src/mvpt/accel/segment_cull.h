@@ -9,6 +9,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <unordered_map>
@@ -106,6 +107,19 @@ private:
         /// The box that holds the primitive.
         double lo[3], hi[3];
     };
+    /// A shape's range of triangles and spheres in the occluder list.
+    struct ShapeRange {
+        const Shape *shape;
+        size_t tri0, tri1, sph0, sph1;
+    };
+    static Prim triangle_prim(const std::array<Point3f, 3> &t);
+    /// Occluder `p` with box `b` into the primitives and Embree's build list: its index, or -1
+    /// when the box is empty.
+    int64_t add(Prim p, const BoundingBox &b, std::vector<RTCBuildPrimitive> &build);
+    /// m_shape_occluders from each shape's range and the occluder index of each list entry.
+    void index_shapes(const std::vector<ShapeRange> &ranges, const std::vector<int64_t> &tri_prim,
+                      const std::vector<int64_t> &sph_prim);
+    void build_tree(RTCDevice device, std::vector<RTCBuildPrimitive> &build);
     bool prim_may_block(const Prim &prim, const SegmentBundle &b) const;
     bool prim_may_block(const Prim &prim, const ConvexRegion &r) const;
     /// may_hit for one segment from `a` to `b` and a triangle or box.

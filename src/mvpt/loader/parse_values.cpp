@@ -232,6 +232,73 @@ SpectrumCurve parse_spectrum(const XmlNode &n, const std::string &name, const Lo
     return s;
 }
 
+/// A <boolean>'s value: true/1 or false/0, in any case.
+bool parse_bool(const XmlNode &n, const std::string &name) {
+    std::string v = required(n.attrs, "value", n.tag, n.loc), lv = v;
+    std::transform(lv.begin(), lv.end(), lv.begin(), ::tolower);
+    if (lv == "true" || lv == "1") return true;
+    if (lv == "false" || lv == "0") return false;
+    throw SceneError(n.attr_loc("value"), "boolean '" + name + "': expected true or false, got '" + v + "'");
+}
+
+/// An <rgb>'s value: one number (grey) or three.
+Color3f parse_rgb(const XmlNode &n, const std::string &name) {
+    auto l = parse_float_list(required(n.attrs, "value", n.tag, n.loc), n.attr_loc("value"), "rgb '" + name + "'");
+    if (l.size() == 1) return Color3f(float(l[0]));
+    if (l.size() == 3) return Color3f(float(l[0]), float(l[1]), float(l[2]));
+    throw SceneError(n.attr_loc("value"), "rgb '" + name + "': expected 1 or 3 numbers, got " + std::to_string(l.size()));
+}
+
+/// An <animation>: <transform time="..."> keyframes at distinct times.
+AnimatedTransform parse_animation(const XmlNode &n) {
+    std::vector<std::pair<float, Transform>> keys;
+    for (auto &k : n.children) {
+        if (k.tag != "transform")
+            throw SceneError(k.loc, "<animation> may only contain <transform time=\"...\"> keyframes, got <" + k.tag + ">");
+        check_attrs(k.attrs, {"time"}, "transform", k.loc);
+        float time = float(parse_float(required(k.attrs, "time", "transform", k.loc), k.attr_loc("time"), "keyframe time"));
+        keys.emplace_back(time, parse_transform_ops(k));
+    }
+    if (keys.empty()) throw SceneError(n.loc, "<animation> needs at least one <transform time=\"...\"> keyframe");
+    for (size_t i = 0; i < keys.size(); ++i)
+        for (size_t j = i + 1; j < keys.size(); ++j)
+            if (keys[i].first == keys[j].first)
+                throw SceneError(n.loc, "<animation> has two keyframes at time " + std::to_string(keys[i].first));
+    AnimatedTransform at;
+    std::string err;
+    if (!AnimatedTransform::from_keys(keys, at, err)) throw SceneError(n.loc, err);
+    return at;
+}
+
+[[noreturn]] void unknown_element(const XmlNode &n) {
+    static const std::vector<std::string> known = {"float", "integer", "boolean", "string", "rgb", "spectrum",
+                                                   "point", "vector", "transform", "animation", "ref", "bsdf",
+                                                   "emitter", "shape", "sensor", "film", "rfilter", "sampler",
+                                                   "integrator", "texture", "include", "default"};
+    std::string hint = did_you_mean(n.tag, known, "<", ">");
+    throw SceneError(n.loc, "unknown element <" + n.tag + ">" +
+                                (hint.empty() ? " (expected a value such as <float>, <rgb>, <transform> or an object "
+                                                "such as <bsdf>, <shape>, <texture>)"
+                                              : hint));
+}
+
+/// <float>, <integer>, <boolean>, <string> and <rgb>: a name and a value, no children.
+void parse_named_value(const XmlNode &n, Properties &props) {
+    const std::string &tag = n.tag;
+    check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
+    if (!n.children.empty()) throw SceneError(n.children[0].loc, "<" + tag + "> cannot have child elements");
+    const std::string name = required(n.attrs, "name", tag, n.loc);
+    if (tag == "float")
+        props.set(name, parse_float(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "float '" + name + "'"),
+                  n.loc, tag);
+    else if (tag == "integer")
+        props.set(name, parse_int(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "integer '" + name + "'"),
+                  n.loc, tag);
+    else if (tag == "boolean") props.set(name, parse_bool(n, name), n.loc, tag);
+    else if (tag == "string") props.set(name, required(n.attrs, "value", tag, n.loc), n.loc, tag);
+    else props.set(name, parse_rgb(n, name), n.loc, tag);
+}
+
 } // namespace
 
 void parse_value_node(const XmlNode &n, Properties &props, const LoadContext &ctx) {
@@ -240,41 +307,8 @@ void parse_value_node(const XmlNode &n, Properties &props, const LoadContext &ct
     auto no_children = [&] {
         if (!n.children.empty()) throw SceneError(n.children[0].loc, "<" + tag + "> cannot have child elements");
     };
-    if (tag == "float") {
-        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
-        no_children();
-        std::string name = name_of();
-        props.set(name, parse_float(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "float '" + name + "'"),
-                  n.loc, tag);
-    } else if (tag == "integer") {
-        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
-        no_children();
-        std::string name = name_of();
-        props.set(name, parse_int(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "integer '" + name + "'"),
-                  n.loc, tag);
-    } else if (tag == "boolean") {
-        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
-        no_children();
-        std::string name = name_of(), v = required(n.attrs, "value", tag, n.loc);
-        std::string lv = v;
-        std::transform(lv.begin(), lv.end(), lv.begin(), ::tolower);
-        bool b;
-        if (lv == "true" || lv == "1") b = true;
-        else if (lv == "false" || lv == "0") b = false;
-        else throw SceneError(n.attr_loc("value"), "boolean '" + name + "': expected true or false, got '" + v + "'");
-        props.set(name, b, n.loc, tag);
-    } else if (tag == "string") {
-        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
-        no_children();
-        props.set(name_of(), required(n.attrs, "value", tag, n.loc), n.loc, tag);
-    } else if (tag == "rgb") {
-        check_attrs(n.attrs, {"name", "value"}, tag, n.loc);
-        no_children();
-        std::string name = name_of();
-        auto l = parse_float_list(required(n.attrs, "value", tag, n.loc), n.attr_loc("value"), "rgb '" + name + "'");
-        if (l.size() == 1) props.set(name, Color3f(float(l[0])), n.loc, tag);
-        else if (l.size() == 3) props.set(name, Color3f(float(l[0]), float(l[1]), float(l[2])), n.loc, tag);
-        else throw SceneError(n.attr_loc("value"), "rgb '" + name + "': expected 1 or 3 numbers, got " + std::to_string(l.size()));
+    if (tag == "float" || tag == "integer" || tag == "boolean" || tag == "string" || tag == "rgb") {
+        parse_named_value(n, props);
     } else if (tag == "spectrum") {
         if (const std::string *type = n.attr("type"))
             throw SceneError(n.attr_loc("type"), "<spectrum type=\"" + *type + "\"> (e.g. blackbody) needs Mitsuba's spectral "
@@ -293,33 +327,10 @@ void parse_value_node(const XmlNode &n, Properties &props, const LoadContext &ct
         props.set(name_of(), parse_transform_ops(n), n.loc, tag);
     } else if (tag == "animation") {
         check_attrs(n.attrs, {"name"}, tag, n.loc);
-        std::vector<std::pair<float, Transform>> keys;
-        for (auto &k : n.children) {
-            if (k.tag != "transform")
-                throw SceneError(k.loc, "<animation> may only contain <transform time=\"...\"> keyframes, got <" + k.tag + ">");
-            check_attrs(k.attrs, {"time"}, "transform", k.loc);
-            float time = float(parse_float(required(k.attrs, "time", "transform", k.loc), k.attr_loc("time"), "keyframe time"));
-            keys.emplace_back(time, parse_transform_ops(k));
-        }
-        if (keys.empty()) throw SceneError(n.loc, "<animation> needs at least one <transform time=\"...\"> keyframe");
-        for (size_t i = 0; i < keys.size(); ++i)
-            for (size_t j = i + 1; j < keys.size(); ++j)
-                if (keys[i].first == keys[j].first)
-                    throw SceneError(n.loc, "<animation> has two keyframes at time " + std::to_string(keys[i].first));
-        AnimatedTransform at;
-        std::string err;
-        if (!AnimatedTransform::from_keys(keys, at, err)) throw SceneError(n.loc, err);
+        AnimatedTransform at = parse_animation(n);
         props.set(name_of(), at, n.loc, tag);
     } else {
-        static const std::vector<std::string> known = {"float", "integer", "boolean", "string", "rgb", "spectrum",
-                                                       "point", "vector", "transform", "animation", "ref", "bsdf",
-                                                       "emitter", "shape", "sensor", "film", "rfilter", "sampler",
-                                                       "integrator", "texture", "include", "default"};
-        std::string hint = did_you_mean(tag, known, "<", ">");
-        throw SceneError(n.loc, "unknown element <" + tag + ">" +
-                                    (hint.empty() ? " (expected a value such as <float>, <rgb>, <transform> or an object "
-                                                    "such as <bsdf>, <shape>, <texture>)"
-                                                  : hint));
+        unknown_element(n);
     }
 }
 

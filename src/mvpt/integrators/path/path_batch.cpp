@@ -335,6 +335,30 @@ void Wavefront::start(const Ray *rays, const PathState *states, size_t n) {
     m_tables.build(m_scene.lights(), m_buf);
 }
 
+namespace {
+
+/// Scattering vertex j's sample dimensions, in li's order (u_rr is unused when li stops
+/// earlier): drawn now into the columns `u`, or, from an independent sampler, their hash and
+/// first dimension kept for independent_vertex_draws.
+inline void vertex_draws(Sampler &sampler, size_t j, bool independent, const std::array<float *, 7> &u,
+                         WaveBuffers &buf) {
+    if (independent) {
+        buf.u_hash[j] = sampler.sample_hash();
+        buf.u_dim[j] = sampler.dimension();
+        sampler.set_dimension(sampler.dimension() + DimsPerVertex);
+        return;
+    }
+    u[0][j] = sampler.next_1d();
+    Vec2f u_light = sampler.next_2d();
+    u[1][j] = u_light.x, u[2][j] = u_light.y;
+    u[3][j] = sampler.next_1d();
+    Vec2f u_dir = sampler.next_2d();
+    u[4][j] = u_dir.x, u[5][j] = u_dir.y;
+    u[6][j] = sampler.next_1d();
+}
+
+} // namespace
+
 size_t Wavefront::emission(size_t active) {
     // Raw pointers in locals: through the buffers or `this`, GCC reloads them after every byte store.
     WavePath *const paths = m_buf.paths.data();
@@ -376,7 +400,6 @@ size_t Wavefront::emission(size_t active) {
         if (!hit || p.depth + 1 >= m_max_depth) continue;
 
         SurfaceInteraction &si = sis[k];
-        // The vertex's sample dimensions, in li's order (u_rr is unused when li stops earlier).
         const size_t j = n_scatter++;
         scatter[j].path = uint32_t(k);
         scatter[j].sampled = false;
@@ -385,19 +408,7 @@ size_t Wavefront::emission(size_t active) {
         // A Lambertian vertex's kernels read only wi's z, which their gather computes.
         if (form->kind == BsdfForm::Lambert) scatter[j].refl = lambert_reflectance(form->lambert, si);
         else si.wi = si.to_local(-ray.d);
-        if (independent) {
-            buf.u_hash[j] = sampler.sample_hash();
-            buf.u_dim[j] = sampler.dimension();
-            sampler.set_dimension(sampler.dimension() + DimsPerVertex);
-        } else {
-            u[0][j] = sampler.next_1d();
-            Vec2f u_light = sampler.next_2d();
-            u[1][j] = u_light.x, u[2][j] = u_light.y;
-            u[3][j] = sampler.next_1d();
-            Vec2f u_dir = sampler.next_2d();
-            u[4][j] = u_dir.x, u[5][j] = u_dir.y;
-            u[6][j] = sampler.next_1d();
-        }
+        vertex_draws(sampler, j, independent, u, buf);
     }
     if (independent) independent_vertex_draws(buf.u_hash.data(), buf.u_dim.data(), n_scatter, u.data());
     m_env_mis = n_env_mis, m_env_nomis = env_nomis;
