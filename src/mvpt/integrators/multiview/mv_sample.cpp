@@ -175,104 +175,89 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim) {
     ctx.scene->intersect(prim.rays.data(), n, prim.si.data(), prim.hit.data(), true);
 }
 
-void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_t i_prim, MvScratch &sc,
-                      MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
+namespace {
+
+/// A native sample of view l in progress: its pixel, camera sample, first hit and stream.
+struct NativeSample {
+    int slot;        ///< l
+    uint32_t pixel;  ///< in l's sample window
+    Vec2f film;      ///< the film position
+    float n;         ///< l's native samples in the pixel this pass: the plain weight is 1/n
+    SampleKey key;
+    Vec2f xi;        ///< the lens sample
+    float t;         ///< the time
+    const Ray &ray;  ///< the camera ray
+    SurfaceInteraction &si;
+    Sampler sampler;
+    MvViewStats &st;
+    uint64_t rays_before; ///< the thread's rays before this sample's camera ray
+    MvMediaVertex media;  ///< through media (§10): the first surface and the camera segment
+};
+
+/// Radiance only the native strategy produces goes to l's own pixel with the plain weight
+/// 1/n_l; it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole
+/// pixel.
+void splat_native_only(NativeSample &s, MvSplatSink &sink, const RayCounters &counters, const Spectrum &L) {
+    if (!sink.native(s.slot, s.pixel, s.film, s.sampler.sample_hash(), Spectrum(0.f), 1.f / s.n, L * (1.f / s.n)))
+        sink.lost(s.key);
+    ++s.st.sharing;
+    s.st.rays += counters.rays + counters.shadow_rays - s.rays_before;
+}
+
+/// A native sample that no other view can share (no hit, a first vertex with no smooth lobe,
+/// no bounce, or one view): the (volumetric) path tracer's path, to l alone. False when the
+/// views may share its first vertex.
+bool trace_unshared(const MvContext &ctx, NativeSample &s, bool hit, MvScratch &sc, MvPendingSamples &pending,
+                    MvSplatSink &sink, RayCounters &counters) {
     const Scene &scene = *ctx.scene;
     const PathConfig &pc = ctx.path->config();
     const uint32_t max_depth = pc.max_depth < 0 ? UINT_MAX : uint32_t(pc.max_depth);
-    const MvView &l = ctx.views[slot_l];
-    const Camera &cam = *l.camera;
-    const int px = int(prim.px[i_prim]), py = int(prim.py[i_prim]);
-    const uint32_t pixel_l = ctx.windows[slot_l].index(px, py);
-    const Vec2f film_l = prim.camera.film[i_prim];
-    const float n_l = float(ctx.native_map[slot_l][pixel_l]);
-    MvViewStats &st_l = stats[slot_l];
-    const uint64_t rays_before = counters.rays + counters.shadow_rays;
-    ++st_l.native;
-
-    // The native sample's stream (its camera dimensions were drawn by mv_trace_primaries).
-    Sampler sampler(cam.sampler_kind, ctx.seeds[slot_l]);
-    prim.camera.start(sampler, i_prim, l.scene_index, uint32_t(px), uint32_t(py), prim.sample_index[i_prim], 0);
-    const Vec2f xi = prim.camera.lens[i_prim];
-    const float t = prim.camera.time[i_prim];
-    const Ray &ray = prim.rays[i_prim];
-    ++counters.camera_rays;
-    ++counters.rays;
-    SurfaceInteraction &si = prim.si[i_prim];
-    bool hit = prim.hit[i_prim] != 0;
-    // Through media (§10) the shared vertex is the first surface that is not null.
-    MvMediaVertex media_y;
-    if (ctx.volpath) {
-        media_y = mv_media_first_vertex(ctx, slot_l, ray, sampler, counters);
-        hit = media_y.found();
-        if (hit) si = media_y.walk.si;
-    }
-    // The next sample's rig cells start loading (trace_visibility consults them unless only
-    // the selected views are traced).
-    if (ctx.rig && !ctx.cfg.mis_selected_only && i_prim + 1 < prim.size() && prim.hit[i_prim + 1]) {
-        const SurfaceInteraction &next = prim.si[i_prim + 1];
-        ctx.rig->prefetch(next.p, next.shape, next.prim);
-    }
-
-    // Radiance only the native strategy produces goes to l's own pixel with the plain weight 1/n_l;
-    // it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole pixel.
-    const SampleKey key{int64_t(prim.sample_index[i_prim]), int64_t(l.scene_index), py, px};
-    auto native_only = [&](const Spectrum &L) {
-        if (!sink.native(slot_l, pixel_l, film_l, sampler.sample_hash(), Spectrum(0.f), 1.f / n_l, L * (1.f / n_l)))
-            sink.lost(key);
-        ++st_l.sharing;
-        st_l.rays += counters.rays + counters.shadow_rays - rays_before;
-    };
+    const Camera &cam = *ctx.views[s.slot].camera;
     const Light *env = scene.environment();
-    // Where no view can share the sample through media, it is the volumetric path tracer's.
-    const bool unshared = !hit || !si.shape->bsdf->has_smooth() || max_depth <= 1 || ctx.views.size() < 2;
+    const bool unshared = !hit || !s.si.shape->bsdf->has_smooth() || max_depth <= 1 || ctx.views.size() < 2;
     if (ctx.volpath && unshared) {
         if (!ctx.medium_vertices) {
-            native_only(ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters));
-            return;
+            splat_native_only(s, sink, counters, ctx.volpath->li_in(scene, s.ray, cam.medium.get(), s.sampler, counters));
+            return true;
         }
         // The in-scattering along the segment is the medium vertex's; the rest is l's alone.
-        native_only(ctx.volpath->li_in(scene, ray, cam.medium.get(), sampler, counters, VolPathPart::ReachesSurface));
-        mv_medium_vertex(ctx, slot_l, media_y.near, xi, pixel_l, film_l, key, sampler, sc, pending, counters, st_l);
-        return;
+        splat_native_only(
+            s, sink, counters,
+            ctx.volpath->li_in(scene, s.ray, cam.medium.get(), s.sampler, counters, VolPathPart::ReachesSurface));
+        mv_medium_vertex(ctx, s.slot, s.media.near, s.xi, s.pixel, s.film, s.key, s.sampler, sc, pending, counters, s.st);
+        return true;
     }
     if (!hit) {
-        native_only(env && !pc.hide_emitters ? env->eval_environment(ray.d) : Spectrum(0.f));
-        return;
+        splat_native_only(s, sink, counters, env && !pc.hide_emitters ? env->eval_environment(s.ray.d) : Spectrum(0.f));
+        return true;
     }
-    const Bsdf &bsdf = *si.shape->bsdf;
-    if (unshared) {
-        // Purely specular (or null) first vertex, or no bounce at all: test 4 of §3 fails for
-        // every view, the path is the ordinary path tracer's.
-        PathState state;
-        state.valid = !pc.hide_emitters && env != nullptr;
-        Spectrum L = ctx.path->trace(scene, ray, state, sampler, counters, &si);
-        if (ctx.views.size() >= 2 && max_depth > 1) st_l.rejected[int(ShiftTest::Bsdf)] += ctx.views.size() - 1;
-        native_only(L);
-        return;
-    }
+    if (!unshared) return false;
+    // Purely specular (or null) first vertex, or no bounce at all: test 4 of §3 fails for
+    // every view, the path is the ordinary path tracer's.
+    PathState state;
+    state.valid = !pc.hide_emitters && env != nullptr;
+    Spectrum L = ctx.path->trace(scene, s.ray, state, s.sampler, counters, &s.si);
+    if (ctx.views.size() >= 2 && max_depth > 1) s.st.rejected[int(ShiftTest::Bsdf)] += ctx.views.size() - 1;
+    splat_native_only(s, sink, counters, L);
+    return true;
+}
 
-    // ---------------- Emission at y: to l only (§7) ----------------
-    bool valid = !pc.hide_emitters && env != nullptr;
-    Spectrum le_y(0.f);
-    if (const Light *emitter = si.shape->emitter.get(); emitter && !pc.hide_emitters) {
-        valid = true;
-        le_y = emitter->eval(si, -ray.d);
-    }
-    si.wi = si.to_local(-ray.d);
-
-    // ---------------- Shifts (§3 tests 1-3), selection (§6), visibility (test 5) ----------------
-    MvVertex y{si.p, si.n, t, xi, dot(si.n, ray.o - si.p)};
-    gather_shifts(ctx, slot_l, pixel_l, film_l, y, bsdf, si, sc, &st_l);
-    const MvCandidates &cand = sc.cand;
-    const size_t m = cand.size;
-    mv_select(ctx, sc, sampler, &bsdf, &si);
+/// The views that share the sample: the shifts (§3 tests 1-3), the selection (§6) and the
+/// visibility (test 5) of the candidates, the sharing ones into sc.sharing[0, ns), and the
+/// sums D (§5). Returns ns.
+size_t sharing_views(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, MvScratch &sc, RayCounters &counters) {
+    const SurfaceInteraction &si = s.si;
+    MvVertex y{si.p, si.n, s.t, s.xi, dot(si.n, s.ray.o - si.p)};
+    gather_shifts(ctx, s.slot, s.pixel, s.film, y, bsdf, si, sc, &s.st);
+    const size_t m = sc.cand.size;
+    mv_select(ctx, sc, s.sampler, &bsdf, &si);
     // The balance estimator needs the visibility of every candidate (it enters D); the
     // published variant only that of the selected ones.
     if (ctx.volpath)
-        mv_media_visibility(ctx, sc, si.p, si.time, media_y.walk.tr, ctx.cfg.mis_selected_only, &sampler, counters, &st_l);
+        mv_media_visibility(ctx, sc, si.p, si.time, s.media.walk.tr, ctx.cfg.mis_selected_only, &s.sampler, counters,
+                            &s.st);
     else
-        trace_visibility(ctx, sc, si, t, ctx.cfg.mis_selected_only, counters, &st_l);
+        trace_visibility(ctx, sc, si, s.t, ctx.cfg.mis_selected_only, counters, &s.st);
     // S: the views that shade the sample; V: the strategies in the sums D (§5).
     auto &sharing = sc.sharing;
     grow_scratch(sharing, m);
@@ -282,84 +267,76 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
         ns += sc.visible[i] & sc.selected[i];
     }
     mv_balance_sums(ctx, sc, &bsdf, &si, sharing.data(), ns);
+    return ns;
+}
 
-    // ---------------- Shared next-event estimation (§7) ----------------
-    sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
-    float u_light_select = sampler.next_1d();
-    Vec2f u_light = sampler.next_2d();
-    float u_lobe = sampler.next_1d();
-    Vec2f u_dir = sampler.next_2d();
-    float u_rr = sampler.next_1d();
-    // Per sharing view i (candidate sharing[i]) the radiance is
-    //   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included),
-    // and the contribution L_i / D_i.
-    auto &wis = sc.sharing_wi;
-    const Vec3f *wi_s = cand.wi.data(); // the sharing views' directions (all candidates share: no gather)
-    if (ns < m) {
-        grow_scratch(wis, ns);
-        for (size_t i = 0; i < ns; ++i) wis[i] = cand.wi[sharing[i]];
-        wi_s = wis.data();
-    }
+/// The sharing views' directions at y (those of all candidates when all share: no gather).
+const Vec3f *sharing_directions(MvScratch &sc, size_t ns) {
+    if (ns == sc.cand.size) return sc.cand.wi.data();
+    grow_scratch(sc.sharing_wi, ns);
+    for (size_t i = 0; i < ns; ++i) sc.sharing_wi[i] = sc.cand.wi[sc.sharing[i]];
+    return sc.sharing_wi.data();
+}
+
+/// Shared next-event estimation (§7): one emitter sample for every sharing view, their BSDF
+/// values into f_nee, and the light weight times its MIS weight (zero when no view reflects the
+/// light). Its shadow ray joins `pending` (its index into *shadow), or, through media, its
+/// transmittance is taken now.
+Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
+                    float u_select, Vec2f u_light, Spectrum *f_nee, MvScratch &sc, MvPendingSamples &pending,
+                    RayCounters &counters, int32_t *shadow) {
+    const Scene &scene = *ctx.scene;
     const auto &lights = scene.lights();
-    // The sharing views' BSDF values go straight into the queue (splatted once the suffix is known).
-    const size_t first = pending.add_entries(ns);
-    Spectrum *const f_nee = pending.f_nee.data() + first;
-    Spectrum nee_weight(0.f); // light weight times MIS weight, zero when no view reflects the light
-    int32_t nee_shadow = -1;  // its shadow ray, traced in mv_finish_samples
-    if (!lights.empty()) {
-        const Light &light = *lights[uniform_emitter_index(u_light_select, lights.size())];
-        auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
-        if (!weight.is_black()) {
-            weight *= float(lights.size());
-            Vec3f wo = si.to_local(ls.d);
-            auto &pdf = sc.view_pdf;
-            grow_scratch(pdf, ns);
-            bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee, pdf.data());
-            const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
-            if (max_over_views(f_nee, ns) > 0.f) { // some view reflects light this way
-                const Ray shadow = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
-                if (ctx.volpath) { // the transmittance to the light, now
-                    sampler.set_dimension(DimSharedShadow);
-                    RandomStream rs = sampler.next_stream();
-                    weight *= shadow_transmittance(scene, shadow, mv_medium_towards(si, ls.d, media_y.walk.medium), rs,
-                                                   counters);
-                } else { // a shadow ray, traced with the tile's others
-                    nee_shadow = int32_t(pending.shadow_rays.size());
-                    pending.shadow_rays.push_back(shadow);
-                    ++counters.shadow_rays;
-                }
-                nee_weight = weight * emitter_sample_mis(ls, float(lights.size()), p_mix / float(ns));
-            }
-        }
+    const SurfaceInteraction &si = s.si;
+    if (lights.empty()) return Spectrum(0.f);
+    const Light &light = *lights[uniform_emitter_index(u_select, lights.size())];
+    auto [ls, weight] = light.sample_li(si.p, u_light, si.time);
+    if (weight.is_black()) return Spectrum(0.f);
+    weight *= float(lights.size());
+    Vec3f wo = si.to_local(ls.d);
+    auto &pdf = sc.view_pdf;
+    grow_scratch(pdf, ns);
+    bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee, pdf.data());
+    const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
+    if (!(max_over_views(f_nee, ns) > 0.f)) return Spectrum(0.f); // no view reflects light this way
+    const Ray ray = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
+    if (ctx.volpath) { // the transmittance to the light, now
+        s.sampler.set_dimension(DimSharedShadow);
+        RandomStream rs = s.sampler.next_stream();
+        weight *= shadow_transmittance(scene, ray, mv_medium_towards(si, ls.d, s.media.walk.medium), rs, counters);
+    } else { // a shadow ray, traced with the tile's others
+        *shadow = int32_t(pending.shadow_rays.size());
+        pending.shadow_rays.push_back(ray);
+        ++counters.shadow_rays;
     }
-    const bool nee = !nee_weight.is_black();
+    return weight * emitter_sample_mis(ls, float(lights.size()), p_mix / float(ns));
+}
 
-    // ---------------- Shared bounce from the lobe mixture, one suffix (§7) ----------------
-    sampler.set_dimension(DimBounceView);
-    Spectrum *const fs = pending.f_bounce.data() + first;
+/// The shared bounce from the lobe mixture, one suffix for every sharing view (§7), with
+/// Russian roulette at y as the path tracer's at depth 0: the views' BSDF values into fs, the
+/// suffix into `pending`, and into `rec` its index, validity and the factor of b_i = f_i(wo) /
+/// p_mix(wo) (or, for a delta lobe, the sampled view and its weight).
+void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, Vec2f u_lobe_rr,
+                   Vec2f u_dir, bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending,
+                   MvPendingSamples::Sample &rec) {
+    const PathConfig &pc = ctx.path->config();
+    const SurfaceInteraction &si = s.si;
+    s.sampler.set_dimension(DimBounceView);
     grow_scratch(sc.view_pdf, ns);
     MixtureSample mix =
-        sample_lobe_mixture(bsdf, si, wi_s, ns, sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
+        sample_lobe_mixture(bsdf, si, wi_s, ns, s.sampler.next_1d(), u_lobe_rr.x, u_dir, fs, sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     // (Validity is the path tracer's rule: the volumetric one keeps every path, as Mitsuba's.)
-    bool valid_after = valid || !(bs.sampled_type & BsdfNull) || ctx.volpath;
-    MvPendingSamples::Sample rec;
-    rec.key = key;
-    rec.valid = valid_after;
+    rec.valid = valid || !(bs.sampled_type & BsdfNull) || ctx.volpath;
     float b_scale = 0.f; // b_i = fs[i] * b_scale (smooth), or mix.weight |S| b_scale for the delta view only
     if (!mix.weight.is_black() && mix.pdf > 0.f) {
         // A delta lobe's direction serves only the view that sampled it.
-        float t_max = 0.f;
-        if (mix.delta) {
-            t_max = mix.weight.max_value() * float(ns);
-        } else {
-            t_max = max_over_views(fs, ns) / mix.pdf;
-        }
+        const float t_max = mix.delta ? mix.weight.max_value() * float(ns) : max_over_views(fs, ns) / mix.pdf;
         b_scale = mix.delta ? 1.f : 1.f / mix.pdf;
         bool alive = t_max > 0.f;
         if (alive && 1 >= pc.rr_depth) { // Russian roulette at y, as the path tracer does at depth 0
             float q = std::min(t_max * bs.eta * bs.eta, 0.95f);
-            if (u_rr >= q) alive = false;
+            if (u_lobe_rr.y >= q) alive = false;
             else b_scale /= q;
         }
         if (alive) { // the suffix: traced with the tile's other suffixes (mv_finish_samples)
@@ -369,67 +346,153 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
             state.prev_p = si.p;
             state.prev_bsdf_pdf = mix.pdf;
             state.prev_bsdf_delta = mix.delta;
-            state.valid = valid_after;
+            state.valid = rec.valid;
             rec.suffix = int32_t(pending.rays.size());
             const Vec3f wo = si.to_world(bs.wo);
             pending.rays.push_back(si.spawn_ray(wo));
             if (ctx.volpath) {
-                pending.media.push_back(mv_medium_towards(si, wo, media_y.walk.medium));
+                pending.media.push_back(mv_medium_towards(si, wo, s.media.walk.medium));
                 pending.dims.push_back(DimCameraEnd);
             }
             pending.states.push_back(state);
-            pending.samplers.push_back(sampler);
+            pending.samplers.push_back(s.sampler);
         }
     }
     if (mix.delta) b_scale *= float(ns);
-
-    // ---------------- Each sharing view's share, L_i / D_i, splatted once the suffix is known ----------------
-    // The native view is sharing[0] (candidate 0, always visible and selected).
-    rec.first = uint32_t(first);
-    rec.count = uint32_t(ns);
     rec.delta_view = mix.delta ? int32_t(mix.view) : -1;
-    rec.shadow = nee_shadow;
-    rec.nee = nee;
-    rec.nee_weight = nee_weight;
     rec.b_scale = b_scale;
     if (mix.delta) rec.delta_bounce = mix.weight * b_scale;
-    rec.e = le_y * (1.f / n_l);
-    if (ctx.volpath) { // each view's camera segment (§10): its transmittance, and l's in-scattering
-        for (size_t i = 0; i < ns; ++i) {
-            const Spectrum &tr = sc.tr[sharing[i]];
-            f_nee[i] *= tr, fs[i] *= tr;
-        }
-        if (mix.delta) rec.delta_bounce *= sc.tr[sharing[mix.view]];
-        // (The in-scattering is the medium vertex's where those are shared.)
-        const Spectrum in_scattered =
-            ctx.medium_vertices ? Spectrum(0.f) : mv_in_scattering(ctx, slot_l, ray, media_y, sampler, counters);
-        rec.e = (le_y * media_y.walk.tr + in_scattered) * (1.f / n_l);
+}
+
+/// Through media (§10): each sharing view's camera segment, its transmittance on the view's
+/// values, and l's in-scattering along its own (unless the medium vertices share it).
+void camera_segments(const MvContext &ctx, NativeSample &s, const MvScratch &sc, size_t ns, const Spectrum &le_y,
+                     Spectrum *f_nee, Spectrum *fs, MvPendingSamples::Sample &rec, RayCounters &counters) {
+    for (size_t i = 0; i < ns; ++i) {
+        const Spectrum &tr = sc.tr[sc.sharing[i]];
+        f_nee[i] *= tr, fs[i] *= tr;
     }
-    rec.hash = sampler.sample_hash();
+    if (rec.delta_view >= 0) rec.delta_bounce *= sc.tr[sc.sharing[rec.delta_view]];
+    const Spectrum in_scattered =
+        ctx.medium_vertices ? Spectrum(0.f) : mv_in_scattering(ctx, s.slot, s.ray, s.media, s.sampler, counters);
+    rec.e = (le_y * s.media.walk.tr + in_scattered) * (1.f / s.n);
+}
+
+/// Each sharing view's share L_i / D_i, splatted once the suffix is known: the views' slots,
+/// pixels, film positions and 1/D_i into `pending` from entry `first` (the native view is
+/// sharing[0], candidate 0, always visible and selected).
+void queue_shares(const MvScratch &sc, size_t ns, size_t first, MvPendingSamples &pending) {
+    const MvCandidates &cand = sc.cand;
     int *const slot_out = pending.slot.data() + first;
     uint32_t *const pixel_out = pending.pixel.data() + first;
     Vec2f *const film_out = pending.film.data() + first;
     float *const w_out = pending.w.data() + first;
-    if (ns == m) { // every candidate shares: contiguous copies
+    if (ns == cand.size) { // every candidate shares: contiguous copies
         std::copy_n(cand.slot.data(), ns, slot_out);
         std::copy_n(cand.pixel.data(), ns, pixel_out);
         std::copy_n(cand.film.data(), ns, film_out);
         for (size_t i = 0; i < ns; ++i) w_out[i] = 1.f / sc.d[i];
-    } else {
-        for (size_t i = 0; i < ns; ++i) {
-            const int k = sharing[i];
-            slot_out[i] = cand.slot[k];
-            pixel_out[i] = cand.pixel[k];
-            film_out[i] = cand.film[k];
-            w_out[i] = 1.f / sc.d[k];
-        }
+        return;
     }
-    // (f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.)
+    for (size_t i = 0; i < ns; ++i) {
+        const int k = sc.sharing[i];
+        slot_out[i] = cand.slot[k];
+        pixel_out[i] = cand.pixel[k];
+        film_out[i] = cand.film[k];
+        w_out[i] = 1.f / sc.d[k];
+    }
+}
+
+/// A native sample whose first vertex y the views share (§7): emission at y to l only, the
+/// sharing views, one emitter sample and one bounce for all of them, queued in `pending` until
+/// its suffix and shadow ray are traced. Per sharing view i the radiance is
+///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included),
+/// and the contribution L_i / D_i.
+void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, MvPendingSamples &pending,
+                        RayCounters &counters) {
+    const PathConfig &pc = ctx.path->config();
+    SurfaceInteraction &si = s.si;
+    const Bsdf &bsdf = *si.shape->bsdf;
+    bool valid = !pc.hide_emitters && ctx.scene->environment() != nullptr;
+    Spectrum le_y(0.f);
+    if (const Light *emitter = si.shape->emitter.get(); emitter && !pc.hide_emitters) {
+        valid = true;
+        le_y = emitter->eval(si, -s.ray.d);
+    }
+    si.wi = si.to_local(-s.ray.d);
+    const size_t ns = sharing_views(ctx, s, bsdf, sc, counters);
+
+    s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
+    const float u_light_select = s.sampler.next_1d();
+    const Vec2f u_light = s.sampler.next_2d();
+    const float u_lobe = s.sampler.next_1d();
+    const Vec2f u_dir = s.sampler.next_2d();
+    const float u_rr = s.sampler.next_1d();
+    const Vec3f *wi_s = sharing_directions(sc, ns);
+    // The sharing views' BSDF values go straight into the queue (splatted once the suffix is
+    // known); f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.
+    const size_t first = pending.add_entries(ns);
+    Spectrum *const f_nee = pending.f_nee.data() + first, *const fs = pending.f_bounce.data() + first;
+    MvPendingSamples::Sample rec;
+    rec.key = s.key;
+    rec.first = uint32_t(first);
+    rec.count = uint32_t(ns);
+    rec.shadow = -1;
+    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_light_select, u_light, f_nee, sc, pending, counters, &rec.shadow);
+    rec.nee = !rec.nee_weight.is_black();
+    shared_bounce(ctx, s, bsdf, wi_s, ns, {u_lobe, u_rr}, u_dir, valid, fs, sc, pending, rec);
+    rec.e = le_y * (1.f / s.n);
+    if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
+    rec.hash = s.sampler.sample_hash();
+    queue_shares(sc, ns, first, pending);
     pending.samples.push_back(rec);
-    st_l.sharing += ns;
-    st_l.rays += counters.rays + counters.shadow_rays - rays_before;
+    s.st.sharing += ns;
+    s.st.rays += counters.rays + counters.shadow_rays - s.rays_before;
     if (ctx.medium_vertices)
-        mv_medium_vertex(ctx, slot_l, media_y.near, xi, pixel_l, film_l, key, sampler, sc, pending, counters, st_l);
+        mv_medium_vertex(ctx, s.slot, s.media.near, s.xi, s.pixel, s.film, s.key, s.sampler, sc, pending, counters, s.st);
+}
+
+} // namespace
+
+void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_t i_prim, MvScratch &sc,
+                      MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
+    const MvView &l = ctx.views[slot_l];
+    const int px = int(prim.px[i_prim]), py = int(prim.py[i_prim]);
+    const uint32_t pixel_l = ctx.windows[slot_l].index(px, py);
+    MvViewStats &st_l = stats[slot_l];
+    const uint64_t rays_before = counters.rays + counters.shadow_rays;
+    ++st_l.native;
+    // The native sample's stream (its camera dimensions were drawn by mv_trace_primaries).
+    NativeSample s{slot_l,
+                   pixel_l,
+                   prim.camera.film[i_prim],
+                   float(ctx.native_map[slot_l][pixel_l]),
+                   SampleKey{int64_t(prim.sample_index[i_prim]), int64_t(l.scene_index), py, px},
+                   prim.camera.lens[i_prim],
+                   prim.camera.time[i_prim],
+                   prim.rays[i_prim],
+                   prim.si[i_prim],
+                   Sampler(l.camera->sampler_kind, ctx.seeds[slot_l]),
+                   st_l,
+                   rays_before,
+                   {}};
+    prim.camera.start(s.sampler, i_prim, l.scene_index, uint32_t(px), uint32_t(py), prim.sample_index[i_prim], 0);
+    ++counters.camera_rays;
+    ++counters.rays;
+    bool hit = prim.hit[i_prim] != 0;
+    // Through media (§10) the shared vertex is the first surface that is not null.
+    if (ctx.volpath) {
+        s.media = mv_media_first_vertex(ctx, slot_l, s.ray, s.sampler, counters);
+        hit = s.media.found();
+        if (hit) s.si = s.media.walk.si;
+    }
+    // The next sample's rig cells start loading (trace_visibility consults them unless only
+    // the selected views are traced).
+    if (ctx.rig && !ctx.cfg.mis_selected_only && i_prim + 1 < prim.size() && prim.hit[i_prim + 1]) {
+        const SurfaceInteraction &next = prim.si[i_prim + 1];
+        ctx.rig->prefetch(next.p, next.shape, next.prim);
+    }
+    if (!trace_unshared(ctx, s, hit, sc, pending, sink, counters)) share_first_vertex(ctx, s, sc, pending, counters);
 }
 
 } // namespace mvpt
