@@ -227,11 +227,8 @@ nb::list view_info(const Scene &s) {
     return l;
 }
 
-} // namespace
-
-NB_MODULE(_core, m) {
-    m.doc() = "mvpt native core";
-    // SceneError (a ValueError) carries the location as attributes: file, line, column, message.
+/// SceneError (a ValueError) carries the location as attributes: file, line, column, message.
+void bind_errors(nb::module_ &m) {
     // (A plain PyObject*, deliberately never released: no destructor runs after interpreter shutdown.)
     static PyObject *scene_error = PyErr_NewExceptionWithDoc(
         "mvpt._core.SceneError", "Bad scene input; str() is 'file:line:col: message'.", PyExc_ValueError, nullptr);
@@ -248,7 +245,10 @@ NB_MODULE(_core, m) {
             PyErr_SetObject(scene_error, exc.ptr());
         }
     });
+}
 
+/// The loaded scene: its views, counts, sources, and the camera projection API (for tests and tools).
+void bind_scene(nb::module_ &m) {
     nb::class_<Scene>(m, "Scene")
         .def_prop_ro("views", &view_info)
         .def_prop_ro("integrator", [](const Scene &s) { return s.integrator().name(); })
@@ -286,7 +286,10 @@ NB_MODULE(_core, m) {
                             const std::string &rig) {
         return std::shared_ptr<Scene>(load_scene_string(xml, base_dir, defines, rig));
     }, "xml"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{}, "rig"_a = "");
+}
 
+/// A render in native threads, its state files and merges.
+void bind_render(nb::module_ &m) {
     // A state file that cannot be used (docs/checkpoints.md): a ValueError.
     nb::exception<StateError>(m, "StateError", PyExc_ValueError);
     m.def("read_state_header", &read_state_header, "path"_a, "The header of a render's state file.");
@@ -316,7 +319,10 @@ NB_MODULE(_core, m) {
         .def("progress", &RenderJob::progress)
         .def("results", &RenderJob::results)
         .def("stats", &RenderJob::stats);
+}
 
+/// Images in and out: EXR (single and multi-part), PNG.
+void bind_images(nb::module_ &m) {
     m.def("write_exr", [](const std::string &path, std::map<std::string, nb::ndarray<float, nb::ndim<2>, nb::c_contig, nb::device::cpu>> channels) {
         std::vector<ExrChannel> ch;
         int w = -1, h = -1;
@@ -363,4 +369,14 @@ NB_MODULE(_core, m) {
         size_t h = img.height, w = img.width;
         return make_array(std::move(img.rgb), {h, w, 3});
     }, "path"_a);
+}
+
+} // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "mvpt native core";
+    bind_errors(m);
+    bind_scene(m);
+    bind_render(m);
+    bind_images(m);
 }

@@ -124,13 +124,20 @@ bool SegmentBundle::build(Point3f o, Vec3f across, const float *dx, const float 
     const SlopeRanges r = slope_ranges(dx, dy, dz, t_max, padded, af, uf, vf, of);
     if (!r.ok) return false;
     // The float slopes and heights err by less than ~1e-6 (1 + |s|) (h > |e| / 4): widened
-    // well beyond that, the half-spaces below hold the exact segments of the float inputs.
+    // well beyond that, the half-spaces hold the exact segments of the float inputs.
     const double widen = 1e-5;
-    const double su_lo = r.su_lo - widen * (1 + std::abs(r.su_lo)), su_hi = r.su_hi + widen * (1 + std::abs(r.su_hi));
-    const double sv_lo = r.sv_lo - widen * (1 + std::abs(r.sv_lo)), sv_hi = r.sv_hi + widen * (1 + std::abs(r.sv_hi));
-    const double h_max = double(r.h_max) * (1 + widen) + widen;
+    const double slopes[4] = {r.su_lo - widen * (1 + std::abs(r.su_lo)), r.su_hi + widen * (1 + std::abs(r.su_hi)),
+                              r.sv_lo - widen * (1 + std::abs(r.sv_lo)), r.sv_hi + widen * (1 + std::abs(r.sv_hi))};
     origin[0] = o.x, origin[1] = o.y, origin[2] = o.z;
     const double ad[3] = {a.x, a.y, a.z}, ud[3] = {u.x, u.y, u.z}, vd[3] = {v.x, v.y, v.z};
+    set_pyramid(ad, ud, vd, slopes, double(r.h_max) * (1 + widen) + widen);
+    set_box(r.lo, r.hi, r.t_max_max);
+    return true;
+}
+
+void SegmentBundle::set_pyramid(const double ad[3], const double ud[3], const double vd[3], const double slopes[4],
+                                double h_max) {
+    const double su_lo = slopes[0], su_hi = slopes[1], sv_lo = slopes[2], sv_hi = slopes[3];
     // Half-spaces n.(p - o) <= d: su <= su_hi, su >= su_lo, sv <= sv_hi, sv >= sv_lo, 0 <= h <= h_max
     // (su = u.(p - o) / h: the slope, exact for the float axes a, u, v taken as given).
     for (int c = 0; c < 3; ++c) {
@@ -148,12 +155,15 @@ bool SegmentBundle::build(Point3f o, Vec3f across, const float *dx, const float 
         vertex[0][c] = origin[c];
         for (int q = 0; q < 4; ++q) vertex[1 + q][c] = origin[c] + h_max * (ad[c] + su[q & 1] * ud[c] + sv[q >> 1] * vd[c]);
     }
+}
+
+void SegmentBundle::set_box(const float box_lo[3], const float box_hi[3], float t_max_max) {
     // The end points' box: float rounding of o + e is below 1e-6 (|o| + |e|).
-    double scale = 1.0 + r.t_max_max;
-    for (int c = 0; c < 3; ++c) scale += std::max(std::abs(r.lo[c]), std::abs(r.hi[c]));
+    double scale = 1.0 + t_max_max;
+    for (int c = 0; c < 3; ++c) scale += std::max(std::abs(box_lo[c]), std::abs(box_hi[c]));
     const double pad = 1e-5 * scale;
     for (int c = 0; c < 3; ++c) {
-        lo[c] = r.lo[c] - pad, hi[c] = r.hi[c] + pad;
+        lo[c] = box_lo[c] - pad, hi[c] = box_hi[c] + pad;
         lo_f[c] = float(lo[c]), hi_f[c] = float(hi[c]); // the pad exceeds the float rounding
         origin_f[c] = float(origin[c]);
     }
@@ -170,7 +180,6 @@ bool SegmentBundle::build(Point3f o, Vec3f across, const float *dx, const float 
         norm1_f[k] = float(normal_len[k]);
     }
     eps = Margin * scale;
-    return true;
 }
 
 // ---------------------------------------------------------------------------------------------

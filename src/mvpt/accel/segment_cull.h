@@ -44,6 +44,13 @@ struct SegmentBundle {
     /// Per plane: d + n.o (the bound on n.p) and |n|_1.
     float limit_f[6], norm1_f[6];
     float lo_f[3], hi_f[3], origin_f[3];
+
+private:
+    /// The half-spaces and corners of the pyramid along the axes a, u, v (double copies of the
+    /// float ones) with slope ranges {su_lo, su_hi, sv_lo, sv_hi} and height h_max, from origin.
+    void set_pyramid(const double a[3], const double u[3], const double v[3], const double slopes[4], double h_max);
+    /// The box of the end points, padded beyond float rounding; the float copies and the margin.
+    void set_box(const float box_lo[3], const float box_hi[3], float t_max_max);
 };
 
 /// A convex region that holds a set of segments, for the queries that bound a whole family

@@ -216,11 +216,7 @@ private:
                          int depth, bool legacy) {
         for (pugi::xml_node c : parent.children()) {
             if (c.type() != pugi::node_element) {
-                if (c.type() == pugi::node_cdata) // (pugixml's offset is that of the content, after "<![CDATA[")
-                    throw SceneError(src.loc(std::max<ptrdiff_t>(0, c.offset_debug() - 9)), "a CDATA section inside <" + std::string(parent.name()) +
-                                                                    ">: scene files say everything with elements and attributes");
-                if (c.type() == pugi::node_pcdata && std::string(c.value()).find_first_not_of(" \t\r\n") != std::string::npos)
-                    throw SceneError(src.loc(c.offset_debug()), "unexpected text inside <" + std::string(parent.name()) + ">");
+                check_text(parent, c, src);
                 continue;
             }
             std::string tag = c.name();
@@ -234,55 +230,72 @@ private:
                 // The first value of a name wins (the caller's, then the first <default>), as in
                 // Mitsuba: an included file's defaults do not override its includer's.
                 m_vars.emplace(name, value);
-                continue;
+            } else if (tag == "path") {
+                add_path(attrs, loc, dir);
+            } else if (tag == "include") {
+                include(attrs, loc, dir, out, depth);
+            } else {
+                XmlNode n;
+                n.tag = tag;
+                n.attrs = std::move(attrs);
+                n.loc = loc;
+                n.dir = dir;
+                if (++m_nesting > 256) throw SceneError(loc, "elements nested more than 256 levels deep");
+                expand_children(c, src, dir, n, depth, legacy);
+                --m_nesting;
+                if (legacy) upgrade_legacy_element(n, m_notes);
+                if (is_rig_element(tag)) expand_rig(parent, n, dir, out);
+                else out.children.push_back(std::move(n));
             }
-            if (tag == "path") {
-                check_attrs(attrs, {"value"}, tag, loc);
-                fs::path p = required(attrs, "value", tag, loc);
-                // Relative to the including file, else (Mitsuba's file resolver) to the scene's directory.
-                fs::path full = p.is_absolute() ? p : dir / p;
-                if (!p.is_absolute() && !fs::is_directory(full)) full = m_root_dir / p;
-                if (!fs::is_directory(full)) throw SceneError(loc, "<path> directory '" + p.string() + "' not found");
-                m_path_dirs.insert(m_path_dirs.begin(), fs::absolute(full).lexically_normal());
-                continue;
-            }
-            if (tag == "include") {
-                check_attrs(attrs, {"filename"}, tag, loc);
-                fs::path p = required(attrs, "filename", tag, loc);
-                fs::path full = p.is_absolute() ? p : dir / p;
-                for (auto &d : m_path_dirs)
-                    if (!fs::is_regular_file(full) && !p.is_absolute() && fs::is_regular_file(d / p)) full = d / p;
-                if (!fs::is_regular_file(full)) throw SceneError(loc, "included file '" + p.string() + "' not found");
-                std::ifstream f(full, std::ios::binary);
-                std::stringstream ss;
-                ss << f.rdbuf();
-                fs::path key = enter_file(full, &loc);
-                XmlNode inc = parse_text(ss.str(), full.string(), full.parent_path(), depth + 1);
-                leave_file(key);
-                for (auto &ic : inc.children) out.children.push_back(std::move(ic));
-                continue;
-            }
-            XmlNode n;
-            n.tag = tag;
-            n.attrs = std::move(attrs);
-            n.loc = loc;
-            n.dir = dir;
-            if (++m_nesting > 256) throw SceneError(loc, "elements nested more than 256 levels deep");
-            expand_children(c, src, dir, n, depth, legacy);
-            --m_nesting;
-            if (legacy) upgrade_legacy_element(n, m_notes);
-            if (is_rig_element(tag)) {
-                // A camera rig becomes plain sensors here, before instantiation (rig_xml.cpp).
-                if (std::string(parent.name()) != "scene")
-                    throw SceneError(loc, "<" + tag + "> must be placed directly inside <scene>");
-                std::vector<fs::path> dirs = {dir};
-                dirs.insert(dirs.end(), m_path_dirs.begin(), m_path_dirs.end());
-                dirs.push_back(m_root_dir);
-                for (XmlNode &s : expand_rig_element(n, out, dirs, &m_files)) out.children.push_back(std::move(s));
-                continue;
-            }
-            out.children.push_back(std::move(n));
         }
+    }
+
+    /// Text between elements: whitespace only, and no CDATA sections.
+    static void check_text(const pugi::xml_node &parent, const pugi::xml_node &c, const SourceText &src) {
+        if (c.type() == pugi::node_cdata) // (pugixml's offset is that of the content, after "<![CDATA[")
+            throw SceneError(src.loc(std::max<ptrdiff_t>(0, c.offset_debug() - 9)),
+                             "a CDATA section inside <" + std::string(parent.name()) +
+                                 ">: scene files say everything with elements and attributes");
+        if (c.type() == pugi::node_pcdata && std::string(c.value()).find_first_not_of(" \t\r\n") != std::string::npos)
+            throw SceneError(src.loc(c.offset_debug()), "unexpected text inside <" + std::string(parent.name()) + ">");
+    }
+
+    /// <path value="..."/>: a directory searched for includes and files, before the others.
+    void add_path(const XmlAttrs &attrs, const FileLoc &loc, const fs::path &dir) {
+        check_attrs(attrs, {"value"}, "path", loc);
+        fs::path p = required(attrs, "value", "path", loc);
+        // Relative to the including file, else (Mitsuba's file resolver) to the scene's directory.
+        fs::path full = p.is_absolute() ? p : dir / p;
+        if (!p.is_absolute() && !fs::is_directory(full)) full = m_root_dir / p;
+        if (!fs::is_directory(full)) throw SceneError(loc, "<path> directory '" + p.string() + "' not found");
+        m_path_dirs.insert(m_path_dirs.begin(), fs::absolute(full).lexically_normal());
+    }
+
+    /// <include filename="..."/>: the file's elements in its place.
+    void include(const XmlAttrs &attrs, const FileLoc &loc, const fs::path &dir, XmlNode &out, int depth) {
+        check_attrs(attrs, {"filename"}, "include", loc);
+        fs::path p = required(attrs, "filename", "include", loc);
+        fs::path full = p.is_absolute() ? p : dir / p;
+        for (auto &d : m_path_dirs)
+            if (!fs::is_regular_file(full) && !p.is_absolute() && fs::is_regular_file(d / p)) full = d / p;
+        if (!fs::is_regular_file(full)) throw SceneError(loc, "included file '" + p.string() + "' not found");
+        std::ifstream f(full, std::ios::binary);
+        std::stringstream ss;
+        ss << f.rdbuf();
+        fs::path key = enter_file(full, &loc);
+        XmlNode inc = parse_text(ss.str(), full.string(), full.parent_path(), depth + 1);
+        leave_file(key);
+        for (auto &ic : inc.children) out.children.push_back(std::move(ic));
+    }
+
+    /// A camera rig becomes plain sensors here, before instantiation (rig_xml.cpp).
+    void expand_rig(const pugi::xml_node &parent, XmlNode &rig, const fs::path &dir, XmlNode &out) {
+        if (std::string(parent.name()) != "scene")
+            throw SceneError(rig.loc, "<" + rig.tag + "> must be placed directly inside <scene>");
+        std::vector<fs::path> dirs = {dir};
+        dirs.insert(dirs.end(), m_path_dirs.begin(), m_path_dirs.end());
+        dirs.push_back(m_root_dir);
+        for (XmlNode &s : expand_rig_element(rig, out, dirs, &m_files)) out.children.push_back(std::move(s));
     }
 
     std::string substitute(const std::string &s, const FileLoc &loc) const {

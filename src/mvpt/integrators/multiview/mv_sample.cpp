@@ -4,6 +4,7 @@
 #include "mv_densities.h"
 #include "mv_media.h"
 #include "mv_mixture.h"
+#include "../path/path_steps.h"
 #include "../path/transmittance.h"
 #include "../path/volpath.h"
 
@@ -335,7 +336,7 @@ void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, cons
         b_scale = mix.delta ? 1.f : 1.f / mix.pdf;
         bool alive = t_max > 0.f;
         if (alive && 1 >= pc.rr_depth) { // Russian roulette at y, as the path tracer does at depth 0
-            float q = std::min(t_max * bs.eta * bs.eta, 0.95f);
+            float q = rr_survival(t_max, bs.eta);
             if (u_lobe_rr.y >= q) alive = false;
             else b_scale /= q;
         }

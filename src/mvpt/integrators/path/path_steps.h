@@ -2,7 +2,9 @@
 // next-event estimation with its MIS weight, and the BSDF sample that the path follows with
 // Russian roulette. Written once, for the reference path tracer (PathIntegrator::trace) and
 // the wavefront's vertices that no vector kernel takes (path_batch.cpp); the kernels are
-// pinned to them bit for bit by tests/cpp/test_path_batch*.cpp.
+// pinned to them bit for bit by tests/cpp/test_path_batch*.cpp. Russian roulette's survival
+// probability (rr_survival) also serves the kernels, the volumetric path tracer and multi-view
+// path tracing's shared bounce.
 #pragma once
 
 #include "path.h"
@@ -14,6 +16,10 @@
 #include <cmath>
 
 namespace mvpt {
+
+/// Russian roulette's survival probability for a path whose throughput's largest channel is
+/// t_max and whose refractions so far scaled radiance by eta: min(t_max eta^2, 0.95).
+inline float rr_survival(float t_max, float eta) { return std::min(t_max * eta * eta, 0.95f); }
 
 /// Next-event estimation at `si` for the emitter sample (ls, weight = L/pdf) of a light chosen
 /// uniformly among `n_lights`: the contribution throughput * f * weight * n_lights * w_MIS
@@ -50,7 +56,7 @@ inline bool follow_bsdf_sample(Path &path, const SurfaceInteraction &si, const B
     const float t_max = path.throughput.max_value();
     if (!(t_max > 0.f)) return false;
     if (depth + 1 >= uint32_t(rr_depth)) {
-        const float q = std::min(t_max * path.eta * path.eta, 0.95f);
+        const float q = rr_survival(t_max, path.eta);
         if (u_rr >= q) return false;
         path.throughput *= 1.f / q;
     }

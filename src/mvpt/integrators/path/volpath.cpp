@@ -6,6 +6,7 @@
 #include "../../render/shape.h"
 #include "../../core/plugin.h"
 #include "../../accel/scene.h"
+#include "path_steps.h"
 #include "transmittance.h"
 
 #include <climits>
@@ -103,29 +104,23 @@ Spectrum VolPathIntegrator::li_in(const Scene &scene, Ray ray, const Medium *med
 Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *medium, const PathState &start,
                                   Sampler &sampler, RayCounters &counters, VolPathPart part, uint32_t dims) const {
     const uint32_t max_depth = m_cfg.max_depth < 0 ? UINT_MAX : uint32_t(m_cfg.max_depth);
-    const BsdfContext ctx;
     const bool scattered_only = part == VolPathPart::ScatteredInMedium;
     const bool unscattered_only = part == VolPathPart::ReachesSurface;
-    const uint32_t dim0 = dims;
-
-    Spectrum result(0.f), throughput = start.throughput;
-    float eta = start.eta;
-    uint32_t depth = start.depth; // scattering events so far (crossing a null surface is none)
-    // The last scattering event and the density of the direction it sampled (MIS on emitters
-    // hit); `prev_delta`: that density is a delta (or the camera's), so the hit counts in full.
-    Point3f prev_p = start.prev_p;
-    float prev_pdf = start.prev_bsdf_pdf;
-    bool prev_delta = start.prev_bsdf_delta;
-
+    // path.depth counts scattering events (crossing a null surface is none); path.prev_*: the
+    // last of them and the density of the direction it sampled (MIS on emitters hit), a delta
+    // (or the camera's) when the hit counts in full.
+    PathState path = start;
+    Spectrum result(0.f);
     for (uint32_t step = start.depth;; ++step) {
-        sampler.set_dimension(dim0 + step * VolDimsPerStep);
+        const uint32_t block = dims + step * VolDimsPerStep;
+        sampler.set_dimension(block);
         // ---------------- Russian roulette, as Mitsuba's volpath: before each step ----------------
         float u_rr = sampler.next_1d();
-        if (throughput.is_black() || depth >= max_depth) break;
-        if (depth > uint32_t(m_cfg.rr_depth)) {
-            float q = std::min(throughput.max_value() * eta * eta, 0.95f);
+        if (path.throughput.is_black() || path.depth >= max_depth) break;
+        if (path.depth > uint32_t(m_cfg.rr_depth)) {
+            float q = rr_survival(path.throughput.max_value(), path.eta);
             if (u_rr >= q) break;
-            throughput *= 1.f / q;
+            path.throughput *= 1.f / q;
         }
 
         float u_flight = sampler.next_1d();
@@ -133,70 +128,78 @@ Spectrum VolPathIntegrator::trace(const Scene &scene, Ray ray, const Medium *med
         SurfaceInteraction si;
         ++counters.rays;
         // In a medium, surfaces beyond where the flight surely ends need not be found.
-        const bool pass_through = unscattered_only && depth == 0; // the camera segment, without scattering
+        const bool pass_through = unscattered_only && path.depth == 0; // the camera segment, without scattering
         Ray query = ray;
         if (medium && !pass_through) query.tmax = std::min(query.tmax, medium->free_flight_bound(u_flight));
         const bool hit = scene.intersect(query, si);
 
         // ---------------- Free flight through the medium ----------------
         if (medium && pass_through) {
-            throughput *= medium->transmittance(ray, hit ? si.t : Infinity, rs);
+            path.throughput *= medium->transmittance(ray, hit ? si.t : Infinity, rs);
         } else if (medium) {
             MediumSample ms = medium->sample(ray, hit ? si.t : Infinity, u_flight, rs);
-            throughput *= ms.weight;
+            path.throughput *= ms.weight;
             if (ms.scattered) {
-                if (++depth >= max_depth || throughput.is_black()) break;
+                if (++path.depth >= max_depth || path.throughput.is_black()) break;
                 ray = Ray{ray.at(ms.t), ray.d, 0.f, Infinity, ray.time};
-                prev_p = ray.o;
-                result += scatter_in_medium(scene, *medium, throughput, dim0 + step * VolDimsPerStep, sampler, counters,
-                                            ray, prev_pdf, prev_delta);
+                path.prev_p = ray.o;
+                result += scatter_in_medium(scene, *medium, path.throughput, block, sampler, counters, ray,
+                                            path.prev_bsdf_pdf, path.prev_bsdf_delta);
                 continue;
             }
         }
 
         // The part without scattering ends at the first surface that is not null.
-        if (scattered_only && depth == 0 && (!hit || si.shape->bsdf->flags() != BsdfNull)) break;
-
-        // ---------------- Emission (hit by BSDF or phase sampling, MIS against NEE) ----------------
-        const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
-        if (emitter && !(depth == 0 && m_cfg.hide_emitters)) {
-            float w;
-            Spectrum le = emitted_radiance(scene, emitter, ray, hit, si, prev_p, prev_pdf, prev_delta, w);
-            if (!le.is_black()) result += throughput * le * w;
-        }
-        if (!hit) break;
-
-        // ---------------- Next-event estimation at the surface ----------------
-        const Bsdf &bsdf = *si.shape->bsdf;
-        si.wi = si.to_local(-ray.d);
-        if (bsdf.has_smooth() && depth + 1 < max_depth) {
-            LightSample ls;
-            Spectrum le = sample_emitter(scene, si.p, &si, medium, si.time, sampler, counters, ls);
-            if (!le.is_black()) {
-                Vec3f wo = si.to_local(ls.d);
-                auto [f, pdf] = bsdf.eval_pdf(ctx, si, si.wi, wo);
-                result += throughput * le * f * emitter_sample_mis(ls, float(scene.lights().size()), pdf);
-            }
-        }
-
-        // ---------------- BSDF sampling ----------------
-        sampler.set_dimension(dim0 + step * VolDimsPerStep + 6);
-        float u_lobe = sampler.next_1d();
-        auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, sampler.next_2d());
-        const bool scattered = !(bs.sampled_type & BsdfNull); // a failed sample counts too, as in Mitsuba
-        if (bsdf_weight.is_black()) break;
-        const Vec3f wo = si.to_world(bs.wo);
-        throughput *= bsdf_weight;
-        eta *= bs.eta;
-        if (scattered) {
-            ++depth;
-            prev_p = si.p, prev_pdf = bs.pdf, prev_delta = (bs.sampled_type & BsdfDelta) != 0;
-        }
-        if (si.shape->is_medium_transition()) medium = si.shape->target_medium(wo, si.n);
-        ray = si.spawn_ray(wo);
+        if (scattered_only && path.depth == 0 && (!hit || si.shape->bsdf->flags() != BsdfNull)) break;
+        if (!surface_vertex(scene, hit, si, block, max_depth, path, ray, medium, result, sampler, counters)) break;
     }
     // (Mitsuba's volpath keeps the radiance of paths it calls invalid: validity is only alpha.)
     return result;
+}
+
+bool VolPathIntegrator::surface_vertex(const Scene &scene, bool hit, SurfaceInteraction &si, uint32_t block,
+                                       uint32_t max_depth, PathState &path, Ray &ray, const Medium *&medium,
+                                       Spectrum &result, Sampler &sampler, RayCounters &counters) const {
+    const BsdfContext ctx;
+    // ---------------- Emission (hit by BSDF or phase sampling, MIS against NEE) ----------------
+    const Light *emitter = hit ? si.shape->emitter.get() : scene.environment();
+    if (emitter && !(path.depth == 0 && m_cfg.hide_emitters)) {
+        float w;
+        Spectrum le = emitted_radiance(scene, emitter, ray, hit, si, path.prev_p, path.prev_bsdf_pdf,
+                                       path.prev_bsdf_delta, w);
+        if (!le.is_black()) result += path.throughput * le * w;
+    }
+    if (!hit) return false;
+
+    // ---------------- Next-event estimation at the surface ----------------
+    const Bsdf &bsdf = *si.shape->bsdf;
+    si.wi = si.to_local(-ray.d);
+    if (bsdf.has_smooth() && path.depth + 1 < max_depth) {
+        LightSample ls;
+        Spectrum le = sample_emitter(scene, si.p, &si, medium, si.time, sampler, counters, ls);
+        if (!le.is_black()) {
+            Vec3f wo = si.to_local(ls.d);
+            auto [f, pdf] = bsdf.eval_pdf(ctx, si, si.wi, wo);
+            result += path.throughput * le * f * emitter_sample_mis(ls, float(scene.lights().size()), pdf);
+        }
+    }
+
+    // ---------------- BSDF sampling ----------------
+    sampler.set_dimension(block + 6);
+    float u_lobe = sampler.next_1d();
+    auto [bs, bsdf_weight] = bsdf.sample(ctx, si, si.wi, u_lobe, sampler.next_2d());
+    const bool scattered = !(bs.sampled_type & BsdfNull); // a failed sample counts too, as in Mitsuba
+    if (bsdf_weight.is_black()) return false;
+    const Vec3f wo = si.to_world(bs.wo);
+    path.throughput *= bsdf_weight;
+    path.eta *= bs.eta;
+    if (scattered) {
+        ++path.depth;
+        path.prev_p = si.p, path.prev_bsdf_pdf = bs.pdf, path.prev_bsdf_delta = (bs.sampled_type & BsdfDelta) != 0;
+    }
+    if (si.shape->is_medium_transition()) medium = si.shape->target_medium(wo, si.n);
+    ray = si.spawn_ray(wo);
+    return true;
 }
 
 MVPT_REGISTER_PLUGIN("integrator", "volpath", [](const Properties &props, const LoadContext &) {

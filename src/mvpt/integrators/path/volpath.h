@@ -73,6 +73,12 @@ public:
                             float time, Sampler &sampler, RayCounters &counters, LightSample &ls) const;
 
 private:
+    /// The vertex of `path` at the surface `si` (or, when not `hit`, where it escapes): emission
+    /// with MIS, next-event estimation, and the BSDF sample (dimensions from `block` + 6) that
+    /// the path follows through `ray` (and into `medium`). False: the path ends.
+    bool surface_vertex(const Scene &scene, bool hit, SurfaceInteraction &si, uint32_t block, uint32_t max_depth,
+                        PathState &path, Ray &ray, const Medium *&medium, Spectrum &result, Sampler &sampler,
+                        RayCounters &counters) const;
     /// A scattering at `ray.o` in `medium` coming along `ray.d`, with the path's `throughput`:
     /// next-event estimation (when the medium samples emitters; returned, throughput included)
     /// and the phase function's sample, into `ray` with its density `pdf` (`delta`: no MIS on

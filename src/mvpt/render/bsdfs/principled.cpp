@@ -150,26 +150,8 @@ public:
             value += csqrt(base_color) * (w.bsdf * t);
         }
 
-        // Clearcoat: GTR1 distribution, Schlick Fresnel with R0 = 0.04, fixed GGX alpha 0.25 masking.
-        // (Mitsuba's form: F D G |cos_o| without the 1 / (4 cos_i cos_o) microfacet factor.)
-        if (clearcoat_active) {
-            float Fcc = schlick_fresnel(0.04f, dot(wi, wh), m_eta);
-            float Dcc = Gtr1(clearcoat_alpha(si.uv)).eval(wh);
-            float Gcc = smith_ggx1(wi, wh, 0.25f) * smith_ggx1(wo, wh, 0.25f);
-            value += Color3f(w.clearcoat * 0.25f * Fcc * Dcc * Gcc * std::abs(cos_theta_o));
-        }
-
-        // Diffuse with retro-reflection, fake subsurface and sheen [Burley 2015, §5.3].
-        if (diffuse_active) {
-            float abs_cos_o = std::abs(cos_theta_o), cos_theta_d = dot(wh, wo);
-            float f = disney_diffuse(std::abs(cos_theta_i), abs_cos_o, cos_theta_d, w.roughness, flatness,
-                                     m_flatness.enabled);
-            value += base_color * (w.brdf * abs_cos_o * InvPi * f);
-            if (sheen_active) {
-                Color3f c_sheen = sheen_color(base_color, m_sheen_tint.eval_1(si.uv), m_sheen_tint.enabled);
-                value += c_sheen * (sheen * (1.f - w.metallic) * schlick_weight(std::abs(cos_theta_d)) * abs_cos_o);
-            }
-        }
+        if (clearcoat_active) value += clearcoat_value(si, w, wi, wo, wh);
+        if (diffuse_active) add_diffuse(value, si, w, base_color, flatness, sheen_active ? sheen : 0.f, wi, wo, wh);
         return value;
     }
 
@@ -228,6 +210,30 @@ private:
         float brdf; ///< weight of the opaque (diffuse) part: (1 - metallic)(1 - spec_trans)
         float bsdf; ///< weight of the transmissive part: (1 - metallic) spec_trans
     };
+
+    /// Clearcoat: GTR1 distribution, Schlick Fresnel with R0 = 0.04, fixed GGX alpha 0.25 masking.
+    /// (Mitsuba's form: F D G |cos_o| without the 1 / (4 cos_i cos_o) microfacet factor.)
+    Color3f clearcoat_value(const SurfaceInteraction &si, const Weights &w, Vec3f wi, Vec3f wo, Vec3f wh) const {
+        float Fcc = schlick_fresnel(0.04f, dot(wi, wh), m_eta);
+        float Dcc = Gtr1(clearcoat_alpha(si.uv)).eval(wh);
+        float Gcc = smith_ggx1(wi, wh, 0.25f) * smith_ggx1(wo, wh, 0.25f);
+        return Color3f(w.clearcoat * 0.25f * Fcc * Dcc * Gcc * std::abs(Frame::cos_theta(wo)));
+    }
+
+    /// Diffuse with retro-reflection, fake subsurface and sheen [Burley 2015, §5.3], added to
+    /// `value` (sheen 0: none).
+    void add_diffuse(Color3f &value, const SurfaceInteraction &si, const Weights &w, Color3f base_color, float flatness,
+                     float sheen, Vec3f wi, Vec3f wo, Vec3f wh) const {
+        float abs_cos_o = std::abs(Frame::cos_theta(wo)), cos_theta_d = dot(wh, wo);
+        float f = disney_diffuse(std::abs(Frame::cos_theta(wi)), abs_cos_o, cos_theta_d, w.roughness, flatness,
+                                 m_flatness.enabled);
+        value += base_color * (w.brdf * abs_cos_o * InvPi * f);
+        if (sheen > 0.f) {
+            Color3f c_sheen = sheen_color(base_color, m_sheen_tint.eval_1(si.uv), m_sheen_tint.enabled);
+            value += c_sheen * (sheen * (1.f - w.metallic) * schlick_weight(std::abs(cos_theta_d)) * abs_cos_o);
+        }
+    }
+
     Weights weights(Vec2f uv) const {
         Weights w;
         w.anisotropic = m_anisotropic.eval_1(uv);

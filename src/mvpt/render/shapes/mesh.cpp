@@ -14,7 +14,17 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
     m_flip_normals = props.get_bool("flip_normals", false);
     bool face_normals = props.get_bool("face_normals", false);
     if (face_normals) m_data.normals.clear();
+    check_and_transform(props, to_world, what);
+    if (m_data.normals.empty() && !face_normals) m_data.normals = compute_vertex_normals(m_data);
+    build_area_table();
+    build_face_normals();
+    build_constant_frames();
+    detect_parallelogram();
+    attach_shape_children(*this, props);
+    if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
+}
 
+void TriangleMesh::check_and_transform(const Properties &props, const Transform &to_world, const std::string &what) {
     size_t nv = m_data.positions.size();
     if (m_data.indices.size() % 3 != 0) props.fail("", what + ": index count is not a multiple of 3");
     for (uint32_t i : m_data.indices)
@@ -32,7 +42,9 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
         float l = norm(wn);
         n = (l > 0.f && std::isfinite(l)) ? wn / l : Normal3f(0.f);
     }
-    if (m_data.normals.empty() && !face_normals) m_data.normals = compute_vertex_normals(m_data);
+}
+
+void TriangleMesh::build_area_table() {
     std::vector<float> areas(m_data.triangle_count());
     for (size_t i = 0; i < areas.size(); ++i) {
         const Point3f &p0 = m_data.positions[m_data.indices[3 * i]], &p1 = m_data.positions[m_data.indices[3 * i + 1]],
@@ -42,39 +54,41 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
     }
     m_area_distr.build(areas);
     m_inv_area = 1.f / m_area;
+}
+
+void TriangleMesh::build_face_normals() {
     m_face_normals.resize(m_data.triangle_count());
     m_flat_vertex_normals.assign(m_data.triangle_count(), 0);
+    // Equal to within 1e-6 per component: normals computed for a planar region (angle-weighted
+    // sums, renormalised) differ in their last bits, and interpolating them moves the shading
+    // normal by less than that (1e-6 rad), far below any visible effect.
+    auto near = [](const Normal3f &a, const Normal3f &b) {
+        return std::max({std::abs(a.x - b.x), std::abs(a.y - b.y), std::abs(a.z - b.z)}) <= 1e-6f;
+    };
     for (size_t i = 0; i < m_face_normals.size(); ++i) {
         const uint32_t *idx = &m_data.indices[3 * i];
         const Point3f &p0 = m_data.positions[idx[0]], &p1 = m_data.positions[idx[1]], &p2 = m_data.positions[idx[2]];
         m_face_normals[i] = normalize(cross(p1 - p0, p2 - p0));
         if (!m_data.normals.empty()) {
             const Normal3f &n0 = m_data.normals[idx[0]], &n1 = m_data.normals[idx[1]], &n2 = m_data.normals[idx[2]];
-            // Equal to within 1e-6 per component: normals computed for a planar region (angle-weighted
-            // sums, renormalised) differ in their last bits, and interpolating them moves the shading
-            // normal by less than that (1e-6 rad), far below any visible effect.
-            auto near = [](const Normal3f &a, const Normal3f &b) {
-                return std::max({std::abs(a.x - b.x), std::abs(a.y - b.y), std::abs(a.z - b.z)}) <= 1e-6f;
-            };
             m_flat_vertex_normals[i] = near(n0, n1) && near(n1, n2) && squared_norm(n0) > 0.f;
         }
     }
+}
+
+void TriangleMesh::build_constant_frames() {
     size_t n_flat = 0;
     for (size_t i = 0; i < m_face_normals.size(); ++i) n_flat += m_data.normals.empty() || m_flat_vertex_normals[i];
-    if (n_flat > 0 && 2 * n_flat >= m_face_normals.size()) {
-        m_const_frames.resize(m_face_normals.size());
-        m_has_const_frame.assign(m_face_normals.size(), 0);
-        for (size_t i = 0; i < m_const_frames.size(); ++i) {
-            if (!m_data.normals.empty() && !m_flat_vertex_normals[i]) continue;
-            m_has_const_frame[i] = 1;
-            const uint32_t *idx = &m_data.indices[3 * i];
-            Normal3f ns = m_data.normals.empty() ? m_face_normals[i] : m_data.normals[idx[0]];
-            m_const_frames[i] = shading_frame(idx[0], idx[1], idx[2], m_flip_normals ? -ns : ns);
-        }
+    if (!(n_flat > 0 && 2 * n_flat >= m_face_normals.size())) return;
+    m_const_frames.resize(m_face_normals.size());
+    m_has_const_frame.assign(m_face_normals.size(), 0);
+    for (size_t i = 0; i < m_const_frames.size(); ++i) {
+        if (!m_data.normals.empty() && !m_flat_vertex_normals[i]) continue;
+        m_has_const_frame[i] = 1;
+        const uint32_t *idx = &m_data.indices[3 * i];
+        Normal3f ns = m_data.normals.empty() ? m_face_normals[i] : m_data.normals[idx[0]];
+        m_const_frames[i] = shading_frame(idx[0], idx[1], idx[2], m_flip_normals ? -ns : ns);
     }
-    detect_parallelogram();
-    attach_shape_children(*this, props);
-    if (emitter && !(m_area > 0.f)) props.fail("", what + ": an emitting mesh needs a non-zero surface area");
 }
 
 std::vector<Normal3f> compute_vertex_normals(const MeshData &mesh) {

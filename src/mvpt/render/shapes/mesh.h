@@ -69,6 +69,14 @@ private:
     Normal3f m_quad_normal;
     /// Sets the members above when the mesh is such a parallelogram.
     void detect_parallelogram();
+    /// The file's counts and indices checked, positions and normals into world space.
+    void check_and_transform(const Properties &props, const Transform &to_world, const std::string &what);
+    /// The triangles' areas, the total and the distribution that picks a triangle by area.
+    void build_area_table();
+    /// Face normals, and which triangles' vertex normals are all equal (flat).
+    void build_face_normals();
+    /// The shading frames of flat triangles, kept when at least half of them are.
+    void build_constant_frames();
 };
 
 /// Shared parameters of every shape plugin: bsdf (default diffuse 0.5) and an
