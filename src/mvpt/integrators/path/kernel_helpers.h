@@ -9,7 +9,6 @@
 #include "../../render/interaction.h"
 #include "../../render/shapes/sphere_cone.h"
 #include "path_kernels.h"
-#include "path_steps.h"
 
 namespace mvpt::kernel {
 
@@ -52,7 +51,7 @@ template <size_t S0, size_t P0, size_t B0, size_t O0>
     float br = col(B0) * wr, bg = col(B0 + 1) * wg, bb = col(B0 + 2) * wb;
     float t_max = max_of(br, max_of(bg, bb));
     const float eta = col(B0 + 3);
-    float q = rr_survival(t_max, eta);
+    float q = min_of(t_max * eta * eta, 0.95f); // rr_survival (path_steps.h), branch-free
     bool rr_on = col(B0 + 5) > 0.f;
     float inv_q = 1.f / q;
     col(B0) = select(rr_on, br * inv_q, br);
