@@ -286,17 +286,15 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
     total_rays = raw["rays"] + raw["shadow_rays"]
     views = {}
     for i, r in zip(index or range(len(ids)), results):
-        img = r["image"]
         pixels = max(1, r["width"] * r["height"])
         views[r["id"]] = {
             "id": r["id"], "index": i, "width": r["width"], "height": r["height"],
             "spp": float(r["samples"]) / pixels, "samples": int(r["samples"]),
-            "mean": [float(x) for x in img.reshape(-1, 3).mean(axis=0, dtype=np.float64)],
+            "mean": [float(x) for x in r["mean"]],
             "nonfinite_samples": int(r["nonfinite"]),
         }
         if "multiview" in r:
-            views[r["id"]]["multiview"] = dict(r["multiview"], contributions_per_pixel=float(
-                r["contributions"].sum(dtype=np.float64)) / pixels,
+            views[r["id"]]["multiview"] = dict(r["multiview"], contributions_per_pixel=r["contributions_total"] / pixels,
                 native_samples_per_second=rate(r["multiview"]["native_samples"]))
     settings = dict(settings, views=list(views), integrator=scene.integrator)
     first = raw.get("first_nonfinite")

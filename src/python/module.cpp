@@ -132,9 +132,11 @@ public:
             r.sample_count = std::vector<uint32_t>();
             d["sample_count"] = make_array(std::move(count), {h, w});
             d["samples"] = r.samples;
+            d["mean"] = nb::make_tuple(r.mean[0], r.mean[1], r.mean[2]);
             d["nonfinite"] = r.nonfinite;
             if (!r.contributions.empty()) {
                 d["contributions"] = make_array(std::move(r.contributions), {h, w});
+                d["contributions_total"] = r.contributions_total;
                 d["weight_sum"] = make_array(std::move(r.weight_sum), {h, w});
                 d["multiview"] = mv_stats_dict(r.mv);
             }

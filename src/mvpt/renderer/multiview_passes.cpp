@@ -283,7 +283,6 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     // Moving shapes or lights: a shared sample keeps its time (§3 test 1).
     m_mv.scene_moves = m_scene.is_animated();
     for (const auto &light : m_scene.lights()) m_mv.scene_moves |= light->moves();
-    m_films.clear();
     for (int v : m_views) {
         const Camera &cam = *cams[v];
         m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
@@ -300,9 +299,12 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
         const FilmDesc &f = m_mv.views[slot].camera->film;
         footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
                                                 Sampler::dimension_key(DimSplatBase + m_mv.views[slot].scene_index)));
-        m_films.emplace_back(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
-        m_mv.native_map.push_back(m_films.back().map.data());
     }
+    make_films([&](size_t slot) {
+        const FilmDesc &f = m_mv.views[slot].camera->film;
+        return Film(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
+    });
+    for (const Film &film : m_films) m_mv.native_map.push_back(film.map.data());
     m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
     m_mv.rig.reset();
     // (Through media every camera segment is walked for its transmittance: no cells.)

@@ -11,9 +11,10 @@ namespace mvpt {
 
 void Renderer::run_passes(PassSchedule &schedule, const std::atomic<bool> &cancel, const ProgressFn &progress) {
     using clock = std::chrono::steady_clock;
-    // A resumed render's clock goes on from the seconds of the runs before (for --time).
+    // The clock starts with render() (the method's preparation counts); a resumed render's goes
+    // on from the seconds of the runs before (for --time).
     const auto t_start =
-        clock::now() - std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(m_elapsed_before));
+        m_render_start - std::chrono::duration_cast<clock::duration>(std::chrono::duration<double>(m_elapsed_before));
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - t_start).count(); };
     const double budget = m_opts.time_budget;
     double last_pass = m_last_pass_before, last_checkpoint = m_elapsed_before;

@@ -43,7 +43,10 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
                                  " MiB but the machine has " + std::to_string(int64_t(available / (1 << 20))) +
                                  " MiB of memory available");
     if (m_multiview) return; // multi-view path tracing makes its films when it prepares (prepare_multiview)
-    for (int v : m_views) m_films.emplace_back(cams[v]->film.crop_width, cams[v]->film.crop_height);
+    make_films([&](size_t slot) {
+        const FilmDesc &f = cams[m_views[slot]]->film;
+        return Film(f.crop_width, f.crop_height);
+    });
 }
 
 double Renderer::estimate_peak_bytes() const {
@@ -78,7 +81,16 @@ int Renderer::spp_target() const {
     return spp;
 }
 
+void Renderer::make_films(const std::function<Film(size_t)> &make) {
+    m_films.clear();
+    m_films.resize(m_views.size());
+    tbb::task_arena(m_opts.threads > 0 ? m_opts.threads : tbb::task_arena::automatic).execute([&] {
+        tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) { m_films[slot] = make(slot); });
+    });
+}
+
 void Renderer::render(const std::atomic<bool> &cancel, const ProgressFn &progress) {
+    m_render_start = std::chrono::steady_clock::now();
     m_stats.threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(m_stats.threads);
     if (m_multiview) {
@@ -94,7 +106,9 @@ void Renderer::render(const std::atomic<bool> &cancel, const ProgressFn &progres
 
 void Renderer::develop() {
     // The views in parallel, each view's film freed once its images are made; multi-view path
-    // tracing adds its AOVs (contributions received, the sum of W).
+    // tracing adds its AOVs (contributions received, the sum of W). The images' means are
+    // summed here, in parallel, rather than by Python afterwards (0.12 s per 5 million
+    // view-pixels, on one core).
     m_results.assign(m_views.size(), ViewResult{});
     tbb::parallel_for(size_t(0), m_views.size(), [&](size_t slot) {
         Film &film = m_films[slot];
@@ -107,13 +121,19 @@ void Renderer::develop() {
         r.variance.resize(3 * n);
         r.sample_count.resize(n);
         if (film.multiview()) r.weight_sum.resize(n);
+        double sum[3] = {0.0, 0.0, 0.0};
         for (size_t p = 0; p < n; ++p) {
             film.develop(p, &r.rgb[3 * p], &r.variance[3 * p]);
+            for (int c = 0; c < 3; ++c) sum[c] += r.rgb[3 * p + c];
             r.sample_count[p] = film.samples(p);
             r.samples += r.sample_count[p];
             if (film.multiview()) r.weight_sum[p] = film.weight_sum(p);
         }
-        if (film.multiview()) r.contributions.assign(film.received.begin(), film.received.end());
+        for (int c = 0; c < 3; ++c) r.mean[c] = n > 0 ? sum[c] / double(n) : 0.0;
+        if (film.multiview()) {
+            r.contributions.assign(film.received.begin(), film.received.end());
+            for (float k : r.contributions) r.contributions_total += k;
+        }
         r.nonfinite = film.nonfinite;
         film = Film{};
         m_results[slot] = std::move(r);

@@ -12,6 +12,7 @@
 #include <tbb/task_arena.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -69,6 +70,8 @@ struct ViewResult {
     /// densities D are complete (balance, mis_set=all), so it checks the weights (§5).
     std::vector<float> weight_sum;
     uint64_t samples = 0;
+    double mean[3] = {0.0, 0.0, 0.0}; ///< the image's mean (RGB), summed as it is developed
+    double contributions_total = 0.0; ///< multi-view: the sum of `contributions`
     MvViewStats mv; ///< multi-view statistics of the view
     uint64_t nonfinite = 0; ///< non-finite samples dropped (recorded as zero)
 };
@@ -153,6 +156,10 @@ private:
                          uint64_t samples, double fraction) const;
     /// Every view's images from its film (each film freed once its images are made).
     void develop();
+    /// The films of the views, make(slot) each, in parallel within the render's threads (on
+    /// one core, zeroing the accumulators of many large views took a noticeable share of a
+    /// short render).
+    void make_films(const std::function<Film(size_t)> &make);
 
     /// Path tracing: 16x16 tiles of every view's crop window.
     std::vector<Tile> make_tiles() const;
@@ -197,6 +204,8 @@ private:
     /// native samples per pixel and the statistics of the runs before.
     int m_first_pass = 0;
     double m_elapsed_before = 0.0, m_last_pass_before = 0.0, m_native_done = 0.0;
+    /// When render() began: a time budget counts from there (the method's preparation included).
+    std::chrono::steady_clock::time_point m_render_start;
     std::vector<MvViewStats> m_mv_stats_before;
     std::vector<ViewResult> m_results;
     RenderStats m_stats;
