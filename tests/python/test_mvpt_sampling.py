@@ -150,6 +150,9 @@ def test_mvpt_is_bit_identical_for_any_thread_count():
         m = s["multiview"]
         assert m["native_samples"] == a.sample_count[v].sum() and m["native_samples_per_second"] > 0
         assert 1.0 <= m["mean_sharing"] <= len(a.images) and m["rays_per_native_sample"] >= 1.0
+        # (Summed by the renderer as it develops the images.)
+        assert m["contributions_per_pixel"] == pytest.approx(a.contributions[v].mean(dtype=np.float64), rel=1e-6)
+        assert s["mean"] == pytest.approx(a.images[v].reshape(-1, 3).mean(axis=0, dtype=np.float64), rel=1e-6)
 
 
 # Static thin lenses of two apertures in a row over a floor with a sphere and a cube.
