@@ -317,15 +317,15 @@ Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, con
 /// Russian roulette at y as the path tracer's at depth 0: the views' BSDF values into fs, the
 /// suffix into `pending`, and into `rec` its index, validity and the factor of b_i = f_i(wo) /
 /// p_mix(wo) (or, for a delta lobe, the sampled view and its weight).
-void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, Vec2f u_lobe_rr,
-                   Vec2f u_dir, bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending,
+void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, float u_lobe,
+                   Vec2f u_dir, float u_rr, bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending,
                    MvPendingSamples::Sample &rec) {
     const PathConfig &pc = ctx.path->config();
     const SurfaceInteraction &si = s.si;
     s.sampler.set_dimension(DimBounceView);
     grow_scratch(sc.view_pdf, ns);
     MixtureSample mix =
-        sample_lobe_mixture(bsdf, si, wi_s, ns, s.sampler.next_1d(), u_lobe_rr.x, u_dir, fs, sc.view_pdf.data());
+        sample_lobe_mixture(bsdf, si, wi_s, ns, s.sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     // (Validity is the path tracer's rule: the volumetric one keeps every path, as Mitsuba's.)
     rec.valid = valid || !(bs.sampled_type & BsdfNull) || ctx.volpath;
@@ -337,7 +337,7 @@ void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, cons
         bool alive = t_max > 0.f;
         if (alive && 1 >= pc.rr_depth) { // Russian roulette at y, as the path tracer does at depth 0
             float q = rr_survival(t_max, bs.eta);
-            if (u_lobe_rr.y >= q) alive = false;
+            if (u_rr >= q) alive = false;
             else b_scale /= q;
         }
         if (alive) { // the suffix: traced with the tile's other suffixes (mv_finish_samples)
@@ -441,7 +441,7 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     rec.shadow = -1;
     rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_light_select, u_light, f_nee, sc, pending, counters, &rec.shadow);
     rec.nee = !rec.nee_weight.is_black();
-    shared_bounce(ctx, s, bsdf, wi_s, ns, {u_lobe, u_rr}, u_dir, valid, fs, sc, pending, rec);
+    shared_bounce(ctx, s, bsdf, wi_s, ns, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
     rec.e = le_y * (1.f / s.n);
     if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
     rec.hash = s.sampler.sample_hash();
