@@ -8,7 +8,8 @@ Renders a 9x9 light field of the still life (scenes/stereo.xml --rig grid:9x9) w
 of tiles (between two chunks progress is reported and Ctrl-C and the budget are checked) and
 the longest gap between progress reports that brought new samples; the time from a
 KeyboardInterrupt raised in the progress callback 2 s into a render to the returned images; and
-the time from the end of a time budget (--budgets) to the returned images.
+the time from the end of a time budget (--budgets) to the returned images, and how much of a
+first pass cut short (multi-view path tracing, docs/multiview-path-tracing.md) they keep.
 """
 from __future__ import annotations
 
@@ -46,7 +47,13 @@ def interrupt(scene, method: str, threads: int, after: float = 2.0) -> None:
 
     r = mvpt.render(scene, spp=64, method=method, threads=threads, poll=0.02, progress=stop)
     print(f"{method:4s}  Ctrl-C {raised[0] - t0:.2f} s in: images back {time.monotonic() - raised[0]:.3f} s later "
-          f"({r.stats['passes']} passes kept)", flush=True)
+          f"({r.stats['passes']} passes kept{_cut(r)})", flush=True)
+
+
+def _cut(r) -> str:
+    """The share of a first pass cut short that the images keep (multi-view path tracing)."""
+    share = r.stats.get("cut_pass_share", 0.0)
+    return f", the first cut at {share:.0%} of its regions" if share else ""
 
 
 def budget(scene, method: str, threads: int, seconds: float) -> None:
@@ -54,7 +61,7 @@ def budget(scene, method: str, threads: int, seconds: float) -> None:
     r = mvpt.render(scene, time=seconds, method=method, threads=threads)
     wall = time.monotonic() - t0
     print(f"{method:4s}  --time {seconds:g}: images back after {wall:.2f} s ({wall - seconds:+.2f} s), "
-          f"{r.stats['passes']} passes", flush=True)
+          f"{r.stats['passes']} passes{_cut(r)}", flush=True)
 
 
 def main(argv=None) -> int:

@@ -129,23 +129,25 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     the mean number of native samples per pixel.
 
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
-    seconds (0: none; passes stop when the next would end past it, and after the first pass
-    it is not overrun by more than about half a second). The render runs natively with the
+    seconds (0: none; passes stop when the next would end past it, and it is not overrun by
+    more than about half a second, except by path tracing's first pass). The render runs natively with the
     GIL released; `progress(dict)` is called every `poll` seconds and once at the end, with
     the passes finished, fraction done, elapsed seconds and samples so far. Ctrl-C (or
     KeyboardInterrupt raised by `progress`) cancels within about half a second (path tracing
     at the end of its current quarter-second chunk of short passes, or between the tiles of a
     pass longer than half a second, keeping the finished tiles: their sample counts say so;
-    multi-view path tracing between tiles, dropping the unfinished pass) and the images are
-    returned with stats["cancelled"] set (stats["passes"] == 0: none finished); any other
-    exception from `progress` cancels the render and is re-raised.
+    multi-view path tracing between tiles, dropping the unfinished pass, except the first,
+    which it cuts at the end of a chunk and keeps, its finished regions scaled to an unbiased
+    estimate: stats["cut_pass_share"] is their share) and the images are returned with
+    stats["cancelled"] set (stats["passes"] == 0: none finished); any other exception from
+    `progress` cancels the render and is re-raised.
 
     state: a file for the render's state (docs/checkpoints.md), written at a pass boundary
     every `checkpoint` seconds (0: not periodically), when the render is interrupted and, with
     `state_at_end`, when it ends; `state_extra` (JSON-able) is stored in its header. resume: a
     state file of the same scene and settings to continue from: the images are bit-identical
-    to those of a render that was never stopped (with `time`, the budget is the total of all
-    runs). A state of another scene, setting or mvpt version raises mvpt.StateError naming
+    to those of a render that was never stopped, unless it kept a cut first pass (with
+    `time`, the budget is the total of all runs). A state of another scene, setting or mvpt version raises mvpt.StateError naming
     what differs, as does a file that is truncated or corrupt.
 
     passes: (first, count) renders one range of a render split over processes or machines
@@ -306,7 +308,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "max_chunk_seconds": raw["max_chunk_seconds"],
         "between_passes_seconds": raw["between_passes_seconds"],
         "estimated_bytes": raw["estimated_bytes"],
-        "passes": raw["passes"], "resumed_from_pass": raw["first_pass"],
+        "passes": raw["passes"], "cut_pass_share": raw["cut_pass_share"], "resumed_from_pass": raw["first_pass"],
         "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
         "samples": raw["samples"], "samples_per_second": rate(raw["samples"]),
         "rays": {"camera": raw["camera_rays"], "intersect": raw["rays"], "shadow": raw["shadow_rays"],

@@ -157,6 +157,7 @@ public:
         d["between_passes_seconds"] = s.between_passes_seconds;
         d["estimated_bytes"] = s.estimated_bytes;
         d["passes"] = s.passes;
+        d["cut_pass_share"] = s.cut_pass_share;
         d["first_pass"] = s.first_pass;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;

@@ -36,7 +36,7 @@ size_t Film::bytes_per_pixel(bool multiview, MvEstimator estimator, bool adaptiv
     return b;
 }
 
-void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
+void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale) {
     const bool weighted = estimator == MvEstimator::Weighted, adaptive = !e_sum.empty();
     for (size_t p = begin; p < end; ++p) {
         const double k = double(count[p]); // earlier passes
@@ -45,7 +45,7 @@ void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
         if (cv)
             for (int c = 0; c < 3; ++c) beta[c] = sum[3 * p + c] / k;
         const SplatEntry t = pass.take(offset + uint32_t(p));
-        const MvPassEstimate est = mv_pass_estimate(t, estimator, cv ? beta : nullptr);
+        const MvPassEstimate est = mv_pass_estimate(t, estimator, cv ? beta : nullptr, scale);
         if (weighted) {
             for (int c = 0; c < 3; ++c) lw[3 * p + c] += est.lw[c], e[3 * p + c] += est.e[c];
             w[p] += est.w;

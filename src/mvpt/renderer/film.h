@@ -79,8 +79,8 @@ struct Film {
     /// Multi-view: sets n of the crop window's pixels (row-major, as many as pixels()).
     void set_map(const std::vector<uint16_t> &crop);
     /// Multi-view: pixels [begin, end) of a pass whose sums `pass` holds from index `offset` on
-    /// (read and cleared), each as one estimate.
-    void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end);
+    /// (read and cleared), each as one estimate (the sums times `scale`: mv_pass_estimate).
+    void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale = 1.0);
     /// Multi-view: mean over passes of the sum of W of pixel p (1 in expectation for the balance estimator).
     float weight_sum(size_t p) const { return count[p] ? float(double(w_sum[p]) / count[p]) : 0.f; }
 

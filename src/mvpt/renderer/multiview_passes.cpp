@@ -9,6 +9,7 @@
 #include "../integrators/multiview/mv_sample.h"
 #include "../integrators/multiview/mvpath.h"
 #include "../integrators/path/volpath.h"
+#include "../core/sampler.h"
 #include "../render/camera.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -24,6 +25,9 @@
 namespace mvpt {
 
 namespace {
+/// The key of the regions' random order (multiview_tiles).
+constexpr uint64_t RegionOrderKey = 0x726567696f6e; // "region"
+
 /// Per-thread state of the pass loop.
 struct MvThreadState {
     SplatCache cache;
@@ -56,8 +60,10 @@ MultiviewSettings multiview_settings(const Scene &scene) {
 } // namespace
 
 /// Multi-view path tracing's part in the pass loop (pass_schedule.h): one pass per step over
-/// every view's tiles, its splats folded into the accumulators between passes, then the next
-/// pass's native-sample maps.
+/// every view's tiles, region by region in a random order, its splats folded into the
+/// accumulators between passes, then the next pass's native-sample maps. A pass stopped
+/// (Ctrl-C, the time budget) is dropped, except the first: the regions it finished are kept,
+/// scaled by the inverse of their share (docs/multiview-path-tracing.md, "A first pass cut short").
 class Renderer::MultiviewPasses final : public PassSchedule {
 public:
     /// Prepares the method and `r`'s accumulators, and reads the state a render resumes from.
@@ -66,12 +72,15 @@ public:
     int step_end(int pass, double fit, double) override { return fit >= 1.0 ? pass + 1 : pass; }
     StepTiles begin_step(int pass, int end) override;
     uint64_t render(size_t t) override { return render_tile(m_state.local(), m_tiles[t]); }
-    /// Every view takes part in every pass: an unfinished pass cannot enter the estimates.
-    bool can_abandon(double, double) const override { return true; }
-    uint64_t kept(const ChunksDone &done) const override { return done.finished ? m_pass_samples : 0; }
-    void abandon() override {
-        for (MvThreadState &ts : m_state) ts.cache.discard();
+    /// A later pass stops between any two tiles (it is dropped), the first between chunks,
+    /// which end with a region.
+    bool can_abandon(double, double, bool between_chunks) const override { return m_pass > 0 || between_chunks; }
+    bool budget_stops(int) const override { return true; }
+    size_t chunk_end(size_t end) const override {
+        return m_pass > 0 || end == 0 ? end : m_region_end[m_region[end - 1]];
     }
+    uint64_t kept(const ChunksDone &done) const override;
+    bool abandon(const ChunksDone &done) override;
     void end_step() override;
     double fraction(uint64_t samples) const override;
     double fraction_after(int pass) const override;
@@ -81,6 +90,8 @@ public:
 
 private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
+    /// The native samples of tile `tile`'s crop-window pixels this pass.
+    uint64_t crop_samples(const Tile &tile) const;
     /// The statistics of the threads, summed by slot (the ray counters with the runs' before);
     /// the first native sample with a dropped contribution goes to the render's statistics.
     RayCounters thread_sums(std::vector<MvViewStats> &stats, std::vector<uint64_t> &dropped);
@@ -99,6 +110,9 @@ private:
     uint32_t m_sample0 = 0, m_margin0 = 0;
     uint64_t m_pixels_total = 0;
     std::vector<Tile> m_tiles;
+    /// The region of each tile (regions numbered in the tiles' order) and where each ends.
+    std::vector<uint32_t> m_region;
+    std::vector<size_t> m_region_end;
     std::unique_ptr<MvPassFilm> m_pass_film;
     tbb::enumerable_thread_specific<MvThreadState> m_state;
     // The current pass and its native samples (of the crop windows).
@@ -121,6 +135,12 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
     m_sample0 = uint32_t(uint64_t(o.first_pass) * per_pass), m_margin0 = uint32_t(o.first_pass);
     for (const Film &mf : r.m_films) m_pixels_total += mf.pixels();
     m_tiles = r.multiview_tiles();
+    for (size_t t = 0; t < m_tiles.size(); ++t) {
+        const bool next = t > 0 && (m_tiles[t].x0 != m_tiles[t - 1].x0 || m_tiles[t].y0 != m_tiles[t - 1].y0);
+        if (next) m_region_end.push_back(t);
+        m_region.push_back(uint32_t(m_region_end.size()));
+    }
+    m_region_end.push_back(m_tiles.size());
     m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted);
 }
 
@@ -161,6 +181,57 @@ uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &t
     // The tile's suffixes as one wavefront of the path tracer.
     mv_finish_samples(mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
     return prim.size();
+}
+
+uint64_t Renderer::MultiviewPasses::crop_samples(const Tile &tile) const {
+    const Film &mf = m_r.m_films[tile.view_slot];
+    const int m = mf.margin;
+    uint64_t n = 0;
+    for (int y = std::max(tile.y0, m); y < std::min(tile.y1, m + mf.height); ++y)
+        for (int x = std::max(tile.x0, m); x < std::min(tile.x1, m + mf.width); ++x)
+            n += mf.n(size_t(y - m) * size_t(mf.width) + size_t(x - m));
+    return n;
+}
+
+uint64_t Renderer::MultiviewPasses::kept(const ChunksDone &done) const {
+    if (done.finished) return m_pass_samples;
+    uint64_t n = 0;
+    if (m_pass == 0)
+        for (size_t t = 0; t < done.prefix; ++t) n += crop_samples(m_tiles[t]);
+    return n;
+}
+
+bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
+    // Regions [0, regions) finished (chunk_end); none when the pass stopped inside a chunk.
+    const uint32_t regions = done.prefix < m_region.size() ? m_region[done.prefix] : 0;
+    if (m_pass > 0 || regions == 0) {
+        for (MvThreadState &ts : m_state) ts.cache.discard();
+        return false;
+    }
+    // A first pass cut short: its regions were taken in a random order (multiview_tiles), so
+    // each was among the first `regions` with probability regions / all, and the pass's sums
+    // divided by that are an unbiased estimate of the pass (docs/multiview-path-tracing.md).
+    const double share = double(regions) / double(m_region_end.size());
+    arena().execute([&] {
+        tbb::parallel_for(m_state.range(1), [](auto &r) {
+            for (MvThreadState &ts : r) ts.cache.flush();
+        });
+        m_r.fold_pass(*m_pass_film, 1.0 / share);
+        // The pixels of the regions not rendered took no native sample (fold counted n).
+        tbb::parallel_for(done.prefix, m_tiles.size(), [&](size_t t) {
+            const Tile &tile = m_tiles[t];
+            Film &mf = m_r.m_films[tile.view_slot];
+            const int m = mf.margin;
+            for (int y = std::max(tile.y0, m); y < std::min(tile.y1, m + mf.height); ++y)
+                for (int x = std::max(tile.x0, m); x < std::min(tile.x1, m + mf.width); ++x) {
+                    const size_t p = size_t(y - m) * size_t(mf.width) + size_t(x - m);
+                    mf.native[p] -= mf.n(p);
+                }
+        });
+    });
+    m_r.m_native_done += double(kept(done)) / double(m_pixels_total);
+    m_r.m_stats.cut_pass_share = share;
+    return true;
 }
 
 void Renderer::MultiviewPasses::end_step() {
@@ -327,7 +398,8 @@ std::vector<Renderer::Tile> Renderer::multiview_tiles() const {
     // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
     // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
     // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
-    // (Tiles cover the sample windows, in window coordinates.)
+    // The regions come in a random order drawn from the seed: a first pass cut short keeps a
+    // uniformly random subset of them. (Tiles cover the sample windows, in window coordinates.)
     std::vector<Tile> tiles;
     for (size_t slot = 0; slot < m_views.size(); ++slot) {
         constexpr int TileSize = 16;
@@ -336,12 +408,13 @@ std::vector<Renderer::Tile> Renderer::multiview_tiles() const {
             for (int x = 0; x < w.width(); x += TileSize)
                 tiles.push_back({int(slot), x, y, std::min(x + TileSize, w.width()), std::min(y + TileSize, w.height())});
     }
-    std::stable_sort(tiles.begin(), tiles.end(),
-                     [](const Tile &a, const Tile &b) { return std::tie(a.y0, a.x0) < std::tie(b.y0, b.x0); });
+    const uint64_t seed = hash_ints(m_mv.seeds.empty() ? 0 : m_mv.seeds[0], RegionOrderKey);
+    auto key = [&](const Tile &t) { return std::make_tuple(hash_ints(seed, uint64_t(t.y0), uint64_t(t.x0)), t.y0, t.x0); };
+    std::stable_sort(tiles.begin(), tiles.end(), [&](const Tile &a, const Tile &b) { return key(a) < key(b); });
     return tiles;
 }
 
-void Renderer::fold_pass(MvPassFilm &pass_film) {
+void Renderer::fold_pass(MvPassFilm &pass_film, double scale) {
     // Each pixel's pass estimate into the accumulators, in blocks of pixels of one view.
     constexpr size_t Block = 4096;
     std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
@@ -350,7 +423,7 @@ void Renderer::fold_pass(MvPassFilm &pass_film) {
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
         const auto [slot, begin] = blocks[b];
         Film &mf = m_films[slot];
-        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block));
+        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block), scale);
     });
 }
 

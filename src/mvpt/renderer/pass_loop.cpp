@@ -28,18 +28,22 @@ void Renderer::run_passes(PassSchedule &schedule, const std::atomic<bool> &cance
         if (end == pass) break;
         const double t_step = seconds();
         const StepTiles step = schedule.begin_step(pass, end);
-        auto stop = [&] {
-            const bool asked = cancel.load() || (pass > 0 && budget > 0.0 && seconds() > budget);
-            return asked && schedule.can_abandon(last_pass, seconds() - t_step);
+        auto stop = [&](bool between_chunks) {
+            const bool asked = cancel.load() || (schedule.budget_stops(pass) && budget > 0.0 && seconds() > budget);
+            return asked && schedule.can_abandon(last_pass, seconds() - t_step, between_chunks);
         };
         auto report = [&](uint64_t samples) {
             report_progress(progress, pass, seconds(), m_stats.samples + samples, schedule.fraction(samples));
         };
         const ChunksDone done = run_in_chunks(schedule.arena(), step.tiles, m_stats.threads, step.samples, timing,
-                                              [&](size_t t) { return schedule.render(t); }, stop, report);
+                                              [&](size_t t) { return schedule.render(t); }, stop, report,
+                                              [&](size_t end) { return schedule.chunk_end(end); });
         m_stats.samples += schedule.kept(done);
         if (!done.finished) {
-            schedule.abandon();
+            if (schedule.abandon(done)) { // a pass, though not every tile of it
+                m_stats.passes = ++pass;
+                report_progress(progress, pass, seconds(), m_stats.samples, schedule.fraction_after(pass - 1));
+            }
             m_stats.cancelled = cancel.load();
             break;
         }

@@ -37,12 +37,20 @@ public:
     /// Renders tile `t` of the step; returns its samples.
     virtual uint64_t render(size_t t) = 0;
     /// Whether a stop request (Ctrl-C, the end of the time budget) may abandon the step's
-    /// tiles not begun, `in_step` seconds into the step.
-    virtual bool can_abandon(double last_pass, double in_step) const = 0;
+    /// tiles not begun, `in_step` seconds into the step, between two tiles of a chunk or
+    /// (`between_chunks`) before a chunk.
+    virtual bool can_abandon(double last_pass, double in_step, bool between_chunks) const = 0;
+    /// Whether the time budget may stop pass `pass` (a first pass always finishes unless its
+    /// method keeps a part of it).
+    virtual bool budget_stops(int pass) const { return pass > 0; }
+    /// Where a chunk of the step's tiles that would end at tile `end` ends.
+    virtual size_t chunk_end(size_t end) const { return end; }
     /// The step's samples that the images keep (`done`: what its tiles rendered).
     virtual uint64_t kept(const ChunksDone &done) const = 0;
-    /// After a step abandoned, and after a step finished (the work between passes).
-    virtual void abandon() {}
+    /// After a step abandoned (`done`: what its tiles rendered): whether what it rendered
+    /// entered the images as a pass of its own.
+    virtual bool abandon(const ChunksDone &) { return false; }
+    /// After a step finished (the work between passes).
     virtual void end_step() {}
     /// The share of the sample target reached after `samples` of the step's samples, and
     /// after pass `pass`.

@@ -92,7 +92,7 @@ StepTiles Renderer::PathPasses::begin_step(int pass, int end) {
     return {m_step.size(), double(m_step_samples)};
 }
 
-bool Renderer::PathPasses::can_abandon(double last_pass, double in_step) const {
+bool Renderer::PathPasses::can_abandon(double last_pass, double in_step, bool) const {
     // A step of one pass that is expected to last more than half a second, or has: its
     // finished tiles are kept. Steps of several passes are planned to last a quarter of a
     // second and finish, so that every pixel holds whole passes.

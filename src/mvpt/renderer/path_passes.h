@@ -20,7 +20,7 @@ public:
     int step_end(int pass, double fit, double last_pass) override;
     StepTiles begin_step(int pass, int end) override;
     uint64_t render(size_t t) override;
-    bool can_abandon(double last_pass, double in_step) const override;
+    bool can_abandon(double last_pass, double in_step, bool between_chunks) const override;
     /// Every tile finished keeps its samples, also in a step abandoned.
     uint64_t kept(const ChunksDone &done) const override { return done.samples; }
     double fraction(uint64_t samples) const override;

@@ -90,6 +90,9 @@ struct RenderStats {
     /// the renderer was made plus the films, images and per-thread buffers.
     double estimated_bytes = 0.0;
     int passes = 0;
+    /// Multi-view path tracing: when its first pass was cut short (Ctrl-C, the time budget),
+    /// the share of its regions rendered, whose sums were scaled by its inverse; else 0.
+    double cut_pass_share = 0.0;
     /// The pass a resumed render started from (0: not resumed).
     int first_pass = 0;
     bool cancelled = false;
@@ -174,10 +177,11 @@ private:
                                                   const MvConfig &cfg, bool adaptive);
     /// Multi-view path tracing: whether this render makes adaptive native-sample maps.
     bool adaptive_maps(const MvConfig &cfg) const;
-    /// Multi-view path tracing: 16x16 tiles of every view's sample window, region by region.
+    /// Multi-view path tracing: 16x16 tiles of every view's sample window, region by region,
+    /// the regions in a random order.
     std::vector<Tile> multiview_tiles() const;
-    /// Multi-view path tracing: one pass's sums into every view's accumulators.
-    void fold_pass(MvPassFilm &pass_film);
+    /// Multi-view path tracing: one pass's sums (times `scale`) into every view's accumulators.
+    void fold_pass(MvPassFilm &pass_film, double scale = 1.0);
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
 

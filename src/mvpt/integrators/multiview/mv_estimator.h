@@ -21,19 +21,23 @@ struct MvPassEstimate {
 /// estimates: E[sum W] = 1 exactly when D sums over every valid strategy, and beta is
 /// independent of this pass, so the estimate stays unbiased while the noise of how many
 /// contributions happened to land in the pixel cancels. Weighted: W*L + E, whose ratio the
-/// film forms over all passes.
-inline MvPassEstimate mv_pass_estimate(const SplatEntry &t, MvEstimator estimator, const double *beta) {
+/// film forms over all passes. `scale` multiplies the sums: that of a pass cut short, whose
+/// regions were rendered each with probability 1/scale (docs/multiview-path-tracing.md, "A
+/// first pass cut short").
+inline MvPassEstimate mv_pass_estimate(const SplatEntry &t, MvEstimator estimator, const double *beta,
+                                       double scale = 1.0) {
     MvPassEstimate out;
-    out.w = double(t.w) / SplatScale;
+    const double to_real = scale / SplatScale;
+    out.w = double(t.w) * to_real;
     if (estimator == MvEstimator::Balance) {
-        for (int c = 0; c < 3; ++c) out.v[c] = double(t.lw[c]) / SplatScale + (beta ? beta[c] * (1.0 - out.w) : 0.0);
-        out.e_mean = double(t.e[0]) / SplatScale; // (the balance sums keep only E's mean over channels)
+        for (int c = 0; c < 3; ++c) out.v[c] = double(t.lw[c]) * to_real + (beta ? beta[c] * (1.0 - out.w) : 0.0);
+        out.e_mean = double(t.e[0]) * to_real; // (the balance sums keep only E's mean over channels)
         return out;
     }
     for (int c = 0; c < 3; ++c) {
-        out.v[c] = double(t.lw[c]) / SplatScale;
-        out.lw[c] = double(t.lw[c] - t.e[c]) / SplatScale;
-        out.e[c] = double(t.e[c]) / SplatScale;
+        out.v[c] = double(t.lw[c]) * to_real;
+        out.lw[c] = double(t.lw[c] - t.e[c]) * to_real;
+        out.e[c] = double(t.e[c]) * to_real;
         out.e_mean += out.e[c] / 3.0;
     }
     return out;
