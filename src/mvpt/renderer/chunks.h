@@ -15,9 +15,10 @@
 
 namespace mvpt {
 
-/// What the chunks of a render have measured: CPU seconds per sample, the longest chunk.
+/// What the chunks of a render have measured: CPU seconds per sample, the longest chunk and
+/// the last one.
 struct ChunkTiming {
-    double seconds_per_sample = 0.0, longest = 0.0;
+    double seconds_per_sample = 0.0, longest = 0.0, last = 0.0;
 };
 
 /// How a run of chunks ended: whether every tile was rendered, and the samples rendered;
@@ -65,6 +66,7 @@ ChunksDone run_in_chunks(tbb::task_arena &arena, size_t tiles, int threads, doub
         done += chunk.load();
         if (chunk.load() > 0) timing.seconds_per_sample = took * threads / double(chunk.load());
         timing.longest = std::max(timing.longest, took);
+        timing.last = took;
         first = last;
         if (!abandoned.load() && first < tiles) report(done);
     }

@@ -60,10 +60,11 @@ MultiviewSettings multiview_settings(const Scene &scene) {
 } // namespace
 
 /// Multi-view path tracing's part in the pass loop (pass_schedule.h): one pass per step over
-/// every view's tiles, region by region in a random order, its splats folded into the
-/// accumulators between passes, then the next pass's native-sample maps. A pass stopped
-/// (Ctrl-C, the time budget) is dropped, except the first: the regions it finished are kept,
-/// scaled by the inverse of their share (docs/multiview-path-tracing.md, "A first pass cut short").
+/// every view's tiles, region by region, its splats folded into the accumulators between
+/// passes, then the next pass's native-sample maps. A pass stopped (Ctrl-C, the time budget)
+/// is dropped, except the first, whose regions come in a random order: the regions it
+/// finished are kept, scaled by the inverse of their share (docs/multiview-path-tracing.md,
+/// "A first pass cut short"). Later passes take the regions in scan order.
 class Renderer::MultiviewPasses final : public PassSchedule {
 public:
     /// Prepares the method and `r`'s accumulators, and reads the state a render resumes from.
@@ -110,6 +111,7 @@ private:
     uint32_t m_sample0 = 0, m_margin0 = 0;
     uint64_t m_pixels_total = 0;
     std::vector<Tile> m_tiles;
+    bool m_random_order = false; ///< the tiles' regions are in a random order (the first pass)
     /// The region of each tile (regions numbered in the tiles' order) and where each ends.
     std::vector<uint32_t> m_region;
     std::vector<size_t> m_region_end;
@@ -134,7 +136,8 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
         throw std::invalid_argument("the pass range numbers samples beyond 2^32");
     m_sample0 = uint32_t(uint64_t(o.first_pass) * per_pass), m_margin0 = uint32_t(o.first_pass);
     for (const Film &mf : r.m_films) m_pixels_total += mf.pixels();
-    m_tiles = r.multiview_tiles();
+    m_random_order = r.m_first_pass == 0;
+    m_tiles = r.multiview_tiles(m_random_order);
     for (size_t t = 0; t < m_tiles.size(); ++t) {
         const bool next = t > 0 && (m_tiles[t].x0 != m_tiles[t - 1].x0 || m_tiles[t].y0 != m_tiles[t - 1].y0);
         if (next) m_region_end.push_back(t);
@@ -151,6 +154,7 @@ bool Renderer::MultiviewPasses::done(int pass) const {
 
 StepTiles Renderer::MultiviewPasses::begin_step(int pass, int) {
     m_pass = pass;
+    if (pass > 0 && m_random_order) m_tiles = m_r.multiview_tiles(m_random_order = false);
     m_pass_samples = 0;
     for (const Film &mf : m_r.m_films) m_pass_samples += mf.map_total;
     return {m_tiles.size(), double(m_pass_samples)};
@@ -392,14 +396,14 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     return footprints;
 }
 
-std::vector<Renderer::Tile> Renderer::multiview_tiles() const {
+std::vector<Renderer::Tile> Renderer::multiview_tiles(bool random_regions) const {
     // Tiles by image region, then view: consecutive tiles render the same region of every
     // view, whose native samples splat into overlapping neighbourhoods of the other views, so
     // that a thread's splat cache sums a pixel's contributions before handing them on. Tasks
     // are runs of consecutive tiles, not whole regions: a 48^2 film has 9 regions, and two
     // threads sharing 9 tasks idled 8 % of each light-field pass (CPU use 0.91 -> 0.99).
-    // The regions come in a random order drawn from the seed: a first pass cut short keeps a
-    // uniformly random subset of them. (Tiles cover the sample windows, in window coordinates.)
+    // In a random order drawn from the seed, a first pass cut short keeps a uniformly random
+    // subset of the regions. (Tiles cover the sample windows, in window coordinates.)
     std::vector<Tile> tiles;
     for (size_t slot = 0; slot < m_views.size(); ++slot) {
         constexpr int TileSize = 16;
@@ -409,7 +413,9 @@ std::vector<Renderer::Tile> Renderer::multiview_tiles() const {
                 tiles.push_back({int(slot), x, y, std::min(x + TileSize, w.width()), std::min(y + TileSize, w.height())});
     }
     const uint64_t seed = hash_ints(m_mv.seeds.empty() ? 0 : m_mv.seeds[0], RegionOrderKey);
-    auto key = [&](const Tile &t) { return std::make_tuple(hash_ints(seed, uint64_t(t.y0), uint64_t(t.x0)), t.y0, t.x0); };
+    auto key = [&](const Tile &t) {
+        return std::make_tuple(random_regions ? hash_ints(seed, uint64_t(t.y0), uint64_t(t.x0)) : 0, t.y0, t.x0);
+    };
     std::stable_sort(tiles.begin(), tiles.end(), [&](const Tile &a, const Tile &b) { return key(a) < key(b); });
     return tiles;
 }

@@ -178,8 +178,8 @@ private:
     /// Multi-view path tracing: whether this render makes adaptive native-sample maps.
     bool adaptive_maps(const MvConfig &cfg) const;
     /// Multi-view path tracing: 16x16 tiles of every view's sample window, region by region,
-    /// the regions in a random order.
-    std::vector<Tile> multiview_tiles() const;
+    /// the regions in scan order or (`random_regions`) in a random order drawn from the seed.
+    std::vector<Tile> multiview_tiles(bool random_regions) const;
     /// Multi-view path tracing: one pass's sums (times `scale`) into every view's accumulators.
     void fold_pass(MvPassFilm &pass_film, double scale = 1.0);
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
