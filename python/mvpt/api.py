@@ -130,8 +130,9 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
 
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
     seconds (0: none; passes stop when the next would end past it, and it is not overrun by
-    more than about half a second, except by path tracing's first pass). The render runs natively with the
-    GIL released; `progress(dict)` is called every `poll` seconds and once at the end, with
+    more than about half a second, except by path tracing's first pass; multi-view path
+    tracing cuts its first pass, as on Ctrl-C below). The render runs natively with the GIL
+    released; `progress(dict)` is called every `poll` seconds and once at the end, with
     the passes finished, fraction done, elapsed seconds and samples so far. Ctrl-C (or
     KeyboardInterrupt raised by `progress`) cancels within about half a second (path tracing
     at the end of its current quarter-second chunk of short passes, or between the tiles of a

@@ -200,8 +200,9 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                    help="override a <default> of the scene (repeatable)")
     p.add_argument("--spp", type=_count, default=0, help="samples per pixel (default: each sensor's sample_count)")
     p.add_argument("--time", type=_seconds, default=0.0,
-                   help="wall-clock budget in seconds (passes stop when the next would end past it; "
-                        "after the first pass the budget is never overrun by more than about half a second)")
+                   help="wall-clock budget in seconds (passes stop when the next would end past it, and "
+                        "the budget is not overrun by more than about half a second, except by path tracing's "
+                        "first pass; mvpt cuts its first pass and keeps what it finished)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
     p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
     p.add_argument("--method", choices=("pt", "mvpt"), default="scene",
