@@ -9,7 +9,8 @@ Cases (each rendered by `pt` and `mvpt` at every thread count, one render per pr
 - `lf9x9`: a 9x9 light field of the still life (scenes/stereo.xml with --rig grid:9x9), 128², 4 spp;
 - `mem45`: 45 views of the still life in a row (linear rig), 256², 1 spp: the memory case;
 - `display100` (only when asked for with --cases): 100 views of 1920x1080 in a row, 1 spp, a
-  display's light field at full resolution (mvpt: about 20 GB and a quarter of an hour on 2 cores).
+  display's light field at full resolution (mvpt: about 21 GB and half an hour on 2 cores;
+  with --time 30, which cuts its first pass, the same peak in a few minutes).
 
 Per case, method and thread count the script prints the median over --repeat runs (thread
 counts interleaved, so that load changes of a shared machine hit them alike) of: native
@@ -46,9 +47,10 @@ CHILD = r"""
 import json, resource, sys, time
 import mvpt
 scene_path, rig, defines, spp, method, threads = sys.argv[1], sys.argv[2], json.loads(sys.argv[3]), int(sys.argv[4]), sys.argv[5], int(sys.argv[6])
+budget = float(sys.argv[7])
 scene = mvpt.load_file(scene_path, rig=rig or None, **defines)
 before = resource.getrusage(resource.RUSAGE_SELF)
-r = mvpt.render(scene, spp=spp, method=method, threads=threads, seed=1)
+r = mvpt.render(scene, spp=0 if budget else spp, time=budget, method=method, threads=threads, seed=1)
 after = resource.getrusage(resource.RUSAGE_SELF)
 cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024.0  # Linux: KiB
@@ -66,6 +68,10 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="runs per configuration (median)")
     ap.add_argument("--quick", action="store_true", help="small films, one repeat")
     ap.add_argument("--json", type=Path, help="write every run's numbers here")
+    ap.add_argument("--time", type=float, default=0.0,
+                    help="render each case under this time budget instead of its spp (the peak memory of a "
+                         "large case sooner: multi-view path tracing cuts its first pass; the rates then "
+                         "count the preparation)")
     args = ap.parse_args()
     threads = [int(t) for t in args.threads.split(",")]
     repeat = 1 if args.quick else args.repeat
@@ -76,7 +82,7 @@ def main() -> None:
             runs = {t: [] for t in threads}
             for i in range(repeat):
                 for t in (threads if i % 2 == 0 else threads[::-1]):
-                    r = measure(case, method, t, args.quick)
+                    r = measure(case, method, t, args.quick, args.time)
                     runs[t].append(r)
                     raw.append(dict(r, case=case, method=method, requested_threads=t))
             base = None
@@ -93,7 +99,7 @@ def main() -> None:
         args.json.write_text(json.dumps(raw, indent=1))
 
 
-def measure(case: str, method: str, threads: int, quick: bool) -> dict:
+def measure(case: str, method: str, threads: int, quick: bool, budget: float = 0.0) -> dict:
     """One render in a child process: native samples per second of render time, CPU time per
     native sample (the child's rusage around the render), the child's peak RSS."""
     scene, rig, defines, spp = CASES[case]
@@ -101,7 +107,7 @@ def measure(case: str, method: str, threads: int, quick: bool) -> dict:
         defines = dict(defines, **QUICK[case])
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
     out = subprocess.run([sys.executable, "-c", CHILD, str(scene), rig, json.dumps(defines), str(spp), method,
-                          str(threads)], capture_output=True, text=True, env=env)
+                          str(threads), str(budget)], capture_output=True, text=True, env=env)
     if out.returncode != 0:
         sys.exit(f"{case} {method} --threads {threads} failed:\n{out.stderr}")
     r = json.loads(out.stdout.strip().splitlines()[-1])

@@ -2,6 +2,9 @@
 
 #include "../core/sampler.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -34,9 +37,15 @@ MvPassFilm::MvPassFilm(const std::vector<SplatFootprint> &views, bool e_rgb)
         if (total >= UINT32_MAX) throw std::runtime_error("multi-view path tracing renders at most 2^32 - 2 view-pixels");
         m_offset.push_back(uint32_t(total));
     }
-    m_shared.resize(total);
-    m_e.assign(size_t(m_e_channels) * total, 0);
-    m_count.assign(total, 0);
+    m_size = total;
+    m_shared = std::make_unique_for_overwrite<Shared[]>(total);
+    m_e = std::make_unique_for_overwrite<int64_t[]>(size_t(m_e_channels) * total);
+    m_count = std::make_unique_for_overwrite<uint32_t[]>(total);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, total, size_t(1) << 16), [&](const tbb::blocked_range<size_t> &r) {
+        std::fill(m_shared.get() + r.begin(), m_shared.get() + r.end(), Shared{});
+        std::fill(m_e.get() + size_t(m_e_channels) * r.begin(), m_e.get() + size_t(m_e_channels) * r.end(), 0);
+        std::fill(m_count.get() + r.begin(), m_count.get() + r.end(), 0u);
+    });
 }
 
 void MvPassFilm::add(const SplatEntry &e) {

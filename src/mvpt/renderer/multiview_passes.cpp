@@ -91,8 +91,17 @@ public:
 
 private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
-    /// The native samples of tile `tile`'s crop-window pixels this pass.
-    uint64_t crop_samples(const Tile &tile) const;
+    /// The crop-window pixels of a tile, [x0, x1) x [y0, y1) in crop-window coordinates.
+    struct CropRect {
+        int x0, y0, x1, y1;
+        uint64_t pixels() const { return uint64_t(std::max(0, x1 - x0)) * uint64_t(std::max(0, y1 - y0)); }
+    };
+    CropRect crop_of(const Tile &tile) const {
+        const Film &mf = m_r.m_films[tile.view_slot];
+        const int m = mf.margin;
+        return {std::max(tile.x0 - m, 0), std::max(tile.y0 - m, 0), std::min(tile.x1 - m, mf.width),
+                std::min(tile.y1 - m, mf.height)};
+    }
     /// The statistics of the threads, summed by slot (the ray counters with the runs' before);
     /// the first native sample with a dropped contribution goes to the render's statistics.
     RayCounters thread_sums(std::vector<MvViewStats> &stats, std::vector<uint64_t> &dropped);
@@ -144,7 +153,8 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
         m_region.push_back(uint32_t(m_region_end.size()));
     }
     m_region_end.push_back(m_tiles.size());
-    m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted);
+    arena.execute(
+        [&] { m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted); });
 }
 
 bool Renderer::MultiviewPasses::done(int pass) const {
@@ -187,21 +197,13 @@ uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &t
     return prim.size();
 }
 
-uint64_t Renderer::MultiviewPasses::crop_samples(const Tile &tile) const {
-    const Film &mf = m_r.m_films[tile.view_slot];
-    const int m = mf.margin;
-    uint64_t n = 0;
-    for (int y = std::max(tile.y0, m); y < std::min(tile.y1, m + mf.height); ++y)
-        for (int x = std::max(tile.x0, m); x < std::min(tile.x1, m + mf.width); ++x)
-            n += mf.n(size_t(y - m) * size_t(mf.width) + size_t(x - m));
-    return n;
-}
-
 uint64_t Renderer::MultiviewPasses::kept(const ChunksDone &done) const {
     if (done.finished) return m_pass_samples;
+    // A cut first pass: one native sample per pixel of the tiles rendered (the adaptive maps
+    // start later).
     uint64_t n = 0;
     if (m_pass == 0)
-        for (size_t t = 0; t < done.prefix; ++t) n += crop_samples(m_tiles[t]);
+        for (size_t t = 0; t < done.prefix; ++t) n += crop_of(m_tiles[t]).pixels();
     return n;
 }
 
@@ -221,16 +223,12 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
             for (MvThreadState &ts : r) ts.cache.flush();
         });
         m_r.fold_pass(*m_pass_film, 1.0 / share);
-        // The pixels of the regions not rendered took no native sample (fold counted n).
+        // The pixels of the regions not rendered took no native sample (fold counted one).
         tbb::parallel_for(done.prefix, m_tiles.size(), [&](size_t t) {
-            const Tile &tile = m_tiles[t];
-            Film &mf = m_r.m_films[tile.view_slot];
-            const int m = mf.margin;
-            for (int y = std::max(tile.y0, m); y < std::min(tile.y1, m + mf.height); ++y)
-                for (int x = std::max(tile.x0, m); x < std::min(tile.x1, m + mf.width); ++x) {
-                    const size_t p = size_t(y - m) * size_t(mf.width) + size_t(x - m);
-                    mf.native[p] -= mf.n(p);
-                }
+            Film &mf = m_r.m_films[m_tiles[t].view_slot];
+            const CropRect c = crop_of(m_tiles[t]);
+            for (int y = c.y0; y < c.y1; ++y)
+                for (int x = c.x0; x < c.x1; ++x) mf.native[size_t(y) * size_t(mf.width) + size_t(x)] -= 1;
         });
     });
     m_r.m_native_done += double(kept(done)) / double(m_pixels_total);
