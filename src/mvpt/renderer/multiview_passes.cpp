@@ -91,6 +91,9 @@ public:
 
 private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
+    /// The threads' caches flushed and the pass's sums (times `scale`) folded into the
+    /// accumulators, in the render's arena.
+    void fold_pass(double scale);
     /// The crop-window pixels of a tile, [x0, x1) x [y0, y1) in crop-window coordinates.
     struct CropRect {
         int x0, y0, x1, y1;
@@ -207,6 +210,14 @@ uint64_t Renderer::MultiviewPasses::kept(const ChunksDone &done) const {
     return n;
 }
 
+void Renderer::MultiviewPasses::fold_pass(double scale) {
+    // What the caches still hold goes to the pass sums (exact integer sums).
+    tbb::parallel_for(m_state.range(1), [](auto &r) {
+        for (MvThreadState &ts : r) ts.cache.flush();
+    });
+    m_r.fold_pass(*m_pass_film, scale);
+}
+
 bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
     // Regions [0, regions) finished (chunk_end); none when the pass stopped inside a chunk.
     const uint32_t regions = done.prefix < m_region.size() ? m_region[done.prefix] : 0;
@@ -219,10 +230,7 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
     // divided by that are an unbiased estimate of the pass (docs/multiview-path-tracing.md).
     const double share = double(regions) / double(m_region_end.size());
     arena().execute([&] {
-        tbb::parallel_for(m_state.range(1), [](auto &r) {
-            for (MvThreadState &ts : r) ts.cache.flush();
-        });
-        m_r.fold_pass(*m_pass_film, 1.0 / share);
+        fold_pass(1.0 / share);
         // The pixels of the regions not rendered took no native sample (fold counted one).
         tbb::parallel_for(done.prefix, m_tiles.size(), [&](size_t t) {
             Film &mf = m_r.m_films[m_tiles[t].view_slot];
@@ -239,13 +247,7 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
 void Renderer::MultiviewPasses::end_step() {
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
-    arena().execute([&] {
-        // What the caches still hold goes to the pass sums (exact integer sums).
-        tbb::parallel_for(m_state.range(1), [](auto &r) {
-            for (MvThreadState &ts : r) ts.cache.flush();
-        });
-        m_r.fold_pass(*m_pass_film);
-    });
+    arena().execute([&] { fold_pass(1.0); });
     m_r.m_native_done += double(m_pass_samples) / double(m_pixels_total);
     // Native-sample maps of the next pass (§8), frozen during it. Their statistics change by
     // about 1/passes per pass, so after 16 passes a map serves passes/8 passes (a map costs
