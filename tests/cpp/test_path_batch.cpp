@@ -3,7 +3,7 @@
 // same hits and bit-identical radiance per path (the renderer uses the batches, for camera
 // paths and for multi-view suffixes; tests use li and trace).
 #include "batch_checks.h"
-#include "mvpt/core/simd_x86.h"
+#include "mvpt/core/simd_gather.h"
 #include "mvpt/core/warp.h"
 #include "mvpt/integrators/path/path.h"
 #include "mvpt/loader/load_scene.h"
@@ -39,11 +39,7 @@ using test::same_bits;
 
 /// Whether Embree runs 16-wide packets with 16-wide kernels on this CPU.
 bool embree_has_16_wide() {
-#if MVPT_X86_SIMD
-    return cpu_has_avx512f();
-#else
-    return false;
-#endif
+    return simd::cpu_has_avx512f();
 }
 
 /// How many floats lie between a and b (0: the same value).

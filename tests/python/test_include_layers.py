@@ -1,6 +1,7 @@
 """The C++ tree is layered (docs/architecture.md): each folder of src/mvpt includes only its
 own files and those of the folders below it, and no header includes itself through others.
-An include upward or a cycle means two parts that cannot be read, tested or changed apart."""
+An include upward or a cycle means two parts that cannot be read, tested or changed apart.
+Intrinsics live in one file, core/simd_gather.cpp; every other vector loop uses core/simd.h."""
 import re
 from pathlib import Path
 
@@ -10,6 +11,8 @@ LAYERS = ["core", "io", "render", "accel", "loader", "integrators", "renderer"]
 # Inside a layer, folders in the same order: multi-view path tracing builds on the path tracers.
 SUBLAYERS = {"integrators": ["path", "multiview"]}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
+INTRINSIC = re.compile(r"\b_mm\d*_\w+\s*\(|\b__m(?:128|256|512)\w*\b|<(?:imm|x86|[a-z]mm)intrin\.h>")
+INTRINSICS_FILE = "mvpt/core/simd_gather.cpp"
 
 
 def include_graph(root: Path) -> dict:
@@ -28,6 +31,13 @@ def include_graph(root: Path) -> dict:
                     break
         graph[f.relative_to(root).as_posix()] = deps
     return graph
+
+
+def intrinsic_files(root: Path) -> list:
+    """The C++ files of root / "mvpt" that use x86 intrinsics, other than INTRINSICS_FILE."""
+    return [f.relative_to(root).as_posix() for f in sorted((root / "mvpt").rglob("*"))
+            if f.suffix in (".h", ".cpp") and f.relative_to(root).as_posix() != INTRINSICS_FILE
+            and INTRINSIC.search(f.read_text())]
 
 
 def layer_violations(graph: dict) -> list:
@@ -81,15 +91,24 @@ def test_no_include_cycles():
     assert cycle is None, " -> ".join(cycle)
 
 
+def test_intrinsics_in_one_file():
+    assert (SRC / INTRINSICS_FILE).is_file()
+    assert INTRINSIC.search((SRC / INTRINSICS_FILE).read_text())
+    assert not intrinsic_files(SRC), intrinsic_files(SRC)
+
+
 def test_the_checks_see_violations(tmp_path):
-    """The checks fail on a tree with an upward include and a cycle."""
-    for name, text in {"core/a.h": '#include "../render/b.h"\n', "render/b.h": '#include "c.h"\n',
+    """The checks fail on a tree with an upward include, a cycle and intrinsics elsewhere."""
+    for name, text in {"render/g.cpp": "__m512 v = _mm512_setzero_ps();\n",
+                       "accel/h.cpp": "#include <immintrin.h>\n", "core/simd_gather.cpp": "_mm512_storeu_ps(p, v);\n",
+                       "core/a.h": '#include "../render/b.h"\n', "render/b.h": '#include "c.h"\n',
                        "render/c.h": '#include "b.h"\n', "render/d.cpp": '#include "../../python/x.h"\n',
                        "integrators/path/e.h": '#include "../multiview/f.h"\n', "integrators/multiview/f.h": ""}.items():
         (tmp_path / "mvpt" / name).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / "mvpt" / name).write_text(text)
     (tmp_path / "python").mkdir()
     (tmp_path / "python" / "x.h").write_text("")
+    assert intrinsic_files(tmp_path) == ["mvpt/accel/h.cpp", "mvpt/render/g.cpp"]
     graph = include_graph(tmp_path)
     problems = layer_violations(graph)
     assert any("core/a.h (core) includes mvpt/render/b.h" in p for p in problems), problems

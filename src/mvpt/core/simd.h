@@ -2,8 +2,8 @@
 // the GCC vector extension (GCC and Clang), and functions compiled once per x86-64
 // instruction-set level (AVX-512, AVX2, baseline) and picked when the library loads
 // (MVPT_MULTI_ISA). The build turns off FMA contraction, so every clone rounds exactly like
-// the baseline one and images do not depend on the CPU. The few loops that need AVX-512's
-// gathers and compresses use its intrinsics, in core/simd_x86.h.
+// the baseline one and images do not depend on the CPU. The word gathers and compresses that
+// need AVX-512's instructions are the only intrinsics, in core/simd_gather.cpp.
 #pragma once
 
 #include <cstdint>

@@ -1,9 +1,8 @@
 // Moving a chunk of lanes between the wavefront's records and the vector kernels' columns:
-// the Lambertian kernels' inputs (lam_col, path_kernels.h) gathered one column at a time,
-// 16 lanes per AVX-512 gather where the CPU has it (a lane's 30-odd values come from three
-// records of different paths, which scalar code copies with one load and one store each),
-// and the kernels' shadow rays appended by compressing 16 lanes at a time. Pure copies:
-// the results are the same bits on every CPU.
+// the Lambertian kernels' inputs (lam_col, path_kernels.h) gathered field by field from the
+// records of different paths, and the kernels' shadow rays appended, both by the word
+// gathers and compresses of core/simd_gather.h (16 lanes per AVX-512 instruction where the
+// CPU has it). Pure copies: the results are the same bits on every CPU.
 #pragma once
 
 #include "wavefront.h"
@@ -30,7 +29,7 @@ struct LaneSources {
 /// SurfaceInteraction::to_local computes it), the shading frame, position, geometric normal, reflectance, throughput,
 /// Eta, URr, RrOn and the BSDF sample's numbers DirUx, DirUy; with `light_numbers` also the
 /// emitter sample's LightUx, LightUy. TwoSided and Emitter are left to the caller.
-/// `vector` = false takes the scalar loop on any CPU (the tests compare both).
+/// `vector` = false copies one word at a time on any CPU (the tests compare both).
 void gather_lambert_lanes(float *cols, size_t stride, size_t n, const uint32_t *path, const uint32_t *vertex,
                           const LaneSources &src, bool light_numbers, bool vector = true);
 
@@ -45,8 +44,8 @@ void gather_lambert_nee_lanes(float *cols, size_t stride, size_t n, const uint32
 /// o0 .. o0 + 10 (shadow ray origin, direction and t_max, contribution, whether it counts):
 /// the lanes that count append their shadow ray (with their interaction's time) to the
 /// columns shadow[0..7] and their contribution to `pending`, from position `count` on, in
-/// lane order. Returns the new count. The AVX-512 loop stores whole 16-lane steps: shadow
-/// and pending need 16 entries to spare past the last one used.
+/// lane order. Returns the new count. The AVX-512 loop stores whole 16-lane steps: the
+/// shadow columns need 16 entries to spare past the last one used.
 size_t append_shadow_rays(const float *cols, size_t stride, size_t n, size_t o0, const uint32_t *path,
                           const SurfaceInteraction *si, float *const shadow[8], PendingShadow *pending, size_t count,
                           bool vector = true);

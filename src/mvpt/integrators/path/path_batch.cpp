@@ -145,7 +145,7 @@ struct WaveBuffers {
         for (auto &c : shadow) c.resize(n + 16); // append_shadow_rays stores whole 16-lane steps
         blocked.resize(n);
         scatter.resize(n);
-        shadows.resize(n + 16);
+        shadows.resize(n);
         for (auto &c : u) c.resize(n);
         u_hash.resize(n);
         u_dim.resize(n);
