@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
-#include <span>
-#include <utility>
 
 namespace mvpt {
 
