@@ -66,12 +66,29 @@ inline void flatten(const CameraProjection &c, float out[ProjectionFields]) {
     return c;
 }
 
+/// The shared vertex y as every camera's shift reads it: its point, its normal n_y (zero for
+/// a point in a medium) and 1/|n_y| (1 in a medium), the division made once per vertex and
+/// not in a loop over cameras, where a division under a condition keeps the loop from
+/// vectorising without AVX-512's masks.
+struct ShiftVertex {
+    Point3f p;
+    Normal3f n;
+    float inv_n;
+    float in_medium; ///< 1 for a point in a medium, else 0
+    ShiftVertex(Point3f y, Normal3f n_y) : p(y), n(n_y) {
+        const float n_norm = norm(n_y);
+        inv_n = n_norm > 0.f ? 1.f / n_norm : 1.f;
+        in_medium = n_norm > 0.f ? 0.f : 1.f;
+    }
+};
+
 /// Camera::shift_geometry for camera `c` (design doc §3 projection through the focus plane,
-/// §4 film density G = f^2 cos(phi) / (cos^3(theta) d^2); a zero normal `n_y` makes y a point
-/// in a medium, with G per unit volume and length f^2 / (cos^3(theta) d^2), §10). False when y's camera-space depth
+/// §4 film density G = f^2 cos(phi) / (cos^3(theta) d^2); a zero normal makes y a point in a
+/// medium, with G per unit volume and length f^2 / (cos^3(theta) d^2), §10). False when y's camera-space depth
 /// lies outside [near, far]; `out` then holds meaningless values. Branch-free (a pinhole is a
-/// lens of radius 0), so that shift_geometry_batch vectorises over cameras.
-[[gnu::always_inline]] inline bool shift_geometry(const CameraProjection &c, Point3f y, Normal3f n_y, Vec2f lens, ShiftGeometry *out) {
+/// lens of radius 0), so that the loop over a ProjectionTable vectorises over cameras.
+[[gnu::always_inline]] inline bool shift_geometry(const CameraProjection &c, const ShiftVertex &v, Vec2f lens, ShiftGeometry *out) {
+    const Point3f y = v.p;
     Point3f p = c.pose.to_camera(y);
     // Thin lens: the ray u -> p meets the focus plane z = f_d at P = u + (p - u) f_d / p.z, and
     // q = P / f_d = u (1/f_d - 1/p.z) + p / p.z; a pinhole (u = 0) gives q = p / p.z.
@@ -86,16 +103,15 @@ inline void flatten(const CameraProjection &c, float out[ProjectionFields]) {
     Vec3f w = y - out->lens_point;
     float d = std::sqrt(sqr(p.x - ux) + sqr(p.y - uy) + sqr(p.z));
     // d cos(phi) = |n.w| / |n|, or d in a medium (a zero normal).
-    const float n_norm = norm(n_y), inv_n = n_norm > 0.f ? 1.f / n_norm : 1.f; // hoisted out of batch loops
-    const float n_w = n_norm > 0.f ? absdot(n_y, w) : d;
-    out->density = sqr(c.film_distance) * n_w * inv_n * (inv_z * inv_z * inv_z);
+    const float n_w = absdot(v.n, w) + v.in_medium * d; // exactly |n.w| on a surface, d in a medium
+    out->density = sqr(c.film_distance) * n_w * v.inv_n * (inv_z * inv_z * inv_z);
     // Up to the near plane: d - near / cos(theta).
     out->visible_length = d * (1.f - c.near_clip * inv_z);
     return (p.z >= c.near_clip) & (p.z <= c.far_clip);
 }
 
 /// Many static cameras' projections as a structure of arrays (field-major), for
-/// shift_geometry_batch.
+/// the vector loop of shift_static_views (integrators/multiview/mv_candidates.cpp).
 class ProjectionTable {
 public:
     ProjectionTable() = default;

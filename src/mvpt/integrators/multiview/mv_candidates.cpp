@@ -53,7 +53,7 @@ namespace {
     cx = cx < fx1 - 1.f ? cx : fx1 - 1.f;
     cy = cy < fy1 - 1.f ? cy : fy1 - 1.f;
     // (Offsets from the window's corner are >= 0, so truncation is floor; the corner may be negative.)
-    *pixel = uint32_t(cy - fy0) * uint32_t(x1 - x0) + uint32_t(cx - fx0);
+    *pixel = uint32_t(int32_t(cy - fy0)) * uint32_t(x1 - x0) + uint32_t(int32_t(cx - fx0));
     return (depth ? 0u : uint32_t(ShiftDepth)) | (facing ? 0u : uint32_t(ShiftFacing)) |
            (inside ? 0u : uint32_t(ShiftOutside));
 }
@@ -64,9 +64,10 @@ MVPT_MULTI_ISA void shift_kernel(const float *__restrict proj, const int32_t *__
                                  float *__restrict fy, float *__restrict lx, float *__restrict ly, float *__restrict lz,
                                  float *__restrict dens, float *__restrict vis, uint32_t *__restrict status,
                                  uint32_t *__restrict pixel) {
+    const ShiftVertex v(y.p, y.n);
     for (size_t k = 0; k < n; ++k) {
         ShiftGeometry g;
-        bool ok = shift_geometry(ProjectionTable::at(proj, n, k), y.p, y.n, y.lens, &g);
+        bool ok = shift_geometry(ProjectionTable::at(proj, n, k), v, y.lens, &g);
         fx[k] = g.film.x;
         fy[k] = g.film.y;
         lx[k] = g.lens_point.x;

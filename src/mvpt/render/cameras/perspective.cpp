@@ -141,10 +141,10 @@ public:
     }
 
     bool shift_geometry(Point3f y, Normal3f n_y, float time, Vec2f lens, ShiftGeometry *out) const override {
-        if (!m_animated) return mvpt::shift_geometry(m_proj, y, n_y, lens, out);
+        if (!m_animated) return mvpt::shift_geometry(m_proj, ShiftVertex(y, n_y), lens, out);
         CameraProjection posed = m_proj;
         posed.pose = pose_at(time);
-        return mvpt::shift_geometry(posed, y, n_y, lens, out);
+        return mvpt::shift_geometry(posed, ShiftVertex(y, n_y), lens, out);
     }
 
     const CameraProjection *static_projection() const override { return m_animated ? nullptr : &m_proj; }
