@@ -103,7 +103,7 @@ struct ShiftVertex {
     Vec3f w = y - out->lens_point;
     float d = std::sqrt(sqr(p.x - ux) + sqr(p.y - uy) + sqr(p.z));
     // d cos(phi) = |n.w| / |n|, or d in a medium (a zero normal).
-    const float n_w = absdot(v.n, w) + v.in_medium * d; // exactly |n.w| on a surface, d in a medium
+    const float n_w = absdot(v.n, w) + v.in_medium * d; // |n.w| on a surface (+ 0 d, exact for finite d), d in a medium
     out->density = sqr(c.film_distance) * n_w * v.inv_n * (inv_z * inv_z * inv_z);
     // Up to the near plane: d - near / cos(theta).
     out->visible_length = d * (1.f - c.near_clip * inv_z);

@@ -52,7 +52,8 @@ namespace {
     float cx = g.film.x > fx0 ? g.film.x : fx0, cy = g.film.y > fy0 ? g.film.y : fy0;
     cx = cx < fx1 - 1.f ? cx : fx1 - 1.f;
     cy = cy < fy1 - 1.f ? cy : fy1 - 1.f;
-    // (Offsets from the window's corner are >= 0, so truncation is floor; the corner may be negative.)
+    // (Offsets from the window's corner are >= 0, so truncation is floor; the corner may be negative.
+    // Converted through int32, which AVX2 converts as vectors, unlike float to uint32.)
     *pixel = uint32_t(int32_t(cy - fy0)) * uint32_t(x1 - x0) + uint32_t(int32_t(cx - fx0));
     return (depth ? 0u : uint32_t(ShiftDepth)) | (facing ? 0u : uint32_t(ShiftFacing)) |
            (inside ? 0u : uint32_t(ShiftOutside));
