@@ -9,7 +9,8 @@ of tiles (between two chunks progress is reported and Ctrl-C and the budget are 
 the longest gap between progress reports that brought new samples; the time from a
 KeyboardInterrupt raised in the progress callback 2 s into a render to the returned images; and
 the time from the end of a time budget (--budgets) to the returned images, and how much of a
-first pass cut short (multi-view path tracing, docs/multiview-path-tracing.md) they keep.
+first pass cut short or of a last pass thinned to the budget (multi-view path tracing,
+docs/multiview-path-tracing.md) they keep.
 """
 from __future__ import annotations
 
@@ -51,9 +52,11 @@ def interrupt(scene, method: str, threads: int, after: float = 2.0) -> None:
 
 
 def _cut(r) -> str:
-    """The share of a first pass cut short that the images keep (multi-view path tracing)."""
-    share = r.stats.get("cut_pass_share", 0.0)
-    return f", the first cut at {share:.0%} of its regions" if share else ""
+    """The share of a first pass cut short that the images keep, and that of a last pass
+    thinned to the budget (multi-view path tracing)."""
+    share, thin = r.stats.get("cut_pass_share", 0.0), r.stats.get("thinned_pass_share", 0.0)
+    return (f", the first cut at {share:.0%} of its regions" if share else "") + \
+        (f", the last thinned to {thin:.0%} of its samples" if thin else "")
 
 
 def budget(scene, method: str, threads: int, seconds: float) -> None:

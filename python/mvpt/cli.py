@@ -202,7 +202,8 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--time", type=_seconds, default=0.0,
                    help="wall-clock budget in seconds (passes stop when the next would end past it, and "
                         "the budget is not overrun by more than about half a second, except by path tracing's "
-                        "first pass; mvpt cuts its first pass and keeps what it finished)")
+                        "first pass; mvpt cuts its first pass and keeps what it finished, and thins its last pass "
+                        "to the time left)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
     p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
     p.add_argument("--method", choices=("pt", "mvpt"), default="scene",

@@ -158,6 +158,7 @@ public:
         d["estimated_bytes"] = s.estimated_bytes;
         d["passes"] = s.passes;
         d["cut_pass_share"] = s.cut_pass_share;
+        d["thinned_pass_share"] = s.thinned_pass_share;
         d["first_pass"] = s.first_pass;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;

@@ -1,7 +1,8 @@
 // The film of every rendering method (renderer/film.h): Welford's running deviations give the
-// variance of the pixel mean that the estimates' two-pass variance gives; merging the films of
-// disjoint estimates gives the film of all of them; a film goes through a state file unchanged,
-// and a state of another film is refused.
+// variance of the pixel mean that the estimates' two-pass variance gives, also for estimates
+// weighing less than one (thinned passes); merging the films of disjoint estimates gives the
+// film of all of them; a film goes through a state file unchanged, and a state of another film
+// is refused.
 #include "mvpt/renderer/film.h"
 #include "mvpt/renderer/render_state.h"
 
@@ -91,6 +92,68 @@ TEST(Film, MergedFilmsAreTheFilmOfAllEstimates) {
     }
 }
 
+TEST(Film, WeightedEstimatesGiveThePrecisionWeightedMean) {
+    // Estimates of weight q whose variance is 1/q that of a weight-1 estimate (a thinned
+    // pass): the mean weights them by q, and the variance of the mean is that of k estimates
+    // of total weight sum(q), from their spread.
+    std::mt19937 rng(5);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    const double sigma = 0.5, mu = 2.0;
+    const double weights[5] = {1.0, 1.0, 1.0, 0.25, 1.0};
+    Film film(1, 1);
+    constexpr int Trials = 20000;
+    double mean_sum = 0.0, mean_sq = 0.0, var_sum = 0.0;
+    for (int trial = 0; trial < Trials; ++trial) {
+        Film f(1, 1);
+        for (double q : weights) {
+            const double v = mu + sigma / std::sqrt(q) * normal(rng), rgb[3] = {v, v, v};
+            f.add(0, rgb, q);
+            if (q < 1.0) f.short_weight += 1.0 - q; // what the renderer adds after the pass
+        }
+        float rgb[3], var[3];
+        f.develop(0, rgb, var);
+        mean_sum += rgb[0], mean_sq += double(rgb[0]) * rgb[0], var_sum += var[0];
+        if (trial == 0) film = f;
+    }
+    const double total = 4.25, mean = mean_sum / Trials, spread = mean_sq / Trials - mean * mean;
+    const double expected = sigma * sigma / total; // the precision-weighted mean's variance
+    EXPECT_NEAR(mean, mu, 4.0 * std::sqrt(expected / Trials));
+    EXPECT_NEAR(spread, expected, 0.05 * expected);
+    EXPECT_NEAR(var_sum / Trials, expected, 0.05 * expected); // unbiased, as for weight 1
+    EXPECT_DOUBLE_EQ(film.weight(0), total);
+    // Weighing the thinned estimate as a whole one is found out: its mean would be another.
+    Film unweighted(1, 1), weighted(1, 1);
+    const double a[3] = {1.0, 1.0, 1.0}, b[3] = {4.0, 4.0, 4.0};
+    unweighted.add(0, a), unweighted.add(0, b);
+    weighted.add(0, a), weighted.add(0, b, 0.5), weighted.short_weight = 0.5;
+    float u[3], w[3], var[3];
+    unweighted.develop(0, u, var), weighted.develop(0, w, var);
+    EXPECT_FLOAT_EQ(u[0], 2.5f);
+    EXPECT_FLOAT_EQ(w[0], 2.0f);
+}
+
+TEST(Film, MergedWeightedFilmsAreTheFilmOfAllEstimates) {
+    // Two films, each with a thinned estimate (added after the earlier estimates' weights are
+    // known, as the renderer adds them), merge into the film of all nine estimates.
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Film a(1, 1), b(1, 1), all(1, 1);
+    for (int i = 0; i < 9; ++i) {
+        const double q = i == 4 ? 0.3 : i == 8 ? 0.6 : 1.0, v = u(rng), rgb[3] = {v, 2.0 * v, v * v};
+        Film &part = i < 5 ? a : b;
+        part.add(0, rgb, q), all.add(0, rgb, q);
+        part.short_weight += 1.0 - q, all.short_weight += 1.0 - q;
+    }
+    a.merge(b);
+    float rgb[3], var[3], rgb_all[3], var_all[3];
+    a.develop(0, rgb, var), all.develop(0, rgb_all, var_all);
+    EXPECT_DOUBLE_EQ(a.weight(0), 9.0 - 0.7 - 0.4);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(rgb[c], rgb_all[c], 1e-6 * std::abs(rgb_all[c]));
+        EXPECT_NEAR(var[c], var_all[c], 1e-4 * var_all[c]);
+    }
+}
+
 TEST(Film, GoesThroughAStateFileUnchanged) {
     const std::string path = ::testing::TempDir() + "film-state.bin";
     std::mt19937 rng(3);
@@ -98,6 +161,7 @@ TEST(Film, GoesThroughAStateFileUnchanged) {
     for (size_t p = 0; p < pt.pixels(); ++p)
         for (double v : estimates(rng, int(p))) add_grey(pt, p, v), add_grey(mv, p, v);
     mv.native[4] = 9, mv.received[4] = 17, mv.w_sum[4] = 0.75f, mv.lw[5] = 1.5, mv.e_sq[2] = 3.f, mv.level = 0.25;
+    mv.short_weight = 0.375;
     mv.set_map(std::vector<uint16_t>(mv.pixels(), 3));
     pt.nonfinite = 2;
     {
@@ -122,6 +186,7 @@ TEST(Film, GoesThroughAStateFileUnchanged) {
     EXPECT_EQ(mv2.map, mv.map);
     EXPECT_EQ(mv2.map_total, 3u * mv.pixels());
     EXPECT_EQ(mv2.level, 0.25);
+    EXPECT_EQ(mv2.short_weight, 0.375);
     std::remove(path.c_str());
 }
 

@@ -36,22 +36,21 @@ size_t Film::bytes_per_pixel(bool multiview, MvEstimator estimator, bool adaptiv
     return b;
 }
 
-void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale) {
+void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale, double wt) {
     const bool weighted = estimator == MvEstimator::Weighted, adaptive = !e_sum.empty();
     for (size_t p = begin; p < end; ++p) {
-        const double k = double(count[p]); // earlier passes
-        double beta[3];
-        const bool cv = !weighted && control_variate && k > 0.0;
+        double beta[3]; // the mean of the earlier passes
+        const bool cv = !weighted && control_variate && count[p] > 0;
         if (cv)
-            for (int c = 0; c < 3; ++c) beta[c] = sum[3 * p + c] / k;
+            for (int c = 0; c < 3; ++c) beta[c] = sum[3 * p + c] / weight(p);
         const SplatEntry t = pass.take(offset + uint32_t(p));
         const MvPassEstimate est = mv_pass_estimate(t, estimator, cv ? beta : nullptr, scale);
         if (weighted) {
-            for (int c = 0; c < 3; ++c) lw[3 * p + c] += est.lw[c], e[3 * p + c] += est.e[c];
-            w[p] += est.w;
+            for (int c = 0; c < 3; ++c) lw[3 * p + c] += wt * est.lw[c], e[3 * p + c] += wt * est.e[c];
+            w[p] += wt * est.w;
         }
-        add(p, est.v);
-        w_sum[p] += float(est.w);
+        add(p, est.v, wt);
+        w_sum[p] += float(wt * est.w);
         if (adaptive) {
             const double s = (est.v[0] / 3.0 + est.v[1] / 3.0 + est.v[2] / 3.0) - est.e_mean;
             e_sum[p] += float(est.e_mean);
@@ -64,12 +63,14 @@ void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, dou
 }
 
 void Film::develop(size_t p, float rgb[3], float variance[3]) const {
-    const double k = double(count[p]);
+    // k estimates of total weight wk, each weighted by its precision: the squared deviations
+    // estimate (k - 1) times the variance of a weight-1 estimate, and the mean's is that over wk.
+    const double k = double(count[p]), wk = weight(p);
     for (int c = 0; c < 3; ++c) {
-        double mean = k > 0.0 ? sum[3 * p + c] / k : 0.0;
+        double mean = k > 0.0 ? sum[3 * p + c] / wk : 0.0;
         if (estimator == MvEstimator::Weighted && k > 0.0)
-            mean = e[3 * p + c] / k + (w[p] > 0.0 ? lw[3 * p + c] / w[p] : 0.0); // the ratio of §5's MWIS
-        const double var = k > 1.0 ? std::max(0.0, double(m2[3 * p + c])) / (k * (k - 1.0)) : 0.0;
+            mean = e[3 * p + c] / wk + (w[p] > 0.0 ? lw[3 * p + c] / w[p] : 0.0); // the ratio of §5's MWIS
+        const double var = k > 1.0 ? std::max(0.0, double(m2[3 * p + c])) / (wk * (k - 1.0)) : 0.0;
         rgb[c] = float(mean);
         variance[c] = float(std::min(var, double(FLT_MAX)));
     }
@@ -84,7 +85,7 @@ void Film::set_map(const std::vector<uint16_t> &crop) {
 }
 
 void Film::save(StateWriter &out) const {
-    out.put(int32_t(width)), out.put(int32_t(height)), out.put(nonfinite);
+    out.put(int32_t(width)), out.put(int32_t(height)), out.put(nonfinite), out.put(short_weight);
     out.put(count), out.put(sum), out.put(m2);
     if (!multiview()) return;
     out.put(uint32_t(estimator)), out.put(uint32_t(control_variate)), out.put(uint32_t(!e_sum.empty()));
@@ -99,7 +100,7 @@ void Film::load(StateReader &in) {
     if (w_ != width || h_ != height)
         throw StateError("the state has a view of " + std::to_string(w_) + "x" + std::to_string(h_) +
                          " pixels where this render has " + std::to_string(width) + "x" + std::to_string(height));
-    nonfinite = in.get<uint64_t>();
+    nonfinite = in.get<uint64_t>(), short_weight = in.get<double>();
     const size_t n = pixels();
     in.get(count, n), in.get(sum, 3 * n), in.get(m2, 3 * n);
     if (!multiview()) return;
@@ -120,7 +121,8 @@ void Film::load(StateReader &in) {
 
 void Film::merge(const Film &o) {
     for (size_t p = 0; p < pixels(); ++p) {
-        const double na = count[p], nb = o.count[p], n = na + nb;
+        // Chan et al.'s combination, with the two films' total weights.
+        const double na = count[p] ? weight(p) : 0.0, nb = o.count[p] ? o.weight(p) : 0.0, n = na + nb;
         for (size_t i = 3 * p; i < 3 * p + 3; ++i) {
             const double delta = (nb > 0.0 ? o.sum[i] / nb : 0.0) - (na > 0.0 ? sum[i] / na : 0.0);
             m2[i] = float(double(m2[i]) + double(o.m2[i]) + (n > 0.0 ? delta * delta * na * nb / n : 0.0));
@@ -129,6 +131,7 @@ void Film::merge(const Film &o) {
         count[p] += o.count[p];
     }
     nonfinite += o.nonfinite;
+    short_weight += o.short_weight;
     if (!multiview()) return;
     for (size_t i = 0; i < lw.size(); ++i) lw[i] += o.lw[i], e[i] += o.e[i];
     for (size_t p = 0; p < pixels(); ++p) {

@@ -1,7 +1,8 @@
 // The film of one view: the accumulators over passes of every rendering method. Per pixel,
 // each pass gives one estimate v, added to the pixel's count, sum and sum of squared
 // deviations; the image is the mean of the estimates and its variance comes from their
-// spread. Path tracing's estimate is a path's radiance (add). Multi-view path tracing's comes
+// spread. An estimate may weigh less than one (a thinned pass of multi-view path tracing, of
+// variance about 1/q that of a whole pass, weighs q): the mean is then weighted by precision. Path tracing's estimate is a path's radiance (add). Multi-view path tracing's comes
 // from a pass's fixed-point sums (fold, docs/multiview-path-tracing.md §5), and its film keeps
 // what its estimators and adaptive maps (§8) need of the passes so far.
 #pragma once
@@ -23,6 +24,9 @@ struct Film {
     std::vector<double> sum;         ///< sum of v, 3 per pixel
     std::vector<float> m2;           ///< sum of squared deviations of v from the running mean (Welford), 3 per pixel
     uint64_t nonfinite = 0;          ///< samples or contributions dropped as not finite (or too large)
+    /// What the estimates' weights lack of one each, the same for every pixel: the sum of 1 - q
+    /// over the thinned passes (multi-view; 0 for path tracing). Pixel p's weight is count - short_weight.
+    double short_weight = 0.0;
 
     // Multi-view path tracing alone (empty for path tracing). Per pixel, a pass's estimate v is
     // (balance) W*L + E + beta (1 - sum W), beta from the earlier passes, or (weighted) W*L + E.
@@ -54,15 +58,18 @@ struct Film {
     bool multiview() const { return !native.empty(); }
     size_t pixels() const { return count.size(); }
 
-    /// Adds the estimate `v` (RGB) to pixel p: its sum and, by Welford's update, the squared
-    /// deviations from the mean before and after it.
-    void add(size_t p, const double v[3]) {
-        const double k = double(count[p]);
-        const double to_before = k > 0.0 ? 1.0 / k : 0.0, to_after = 1.0 / (k + 1.0);
+    /// The estimates' total weight at pixel p.
+    double weight(size_t p) const { return double(count[p]) - short_weight; }
+    /// Adds the estimate `v` (RGB) of weight `wt` to pixel p: `wt v` to its sum and, by
+    /// Welford's update (West's, weighted), `wt` times the product of the deviations from the
+    /// mean before and after it to the squared deviations.
+    void add(size_t p, const double v[3], double wt = 1.0) {
+        const double k = weight(p);
+        const double to_before = count[p] > 0 ? 1.0 / k : 0.0, to_after = 1.0 / (k + wt);
         for (int c = 0; c < 3; ++c) {
             const double before = sum[3 * p + c] * to_before;
-            sum[3 * p + c] += v[c];
-            m2[3 * p + c] += float((v[c] - before) * (v[c] - sum[3 * p + c] * to_after));
+            sum[3 * p + c] += wt * v[c];
+            m2[3 * p + c] += float(wt * (v[c] - before) * (v[c] - sum[3 * p + c] * to_after));
         }
         ++count[p];
     }
@@ -79,10 +86,12 @@ struct Film {
     /// Multi-view: sets n of the crop window's pixels (row-major, as many as pixels()).
     void set_map(const std::vector<uint16_t> &crop);
     /// Multi-view: pixels [begin, end) of a pass whose sums `pass` holds from index `offset` on
-    /// (read and cleared), each as one estimate (the sums times `scale`: mv_pass_estimate).
-    void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale = 1.0);
+    /// (read and cleared), each as one estimate (the sums times `scale`: mv_pass_estimate) of
+    /// weight `wt` (a thinned pass: scale 1/q, weight q; the caller adds 1 - q to short_weight
+    /// once every pixel is folded).
+    void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale = 1.0, double wt = 1.0);
     /// Multi-view: mean over passes of the sum of W of pixel p (1 in expectation for the balance estimator).
-    float weight_sum(size_t p) const { return count[p] ? float(double(w_sum[p]) / count[p]) : 0.f; }
+    float weight_sum(size_t p) const { return count[p] ? float(double(w_sum[p]) / weight(p)) : 0.f; }
 
     /// Every accumulator into a state file, and back (a StateError if the file's do not fit).
     void save(StateWriter &out) const;

@@ -27,6 +27,14 @@ namespace mvpt {
 namespace {
 /// The key of the regions' random order (multiview_tiles).
 constexpr uint64_t RegionOrderKey = 0x726567696f6e; // "region"
+/// The key of a thinned pass's draws of which native samples it takes.
+constexpr uint64_t ThinKey = 0x7468696e; // "thin"
+/// A pass thinned to share q lasts about (ThinOverhead + q) times a whole pass (its sampling and
+/// splatting shrink with q, the fold and the tiles' fixed costs do not; 32 views of 96^2, two
+/// threads: 0.14 at q = 0.1, 0.35 at 0.25, 0.5-0.6 at 0.5, 0.82 at 0.75). Under a time budget,
+/// the next pass is whole if it fits with ThinSlack of a pass to spare (a pass that overruns
+/// the budget is dropped), else thinned to the q that does, if q >= MinThinShare.
+constexpr double ThinOverhead = 0.05, ThinSlack = 0.1, MinThinShare = 0.1;
 
 /// Per-thread state of the pass loop.
 struct MvThreadState {
@@ -64,13 +72,15 @@ MultiviewSettings multiview_settings(const Scene &scene) {
 /// passes, then the next pass's native-sample maps. A pass stopped (Ctrl-C, the time budget)
 /// is dropped, except the first, whose regions come in a random order: the regions it
 /// finished are kept, scaled by the inverse of their share (docs/multiview-path-tracing.md,
-/// "A first pass cut short"). Later passes take the regions in scan order.
+/// "A first pass cut short"). Later passes take the regions in scan order; under a time budget
+/// that leaves less than a pass, the last one is thinned to what fits ("A last pass thinned to
+/// the budget").
 class Renderer::MultiviewPasses final : public PassSchedule {
 public:
     /// Prepares the method and `r`'s accumulators, and reads the state a render resumes from.
     MultiviewPasses(Renderer &r, tbb::task_arena &arena);
     bool done(int pass) const override;
-    int step_end(int pass, double fit, double) override { return fit >= 1.0 ? pass + 1 : pass; }
+    int step_end(int pass, double fit, double) override;
     StepTiles begin_step(int pass, int end) override;
     uint64_t render(size_t t) override { return render_tile(m_state.local(), m_tiles[t]); }
     /// A later pass stops between any two tiles (it is dropped), the first between chunks,
@@ -91,9 +101,13 @@ public:
 
 private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
+    /// Whether a thinned pass takes native sample `index` of pixel (px, py) of view `slot`.
+    bool thin_takes(int slot, int px, int py, uint32_t index) const;
+    /// After a thinned pass: the native samples its crop-window pixels skipped, uncounted.
+    void uncount_skipped();
     /// The threads' caches flushed and the pass's sums (times `scale`) folded into the
     /// accumulators, in the render's arena.
-    void fold_pass(double scale);
+    void fold_pass(double scale, double weight = 1.0);
     /// The crop-window pixels of a tile, [x0, x1) x [y0, y1) in crop-window coordinates.
     struct CropRect {
         int x0, y0, x1, y1;
@@ -132,6 +146,11 @@ private:
     // The current pass and its native samples (of the crop windows).
     int m_pass = 0;
     uint64_t m_pass_samples = 0;
+    /// The share of its native samples the pass takes (below 1: a thinned last pass), and those
+    /// of the crop windows it took.
+    double m_share = 1.0;
+    std::atomic<uint64_t> m_thin_taken{0};
+    bool m_thinned = false; ///< a thinned pass ended the render
 };
 
 Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
@@ -161,8 +180,26 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
 }
 
 bool Renderer::MultiviewPasses::done(int pass) const {
+    if (m_thinned) return true;
     if (m_range) return pass >= m_r.m_opts.pass_count;
     return !m_unbounded && !(m_r.m_native_done < double(m_spp_target) - 1e-6);
+}
+
+int Renderer::MultiviewPasses::step_end(int pass, double fit, double) {
+    m_share = 1.0;
+    const double forced = m_r.m_opts.thin_last_pass; // tests: the last pass of an spp target
+    if (forced < 1.0 && !m_unbounded && !m_adaptive && m_r.m_native_done + 1.0 >= double(m_spp_target) - 1e-6) {
+        m_share = forced;
+        return pass + 1;
+    }
+    // The first pass is cut rather than thinned, and a range's passes are whole.
+    if (pass == 0 || m_range || fit >= 1.0 + ThinOverhead + ThinSlack) return fit >= 1.0 ? pass + 1 : pass;
+    // Less than a pass fits with time to spare: a last pass thinned to what does ("A last pass
+    // thinned to the budget").
+    const double q = fit - ThinOverhead - ThinSlack;
+    if (!(q >= MinThinShare)) return pass; // (also when fit is not a number)
+    m_share = q;
+    return pass + 1;
 }
 
 StepTiles Renderer::MultiviewPasses::begin_step(int pass, int) {
@@ -170,7 +207,14 @@ StepTiles Renderer::MultiviewPasses::begin_step(int pass, int) {
     if (pass > 0 && m_random_order) m_tiles = m_r.multiview_tiles(m_random_order = false);
     m_pass_samples = 0;
     for (const Film &mf : m_r.m_films) m_pass_samples += mf.map_total;
-    return {m_tiles.size(), double(m_pass_samples)};
+    m_thin_taken = 0;
+    return {m_tiles.size(), m_share * double(m_pass_samples)};
+}
+
+bool Renderer::MultiviewPasses::thin_takes(int slot, int px, int py, uint32_t index) const {
+    const MvContext &mv = m_r.m_mv;
+    const uint64_t h = hash_ints(mv.seeds[size_t(slot)], mv.views[size_t(slot)].scene_index, px, py, index, ThinKey);
+    return double(bits_to_unit_float(uint32_t(h))) < m_share;
 }
 
 uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &tile) {
@@ -180,17 +224,24 @@ uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &t
     const Film &mf = m_r.m_films[tile.view_slot];
     MvPrimaries &prim = ts.primaries;
     prim.clear();
+    const bool thin = m_share < 1.0;
+    uint64_t taken = 0; // of the crop window, in a thinned pass
     for (int y = tile.y0; y < tile.y1; ++y)
         for (int x = tile.x0; x < tile.x1; ++x) {
             // Inside the crop window: the pixel's next native samples; in the margin: one
-            // sample per pass.
+            // sample per pass. A thinned pass takes each with probability m_share.
             const int cx = x - w.margin, cy = y - w.margin;
             const bool inside = cx >= 0 && cy >= 0 && cx < mf.width && cy < mf.height;
             const uint32_t first = inside ? m_sample0 + mf.native[size_t(cy) * size_t(mf.width) + size_t(cx)]
                                           : m_margin0 + uint32_t(m_pass);
             const uint16_t n = mf.map[size_t(y) * size_t(w.width()) + size_t(x)];
-            for (uint32_t j = 0; j < n; ++j) prim.push(x + w.x0, y + w.y0, first + j);
+            for (uint32_t j = 0; j < n; ++j) {
+                if (thin && !thin_takes(tile.view_slot, x + w.x0, y + w.y0, first + j)) continue;
+                prim.push(x + w.x0, y + w.y0, first + j);
+                taken += inside;
+            }
         }
+    if (thin) m_thin_taken += taken;
     // The tile's camera rays as one stream, then each native sample.
     mv_trace_primaries(mv, tile.view_slot, prim);
     for (size_t i = 0; i < prim.size(); ++i)
@@ -201,7 +252,7 @@ uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &t
 }
 
 uint64_t Renderer::MultiviewPasses::kept(const ChunksDone &done) const {
-    if (done.finished) return m_pass_samples;
+    if (done.finished) return m_share < 1.0 ? m_thin_taken.load() : m_pass_samples;
     // A cut first pass: one native sample per pixel of the tiles rendered (the adaptive maps
     // start later).
     uint64_t n = 0;
@@ -210,12 +261,32 @@ uint64_t Renderer::MultiviewPasses::kept(const ChunksDone &done) const {
     return n;
 }
 
-void Renderer::MultiviewPasses::fold_pass(double scale) {
+void Renderer::MultiviewPasses::fold_pass(double scale, double weight) {
     // What the caches still hold goes to the pass sums (exact integer sums).
     tbb::parallel_for(m_state.range(1), [](auto &r) {
         for (MvThreadState &ts : r) ts.cache.flush();
     });
-    m_r.fold_pass(*m_pass_film, scale);
+    m_r.fold_pass(*m_pass_film, scale, weight);
+}
+
+void Renderer::MultiviewPasses::uncount_skipped() {
+    // fold counted every native sample of the map; the pixels' next samples stay numbered on
+    // from the last one taken.
+    tbb::parallel_for(size_t(0), m_tiles.size(), [&](size_t t) {
+        const Tile &tile = m_tiles[t];
+        Film &mf = m_r.m_films[tile.view_slot];
+        const SampleWindow &w = m_r.m_mv.windows[tile.view_slot];
+        const CropRect c = crop_of(tile);
+        for (int y = c.y0; y < c.y1; ++y)
+            for (int x = c.x0; x < c.x1; ++x) {
+                const size_t p = size_t(y) * size_t(mf.width) + size_t(x);
+                const uint32_t n = mf.n(p), first = m_sample0 + mf.native[p] - n;
+                const int px = x + w.margin + w.x0, py = y + w.margin + w.y0;
+                uint32_t skipped = 0;
+                for (uint32_t j = 0; j < n; ++j) skipped += !thin_takes(tile.view_slot, px, py, first + j);
+                mf.native[p] -= skipped;
+            }
+    });
 }
 
 bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
@@ -247,6 +318,17 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
 void Renderer::MultiviewPasses::end_step() {
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
+    if (m_share < 1.0) { // a thinned pass, the last: its sums scaled by 1/q, weighing q (film.h)
+        arena().execute([&] {
+            fold_pass(1.0 / m_share, m_share);
+            uncount_skipped();
+        });
+        m_r.m_native_done += double(m_thin_taken.load()) / double(m_pixels_total);
+        m_r.m_stats.thinned_pass_share = m_share;
+        m_thinned = true;
+        m_r.m_stats.between_passes_seconds += std::chrono::duration<double>(clock::now() - t0).count();
+        return;
+    }
     arena().execute([&] { fold_pass(1.0); });
     m_r.m_native_done += double(m_pass_samples) / double(m_pixels_total);
     // Native-sample maps of the next pass (§8), frozen during it. Their statistics change by
@@ -420,7 +502,7 @@ std::vector<Renderer::Tile> Renderer::multiview_tiles(bool random_regions) const
     return tiles;
 }
 
-void Renderer::fold_pass(MvPassFilm &pass_film, double scale) {
+void Renderer::fold_pass(MvPassFilm &pass_film, double scale, double weight) {
     // Each pixel's pass estimate into the accumulators, in blocks of pixels of one view.
     constexpr size_t Block = 4096;
     std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
@@ -429,8 +511,9 @@ void Renderer::fold_pass(MvPassFilm &pass_film, double scale) {
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
         const auto [slot, begin] = blocks[b];
         Film &mf = m_films[slot];
-        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block), scale);
+        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block), scale, weight);
     });
+    for (Film &mf : m_films) mf.short_weight += 1.0 - weight;
 }
 
 void Renderer::update_native_maps(int passes, double per_pixel) {

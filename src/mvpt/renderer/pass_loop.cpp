@@ -30,7 +30,7 @@ void Renderer::run_passes(PassSchedule &schedule, const std::atomic<bool> &cance
         const StepTiles step = schedule.begin_step(pass, end);
         // Between chunks the budget stops a step whose next chunk would end past it.
         auto stop = [&](bool between_chunks) {
-            const double next = between_chunks ? timing.last : 0.0;
+            const double next = between_chunks ? timing.next : 0.0;
             const bool asked = cancel.load() || (schedule.budget_stops(pass) && budget > 0.0 && seconds() + next > budget);
             return asked && schedule.can_abandon(last_pass, seconds() - t_step, between_chunks);
         };

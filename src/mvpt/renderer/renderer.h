@@ -56,6 +56,10 @@ struct RenderOptions {
     /// pixel's native samples from first_pass times the most it takes in a pass). Ranges that do
     /// not overlap take disjoint samples, and their states merge (Renderer::merge).
     int first_pass = 0, pass_count = 0;
+    /// Multi-view path tracing, for tests: below 1, the last pass of a render to an spp target of
+    /// one native sample per pixel and pass is thinned to this share (as a time budget thins its
+    /// last pass, docs/multiview-path-tracing.md, "A last pass thinned to the budget").
+    double thin_last_pass = 1.0;
 };
 
 /// Result of one view: crop-window-sized images, row-major, y down.
@@ -93,6 +97,9 @@ struct RenderStats {
     /// Multi-view path tracing: when its first pass was cut short (Ctrl-C, the time budget),
     /// the share of its regions rendered, whose sums were scaled by its inverse; else 0.
     double cut_pass_share = 0.0;
+    /// Multi-view path tracing: when its last pass was thinned to fit the time budget, the share
+    /// q of the native samples it took (its sums scaled by 1/q, weighing q); else 0.
+    double thinned_pass_share = 0.0;
     /// The pass a resumed render started from (0: not resumed).
     int first_pass = 0;
     bool cancelled = false;
@@ -180,8 +187,9 @@ private:
     /// Multi-view path tracing: 16x16 tiles of every view's sample window, region by region,
     /// the regions in scan order or (`random_regions`) in a random order drawn from the seed.
     std::vector<Tile> multiview_tiles(bool random_regions) const;
-    /// Multi-view path tracing: one pass's sums (times `scale`) into every view's accumulators.
-    void fold_pass(MvPassFilm &pass_film, double scale = 1.0);
+    /// Multi-view path tracing: one pass's sums (times `scale`) into every view's accumulators,
+    /// as estimates of weight `weight` (below 1: a thinned pass, film.h).
+    void fold_pass(MvPassFilm &pass_film, double scale = 1.0, double weight = 1.0);
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
 

@@ -1,6 +1,7 @@
-// Test probe for multi-view path tracing's first pass cut short: renders a scene given as XML
-// and stops it at the first chunk boundary of its first pass (pass_loop.cpp), a cut that the
-// render's thread count alone decides, for the statistical test of the cut pass's estimate.
+// Test probes for multi-view path tracing's passes cut short or thinned: render a scene given
+// as XML and stop it at the first chunk boundary of its first pass (pass_loop.cpp), a cut that
+// the render's thread count alone decides, or thin its last pass to a given share, for the
+// statistical tests of those passes' estimates.
 #include "mvpt/loader/load_scene.h"
 #include "mvpt/renderer/renderer.h"
 
@@ -50,8 +51,36 @@ nb::list render_cut_first_pass(const std::string &xml, const std::vector<uint32_
     return out;
 }
 
+/// For each seed: the images of every view of a multi-view render of `spp` passes whose last
+/// is thinned to `share` of its native samples, and the render's native samples per view.
+nb::list render_thinned_last_pass(const std::string &xml, const std::vector<uint32_t> &seeds, int spp, double share) {
+    std::unique_ptr<Scene> scene = mvpt_py::scene_errors_as_value_errors([&] { return load_scene_string(xml, "."); });
+    nb::list out;
+    for (uint32_t seed : seeds) {
+        RenderOptions o;
+        o.method = RenderMethod::MultiView;
+        o.spp = spp, o.seed = seed, o.threads = 1, o.thin_last_pass = share;
+        Renderer r(*scene, o);
+        std::atomic<bool> cancel{false};
+        {
+            nb::gil_scoped_release release;
+            r.render(cancel);
+        }
+        nb::list images, samples;
+        for (const ViewResult &v : r.results()) {
+            OutArray a = out_array(v.rgb.size() / 3, 3);
+            std::copy(v.rgb.begin(), v.rgb.end(), a.data());
+            images.append(a);
+            samples.append(v.samples);
+        }
+        out.append(nb::make_tuple(images, samples, r.stats().thinned_pass_share));
+    }
+    return out;
+}
+
 } // namespace
 
 void bind_render_probes(nb::module_ &m) {
     m.def("render_cut_first_pass", &render_cut_first_pass, "xml"_a, "seeds"_a, "threads"_a);
+    m.def("render_thinned_last_pass", &render_thinned_last_pass, "xml"_a, "seeds"_a, "spp"_a, "share"_a);
 }
