@@ -187,8 +187,8 @@ bool Renderer::MultiviewPasses::done(int pass) const {
 
 int Renderer::MultiviewPasses::step_end(int pass, double fit, double) {
     m_share = 1.0;
-    const double forced = m_r.m_opts.thin_last_pass; // tests: the last pass of an spp target
-    if (forced < 1.0 && !m_unbounded && !m_adaptive && m_r.m_native_done + 1.0 >= double(m_spp_target) - 1e-6) {
+    const double forced = m_r.m_opts.thin_last_pass; // tests: the last pass of a range
+    if (forced < 1.0 && m_range && pass + 1 == m_r.m_opts.pass_count) {
         m_share = forced;
         return pass + 1;
     }

@@ -56,9 +56,9 @@ struct RenderOptions {
     /// pixel's native samples from first_pass times the most it takes in a pass). Ranges that do
     /// not overlap take disjoint samples, and their states merge (Renderer::merge).
     int first_pass = 0, pass_count = 0;
-    /// Multi-view path tracing, for tests: below 1, the last pass of a render to an spp target of
-    /// one native sample per pixel and pass is thinned to this share (as a time budget thins its
-    /// last pass, docs/multiview-path-tracing.md, "A last pass thinned to the budget").
+    /// Multi-view path tracing, for tests: below 1, the last pass of a range (pass_count) is
+    /// thinned to this share, as a time budget thins a last pass (docs/multiview-path-tracing.md,
+    /// "A last pass thinned to the budget").
     double thin_last_pass = 1.0;
 };
 
