@@ -2,9 +2,10 @@
 // each pass gives one estimate v, added to the pixel's count, sum and sum of squared
 // deviations; the image is the mean of the estimates and its variance comes from their
 // spread. An estimate may weigh less than one (a thinned pass of multi-view path tracing, of
-// variance about 1/q that of a whole pass, weighs q): the mean is then weighted by precision. Path tracing's estimate is a path's radiance (add). Multi-view path tracing's comes
-// from a pass's fixed-point sums (fold, docs/multiview-path-tracing.md §5), and its film keeps
-// what its estimators and adaptive maps (§8) need of the passes so far.
+// variance about 1/q that of a whole pass, weighs q): the mean is then weighted by precision.
+// Path tracing's estimate is a path's radiance (add). Multi-view path tracing's comes from a
+// pass's fixed-point sums (fold, docs/multiview-path-tracing.md §5), and its film keeps what
+// its estimators and adaptive maps (§8) need of the passes so far.
 #pragma once
 
 #include "../integrators/multiview/mvpath.h"
