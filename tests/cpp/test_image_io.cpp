@@ -1,5 +1,6 @@
 // Reading image files: an EXR whose data window does not start at the origin reads its pixels
-// in order; a truncated EXR and a header that claims more than MaxImagePixels are refused.
+// in order; a truncated EXR or JPEG, a format mvpt does not read and a header that claims more
+// than MaxImagePixels are refused.
 #include "mvpt/io/image_io.h"
 
 #include <ImfChannelList.h>
@@ -8,6 +9,8 @@
 #include <ImfOutputFile.h>
 
 #include "test_dirs.h"
+
+#include <stb_image_write.h>
 
 #include <gtest/gtest.h>
 
@@ -70,4 +73,48 @@ TEST(ImageIo, HeaderClaimingTooManyPixelsIsRefused) {
     std::ofstream(p, std::ios::binary) << "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 20000 +X 20000\n";
     const std::string what = read_error(p);
     EXPECT_NE(what.find("20000 x 20000 pixels, more than"), std::string::npos) << what;
+}
+
+TEST(ImageIo, CallerBoundOnPixels) {
+    // A caller's lower bound (the fuzz target's) refuses an image the default bound reads.
+    const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "bound.exr";
+    write_y_exr(p, {0, 0}, 4, 3);
+    EXPECT_EQ(read_image(p, false, 12).width, 4);
+    try {
+        read_image(p, false, 11);
+        ADD_FAILURE() << "a 4 x 3 image read under a bound of 11 pixels";
+    } catch (const std::exception &e) {
+        EXPECT_NE(std::string(e.what()).find("4 x 3 pixels, more than the 11"), std::string::npos) << e.what();
+    }
+}
+
+TEST(ImageIo, TruncatedJpegIsRefused) {
+    const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "cut.jpg";
+    std::vector<unsigned char> px(64 * 64 * 3);
+    for (size_t i = 0; i < px.size(); ++i) px[i] = (unsigned char)(i * 7);
+    ASSERT_TRUE(stbi_write_jpg(p.c_str(), 64, 64, 3, px.data(), 90));
+    EXPECT_EQ(read_image(p).width, 64);
+    fs::resize_file(p, fs::file_size(p) - 200);
+    const std::string what = read_error(p);
+    EXPECT_NE(what.find("truncated or corrupt JPEG file"), std::string::npos) << what;
+}
+
+TEST(ImageIo, TgaIsRefused) {
+    // stb_image reads a cut TGA as zeros: a 6399 x 25088 one in 27 bytes (a fuzzer's find).
+    const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "cut.png";
+    const unsigned char tga[] = {1, 0, 2, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0x18, 0, 0x62, 32, 0, 0};
+    std::ofstream(p, std::ios::binary).write((const char *)tga, sizeof tga);
+    EXPECT_NE(read_error(p).find("cannot read image"), std::string::npos);
+}
+
+TEST(ImageIo, TruncatedBmpIsRefused) {
+    const fs::path p = fresh_test_dir("mvpt_image_io_tests") / "cut.bmp";
+    std::vector<unsigned char> px(5 * 4 * 3, 200);
+    ASSERT_TRUE(stbi_write_bmp(p.c_str(), 5, 4, 3, px.data()));
+    const ImageRGB img = read_image(p);
+    EXPECT_EQ(img.width, 5);
+    EXPECT_EQ(img.height, 4);
+    fs::resize_file(p, fs::file_size(p) - 1);
+    const std::string what = read_error(p);
+    EXPECT_NE(what.find("truncated or corrupt BMP file"), std::string::npos) << what;
 }

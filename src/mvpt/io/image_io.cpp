@@ -9,6 +9,12 @@
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb_image_write.h>
 #define STB_IMAGE_IMPLEMENTATION
+// Only the formats whose truncation is caught (stb's readers fill a cut file with zeros): PNG
+// by its chunk lengths, JPEG, HDR and BMP by the checks below. Not TGA or PNM.
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_ONLY_HDR
+#define STBI_ONLY_BMP
 // stb_image copies an empty PNG chunk with memcpy(NULL, src, 0) (stbi__getn), which
 // UndefinedBehaviorSanitizer's nonnull check rejects; exempt stb's own functions from that one
 // check (clang, the fuzzing build), not ours.
@@ -23,6 +29,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <climits>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -134,9 +142,49 @@ std::string radiance_incomplete(const std::string &data) {
     }
     return {};
 }
+
+/// Empty if the JPEG file `data` is whole, otherwise why not. Its entropy-coded data stuffs every
+/// 0xFF byte, so a marker there is a real one: a whole file has an end-of-image marker (FF D9)
+/// after its last start-of-scan (FF DA); stb_image decodes a cut one with the rest left grey.
+std::string jpeg_incomplete(const std::string &data) {
+    const size_t sos = data.rfind("\xFF\xDA");
+    if (sos == std::string::npos) return "no image data";
+    if (data.find("\xFF\xD9", sos) == std::string::npos) return "no end of image after its last scan";
+    return {};
+}
+
+/// Empty if the uncompressed BMP file `data` holds every row its header promises, otherwise what
+/// is missing (stb_image reads no compressed BMP).
+std::string bmp_incomplete(const std::string &data) {
+    auto le = [&](size_t at, int bytes) {
+        int64_t v = 0;
+        for (int k = bytes - 1; k >= 0; --k) v = (v << 8) | (unsigned char)data[at + k];
+        return v;
+    };
+    if (data.size() < 26) return "no header";
+    const int64_t offset = le(10, 4), core = le(14, 4) == 12;
+    if (!core && data.size() < 34) return "no header";
+    const int64_t width = core ? le(18, 2) : le(18, 4), bits = core ? le(24, 2) : le(28, 2);
+    int64_t height = core ? le(20, 2) : le(22, 4);
+    if (!core && height >= (int64_t(1) << 31)) height = (int64_t(1) << 32) - height; // top-down rows
+    if (!core && le(30, 4) != 0 && le(30, 4) != 3) return {}; // compressed: stb_image refuses it
+    const int64_t most = int64_t(1) << 24; // stb_image refuses larger sides, as other bad headers
+    if (width <= 0 || width > most || height <= 0 || height > most || bits > 32) return {};
+    const int64_t stride = (bits * width + 31) / 32 * 4;
+    if (int64_t(data.size()) < offset + stride * height)
+        return std::to_string(data.size()) + " bytes, fewer than the " + std::to_string(offset + stride * height) +
+               " its rows take";
+    return {};
+}
+
+std::string read_file_bytes(const fs::path &path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error(std::string("cannot open the file: ") + std::strerror(errno));
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
 } // namespace
 
-ImageRGB read_image(const fs::path &path, bool raw) {
+ImageRGB read_image(const fs::path &path, bool raw, size_t max_pixels) {
     ImageRGB img;
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
@@ -152,9 +200,9 @@ ImageRGB read_image(const fs::path &path, bool raw) {
             if (!rgb && !cl.findChannel("Y")) throw std::runtime_error("no R, G, B or Y channels");
             if (!file.isComplete()) throw std::runtime_error("the file is truncated (pixel blocks are missing)");
             size_t n = size_t(img.width) * img.height;
-            if (n > MaxImagePixels)
+            if (n > max_pixels)
                 throw std::runtime_error(std::to_string(img.width) + " x " + std::to_string(img.height) +
-                                         " pixels, more than the " + std::to_string(MaxImagePixels) + " an image may have");
+                                         " pixels, more than the " + std::to_string(max_pixels) + " an image may have");
             img.rgb.assign(3 * n, 0.f);
             Imf::FrameBuffer fb;
             const char *names[3] = {"R", "G", "B"};
@@ -170,21 +218,28 @@ ImageRGB read_image(const fs::path &path, bool raw) {
         }
         return img;
     }
+    const std::string data = read_file_bytes(path);
+    const auto *bytes = reinterpret_cast<const stbi_uc *>(data.data());
+    const int size = int(std::min(data.size(), size_t(INT_MAX)));
     int w, h, n;
-    if (stbi_info(path.c_str(), &w, &h, &n) && size_t(w) * size_t(h) > MaxImagePixels)
+    if (stbi_info_from_memory(bytes, size, &w, &h, &n) && size_t(w) * size_t(h) > max_pixels)
         throw std::runtime_error("cannot read image: " + std::to_string(w) + " x " + std::to_string(h) +
-                                 " pixels, more than the " + std::to_string(MaxImagePixels) + " an image may have");
+                                 " pixels, more than the " + std::to_string(max_pixels) + " an image may have");
     if (ext == ".hdr") {
-        std::ifstream in(path, std::ios::binary);
-        const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         if (const std::string missing = radiance_incomplete(data); !missing.empty())
             throw std::runtime_error("cannot read image: a truncated or corrupt Radiance HDR file (" + missing + ")");
-        float *d = stbi_loadf(path.c_str(), &w, &h, &n, 3);
+        float *d = stbi_loadf_from_memory(bytes, size, &w, &h, &n, 3);
         if (!d) throw std::runtime_error(std::string("cannot read image: ") + stbi_failure_reason());
         img.rgb.assign(d, d + size_t(w) * h * 3);
         stbi_image_free(d);
     } else {
-        unsigned char *d = stbi_load(path.c_str(), &w, &h, &n, 3);
+        if (data.compare(0, 2, "\xFF\xD8") == 0)
+            if (const std::string missing = jpeg_incomplete(data); !missing.empty())
+                throw std::runtime_error("cannot read image: a truncated or corrupt JPEG file (" + missing + ")");
+        if (data.compare(0, 2, "BM") == 0)
+            if (const std::string missing = bmp_incomplete(data); !missing.empty())
+                throw std::runtime_error("cannot read image: a truncated or corrupt BMP file (" + missing + ")");
+        unsigned char *d = stbi_load_from_memory(bytes, size, &w, &h, &n, 3);
         if (!d) throw std::runtime_error(std::string("cannot read image: ") + stbi_failure_reason());
         img.rgb.resize(size_t(w) * h * 3);
         for (size_t i = 0; i < img.rgb.size(); ++i) {

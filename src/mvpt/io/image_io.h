@@ -19,16 +19,18 @@ void write_exr(const std::filesystem::path &path, int width, int height, const s
 /// Linear RGB (3 floats per pixel) -> sRGB-encoded 8-bit PNG.
 void write_png_srgb(const std::filesystem::path &path, int width, int height, const float *rgb);
 
-/// A float RGB image read from EXR, PNG, JPEG or HDR; PNG/JPEG are sRGB-decoded
+/// A float RGB image read from EXR, PNG, JPEG, HDR or BMP; PNG/JPEG/BMP are sRGB-decoded
 /// to linear unless `raw` (for data textures such as roughness).
 struct ImageRGB {
     int width = 0, height = 0;
     std::vector<float> rgb;
 };
-ImageRGB read_image(const std::filesystem::path &path, bool raw = false);
 /// The most pixels an image file may have (16384 x 16384, 3 GiB as float RGB): a header that
 /// claims more is refused before anything is allocated.
 inline constexpr size_t MaxImagePixels = size_t(1) << 28;
+/// `max_pixels` lowers that bound where a caller must stay small (the fuzz target: a 40 KiB EXR
+/// may rightly decompress to 16384 x 16384 pixels, which takes a minute and gigabytes there).
+ImageRGB read_image(const std::filesystem::path &path, bool raw = false, size_t max_pixels = MaxImagePixels);
 
 /// Rename `tmp` onto `path` (same directory), removing `tmp` on failure.
 void commit_file(const std::filesystem::path &tmp, const std::filesystem::path &path);
