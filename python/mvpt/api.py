@@ -325,4 +325,5 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "notes": list(scene.notes) + list(raw["notes"]),
         "warnings": _warnings(raw, results),
         "views": views,
-    } | ({"estimator": raw["estimator"], "multiview": dict(raw["multiview"])} if raw["method"] == "mvpt" else {})
+    } | ({"estimator": raw["estimator"], "splits": raw["splits"], "multiview": dict(raw["multiview"])}
+         if raw["method"] == "mvpt" else {})

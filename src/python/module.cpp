@@ -170,6 +170,7 @@ public:
         d["method"] = s.method;
         if (s.method == "mvpt") {
             d["estimator"] = s.estimator;
+            d["splits"] = s.splits;
             d["multiview"] = mv_stats_dict(s.mv);
         }
         nb::list notes;

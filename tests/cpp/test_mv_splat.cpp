@@ -1,6 +1,7 @@
-// mv_splat_entries (one vector per entry, rounded by adding 1.5 * 2^52) against
+// mv_sum_entries + mv_splat_entries (one vector per entry, rounded by adding 1.5 * 2^52) against
 // mv_entry_value + SplatCache::add (llrint per channel): the same integers in every channel,
-// the same contributions dropped, for values that take each of its three paths.
+// the same contributions dropped, for values that take each of its three paths; and the sum of
+// two splits at half weight against its scalar value.
 #include "mvpt/integrators/multiview/mv_sample.h"
 
 #include <gtest/gtest.h>
@@ -60,8 +61,10 @@ TEST(MvSplat, EntryKernelEqualsScalarAdds) {
                                std::abs(w[i]) < 0x1p21f;
             ++paths[!added ? 2 : exact ? 0 : 1];
         }
-        mv_splat_entries(got, t, f_nee.data(), f_bounce.data(), w.data(), slots.data(), pixels.data(), films.data(), 7,
-                         begin, end, got_dropped.data());
+        std::vector<MvEntryRadiance> sum(n);
+        mv_sum_entries(t, f_nee.data(), f_bounce.data(), n, sum.data());
+        mv_splat_entries(got, sum.data(), w.data(), 1.f, slots.data(), pixels.data(), films.data(), 7, begin, end,
+                         got_dropped.data());
         ref.flush(), got.flush();
         for (size_t s = 0; s < pixels_per_view.size(); ++s)
             ASSERT_EQ(got_dropped[s], ref_dropped[s]) << "trial " << trial << ", view " << s;
@@ -75,4 +78,33 @@ TEST(MvSplat, EntryKernelEqualsScalarAdds) {
     EXPECT_GT(paths[0], 3000);
     EXPECT_GT(paths[1], 1000);
     EXPECT_GT(paths[2], 500);
+}
+
+TEST(MvSplat, SplitsAreSummedAndWeighted) {
+    // Two splits of one entry: L = L_0 + L_1 (each as mv_entry_value selects), splatted as
+    // (L w / 2, w): W times the splits' mean, and W; a split that is not valid adds nothing.
+    const Spectrum f_nee[2] = {Spectrum(0.5f, 0.25f, 1.f), Spectrum(0.f)}, f_bounce[2] = {Spectrum(2.f, 1.f, 0.5f), Spectrum(0.f)};
+    const MvSplatTerms a{Spectrum(1.f, 2.f, 4.f), Spectrum(0.5f, 0.5f, 1.f), 2.f, true, true, true};
+    MvSplatTerms b = a;
+    b.nee = false;
+    MvSplatTerms invalid = a;
+    invalid.valid = false;
+    std::vector<MvEntryRadiance> sum(1);
+    for (const MvSplatTerms &t : {a, b, invalid}) mv_sum_entries(t, f_nee, f_bounce, 1, sum.data());
+    const Spectrum want = mv_entry_value(a, f_nee[0], f_bounce[0], 1.f) + mv_entry_value(b, f_nee[0], f_bounce[0], 1.f);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(sum[0].v[c], want[c]);
+    EXPECT_EQ(sum[0].v[3], 0.f);
+    const std::vector<SplatFootprint> views = {SplatFootprint::box(1, 1)};
+    MvPassFilm film(views, false);
+    SplatCache cache(film);
+    const float w = 0.75f;
+    const int slot = 0;
+    const uint32_t pixel = 0;
+    const Vec2f at(0.5f, 0.5f);
+    uint64_t dropped = 0;
+    EXPECT_EQ(mv_splat_entries(cache, sum.data(), &w, 0.5f, &slot, &pixel, &at, 7, 0, 1, &dropped), 0u);
+    cache.flush();
+    const SplatEntry e = film.take(0);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(e.lw[c], to_fixed(want[c] * (w * 0.5f)));
+    EXPECT_EQ(e.w, to_fixed(w));
 }

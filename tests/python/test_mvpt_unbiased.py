@@ -104,6 +104,18 @@ def test_balance_is_unbiased(case, selection):
     assert res.passed, res.summary()
 
 
+@pytest.mark.parametrize("splits", [1, 4])
+def test_balance_is_unbiased_for_any_splits(case, splits):
+    """The default splits the shared vertex in two (§7, "Splitting"); one split (the method
+    without splitting) and four must converge to path tracing as well."""
+    name, ids, pt, mv_spp = case
+    runs = _seeds(_mvpath(name, f'<integer name="splits" value="{splits}"/>'), mv_spp, "scene", 6000 + 100 * splits)
+    assert runs[0].stats["splits"] == splits
+    res = _compare(f"{name} mvpt balance ({splits} splits) vs pt", ids, _estimates(runs, ids), pt, mean_tol=0.0)
+    print(res.summary())
+    assert res.passed, res.summary()
+
+
 @pytest.mark.parametrize("selection", sorted(SELECTION))
 def test_balance_weights_sum_to_one(case, selection):
     name, ids, _, mv_spp = case

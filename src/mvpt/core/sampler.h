@@ -84,6 +84,14 @@ public:
         m_index = sample_index;
         m_dim = dimension;
     }
+    /// The same sample's stream under another `key`: every dimension drawn anew (the splits of
+    /// a shared vertex, multiview-path-tracing.md §7), with either sampler.
+    Sampler rekeyed(uint64_t key) const {
+        Sampler s = *this;
+        s.m_pixel_hash = hash_combine(m_pixel_hash, key);
+        s.m_sample_hash = hash_combine(m_sample_hash, key);
+        return s;
+    }
     void set_dimension(uint32_t d) { m_dim = d; }
     uint32_t dimension() const { return m_dim; }
     SamplerKind kind() const { return m_kind; }

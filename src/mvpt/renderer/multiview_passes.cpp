@@ -103,8 +103,13 @@ private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
     /// Whether a thinned pass takes native sample `index` of pixel (px, py) of view `slot`.
     bool thin_takes(int slot, int px, int py, uint32_t index) const;
-    /// After a thinned pass: the native samples its crop-window pixels skipped, uncounted.
-    void uncount_skipped();
+    /// fold_pass counted every native sample of each pixel's map: for the crop-window pixels of
+    /// tiles [begin, end), subtracts those `skipped(slot, n, first, px, py)` says were not taken of
+    /// the pixel's n, numbered from `first`, at (px, py) in full-film coordinates. The pixels' next
+    /// samples stay numbered on from the last one taken.
+    template <class Skipped> void uncount(size_t begin, const Skipped &skipped);
+    /// After a whole pass: the native-sample maps of the next (§8), on their schedule.
+    void update_maps();
     /// The threads' caches flushed and the pass's sums (times `scale`) folded into the
     /// accumulators, in the render's arena.
     void fold_pass(double scale, double weight = 1.0);
@@ -269,10 +274,8 @@ void Renderer::MultiviewPasses::fold_pass(double scale, double weight) {
     m_r.fold_pass(*m_pass_film, scale, weight);
 }
 
-void Renderer::MultiviewPasses::uncount_skipped() {
-    // fold counted every native sample of the map; the pixels' next samples stay numbered on
-    // from the last one taken.
-    tbb::parallel_for(size_t(0), m_tiles.size(), [&](size_t t) {
+template <class Skipped> void Renderer::MultiviewPasses::uncount(size_t begin, const Skipped &skipped) {
+    tbb::parallel_for(begin, m_tiles.size(), [&](size_t t) {
         const Tile &tile = m_tiles[t];
         Film &mf = m_r.m_films[tile.view_slot];
         const SampleWindow &w = m_r.m_mv.windows[tile.view_slot];
@@ -280,11 +283,9 @@ void Renderer::MultiviewPasses::uncount_skipped() {
         for (int y = c.y0; y < c.y1; ++y)
             for (int x = c.x0; x < c.x1; ++x) {
                 const size_t p = size_t(y) * size_t(mf.width) + size_t(x);
-                const uint32_t n = mf.n(p), first = m_sample0 + mf.native[p] - n;
-                const int px = x + w.margin + w.x0, py = y + w.margin + w.y0;
-                uint32_t skipped = 0;
-                for (uint32_t j = 0; j < n; ++j) skipped += !thin_takes(tile.view_slot, px, py, first + j);
-                mf.native[p] -= skipped;
+                const uint32_t n = mf.n(p);
+                mf.native[p] -= skipped(tile.view_slot, n, m_sample0 + mf.native[p] - n, x + w.margin + w.x0,
+                                        y + w.margin + w.y0);
             }
     });
 }
@@ -303,12 +304,7 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
     arena().execute([&] {
         fold_pass(1.0 / share);
         // The pixels of the regions not rendered took no native sample (fold counted one).
-        tbb::parallel_for(done.prefix, m_tiles.size(), [&](size_t t) {
-            Film &mf = m_r.m_films[m_tiles[t].view_slot];
-            const CropRect c = crop_of(m_tiles[t]);
-            for (int y = c.y0; y < c.y1; ++y)
-                for (int x = c.x0; x < c.x1; ++x) mf.native[size_t(y) * size_t(mf.width) + size_t(x)] -= 1;
-        });
+        uncount(done.prefix, [](int, uint32_t, uint32_t, int, int) { return 1u; });
     });
     m_r.m_native_done += double(kept(done)) / double(m_pixels_total);
     m_r.m_stats.cut_pass_share = share;
@@ -321,16 +317,24 @@ void Renderer::MultiviewPasses::end_step() {
     if (m_share < 1.0) { // a thinned pass, the last: its sums scaled by 1/q, weighing q (film.h)
         arena().execute([&] {
             fold_pass(1.0 / m_share, m_share);
-            uncount_skipped();
+            uncount(0, [&](int slot, uint32_t n, uint32_t first, int px, int py) {
+                uint32_t skipped = 0;
+                for (uint32_t j = 0; j < n; ++j) skipped += !thin_takes(slot, px, py, first + j);
+                return skipped;
+            });
         });
         m_r.m_native_done += double(m_thin_taken.load()) / double(m_pixels_total);
         m_r.m_stats.thinned_pass_share = m_share;
         m_thinned = true;
-        m_r.m_stats.between_passes_seconds += std::chrono::duration<double>(clock::now() - t0).count();
-        return;
+    } else {
+        arena().execute([&] { fold_pass(1.0); });
+        m_r.m_native_done += double(m_pass_samples) / double(m_pixels_total);
+        update_maps();
     }
-    arena().execute([&] { fold_pass(1.0); });
-    m_r.m_native_done += double(m_pass_samples) / double(m_pixels_total);
+    m_r.m_stats.between_passes_seconds += std::chrono::duration<double>(clock::now() - t0).count();
+}
+
+void Renderer::MultiviewPasses::update_maps() {
     // Native-sample maps of the next pass (§8), frozen during it. Their statistics change by
     // about 1/passes per pass, so after 16 passes a map serves passes/8 passes (a map costs
     // about as much as folding a pass), except that the last pass's map spends only what is
@@ -344,7 +348,6 @@ void Renderer::MultiviewPasses::end_step() {
         if (done <= 16 || done % (done / 8) == 0 || last)
             arena().execute([&] { m_r.update_native_maps(done, std::max(per_pixel, 1.0)); });
     }
-    m_r.m_stats.between_passes_seconds += std::chrono::duration<double>(clock::now() - t0).count();
 }
 
 double Renderer::MultiviewPasses::fraction(uint64_t samples) const {
@@ -424,6 +427,7 @@ std::vector<SplatFootprint> Renderer::prepare_multiview_render(MvConfig &cfg) {
     m_stats.method = "mvpt";
     m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
                                                               : (cfg.mis_selected_only ? "weighted-selected" : "weighted");
+    m_stats.splits = cfg.splits;
     m_mv_stats_before.assign(m_views.size(), MvViewStats{});
     return prepare_multiview(settings.path, settings.volpath, cfg, adaptive_maps(cfg));
 }

@@ -111,6 +111,7 @@ struct RenderStats {
     int threads = 0;
     /// "pt" or "mvpt" (what ran), and the multi-view estimator ("balance" / "weighted").
     std::string method = "pt", estimator;
+    int splits = 0; ///< multi-view: light samples and bounces per shared vertex (MvConfig::splits)
     /// Things the user should know about the run (e.g. a filter replaced by a box).
     std::vector<std::string> notes;
     /// Things that make the images useless (a scene that cannot produce light).

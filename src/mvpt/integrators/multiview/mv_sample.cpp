@@ -20,6 +20,7 @@ namespace mvpt {
 
 namespace {
 const BsdfContext Ctx;
+constexpr uint64_t SplitKey = 0x73706c6974; // "split": split b > 0 of a shared vertex re-keys its stream by SplitKey + b
 } // namespace
 
 void mv_shift_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc) {
@@ -369,11 +370,13 @@ void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, cons
 /// values, and l's in-scattering along its own (unless the medium vertices share it).
 void camera_segments(const MvContext &ctx, NativeSample &s, const MvScratch &sc, size_t ns, const Spectrum &le_y,
                      Spectrum *f_nee, Spectrum *fs, MvPendingSamples::Sample &rec, RayCounters &counters) {
+    // (E, with l's in-scattering, belongs to the first split alone: rec.splits > 0.)
     for (size_t i = 0; i < ns; ++i) {
         const Spectrum &tr = sc.tr[sc.sharing[i]];
         f_nee[i] *= tr, fs[i] *= tr;
     }
     if (rec.delta_view >= 0) rec.delta_bounce *= sc.tr[sc.sharing[rec.delta_view]];
+    if (rec.splits == 0) return;
     const Spectrum in_scattered =
         ctx.medium_vertices ? Spectrum(0.f) : mv_in_scattering(ctx, s.slot, s.ray, s.media, s.sampler, counters);
     rec.e = (le_y * s.media.walk.tr + in_scattered) * (1.f / s.n);
@@ -404,11 +407,43 @@ void queue_shares(const MvScratch &sc, size_t ns, size_t first, MvPendingSamples
     }
 }
 
+/// Split b of a shared first vertex (§7, "Splitting"), from its own stream: one emitter sample
+/// and one bounce for every sharing view, queued in `pending` until its suffix and shadow ray
+/// are traced. Per sharing view i the radiance is
+///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included);
+/// the first split's record also holds the views' entries and E.
+void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, int splits,
+                 int b, bool valid, const Spectrum &le_y, MvScratch &sc, MvPendingSamples &pending,
+                 RayCounters &counters) {
+    s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
+    const float u_light_select = s.sampler.next_1d();
+    const Vec2f u_light = s.sampler.next_2d();
+    const float u_lobe = s.sampler.next_1d();
+    const Vec2f u_dir = s.sampler.next_2d();
+    const float u_rr = s.sampler.next_1d();
+    // The sharing views' BSDF values go straight into the queue (splatted once the suffix is
+    // known); f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.
+    const size_t first = pending.add_entries(ns);
+    Spectrum *const f_nee = pending.f_nee.data() + first, *const fs = pending.f_bounce.data() + first;
+    MvPendingSamples::Sample rec;
+    rec.key = s.key;
+    rec.first = uint32_t(first);
+    rec.count = uint32_t(ns);
+    rec.splits = b == 0 ? uint32_t(splits) : 0u;
+    rec.shadow = -1;
+    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_light_select, u_light, f_nee, sc, pending, counters, &rec.shadow);
+    rec.nee = !rec.nee_weight.is_black();
+    shared_bounce(ctx, s, bsdf, wi_s, ns, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
+    if (b == 0) rec.e = le_y * (1.f / s.n);
+    if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
+    if (b == 0) queue_shares(sc, ns, first, pending);
+    pending.samples.push_back(rec);
+}
+
 /// A native sample whose first vertex y the views share (§7): emission at y to l only, the
-/// sharing views, one emitter sample and one bounce for all of them, queued in `pending` until
-/// its suffix and shadow ray are traced. Per sharing view i the radiance is
-///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included),
-/// and the contribution L_i / D_i.
+/// sharing views, and `splits` light samples and bounces for all of them, each weighted
+/// 1/splits (split 0 on the sample's stream, split b on the stream re-keyed by b); the
+/// contribution of view i is the mean of its splits' L_i, over D_i.
 void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, MvPendingSamples &pending,
                         RayCounters &counters) {
     const PathConfig &pc = ctx.path->config();
@@ -422,31 +457,17 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     }
     si.wi = si.to_local(-s.ray.d);
     const size_t ns = sharing_views(ctx, s, bsdf, sc, counters);
-
-    s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
-    const float u_light_select = s.sampler.next_1d();
-    const Vec2f u_light = s.sampler.next_2d();
-    const float u_lobe = s.sampler.next_1d();
-    const Vec2f u_dir = s.sampler.next_2d();
-    const float u_rr = s.sampler.next_1d();
     const Vec3f *wi_s = sharing_directions(sc, ns);
-    // The sharing views' BSDF values go straight into the queue (splatted once the suffix is
-    // known); f_nee holds stale values when there is no NEE, fs when the lobe is a delta: never read.
-    const size_t first = pending.add_entries(ns);
-    Spectrum *const f_nee = pending.f_nee.data() + first, *const fs = pending.f_bounce.data() + first;
-    MvPendingSamples::Sample rec;
-    rec.key = s.key;
-    rec.first = uint32_t(first);
-    rec.count = uint32_t(ns);
-    rec.shadow = -1;
-    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_light_select, u_light, f_nee, sc, pending, counters, &rec.shadow);
-    rec.nee = !rec.nee_weight.is_black();
-    shared_bounce(ctx, s, bsdf, wi_s, ns, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
-    rec.e = le_y * (1.f / s.n);
-    if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
-    rec.hash = s.sampler.sample_hash();
-    queue_shares(sc, ns, first, pending);
-    pending.samples.push_back(rec);
+    const Sampler stream = s.sampler;
+    s.sampler.set_dimension(DimCameraEnd);
+    const uint64_t hash = s.sampler.sample_hash(); // the splats' taps: the sample's, for every split
+    const int splits = ctx.cfg.splits;
+    for (int b = 0; b < splits; ++b) {
+        if (b > 0) s.sampler = stream.rekeyed(SplitKey + uint64_t(b));
+        share_split(ctx, s, bsdf, wi_s, ns, splits, b, valid, le_y, sc, pending, counters);
+        pending.samples.back().hash = hash;
+    }
+    s.sampler = stream;
     s.st.sharing += ns;
     s.st.rays += counters.rays + counters.shadow_rays - s.rays_before;
     if (ctx.medium_vertices)

@@ -35,25 +35,35 @@ Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spec
     return t.valid ? L * w : Spectrum(0.f);
 }
 
-// Per entry, the four values W*L (RGB) and W in the lanes of one vector, masked as
-// mv_entry_value selects, then x = v 2^30 + 1.5 2^52, which holds v 2^30 rounded to an integer
-// (to nearest even) in its low bits: exactly to_fixed's llrint when |v| < 2^21. Other values
-// that fit take to_fixed per channel.
-MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *__restrict f_nee,
-                                     const Spectrum *__restrict f_bounce, const float *__restrict w,
-                                     const int *__restrict slots, const uint32_t *__restrict pixels,
-                                     const Vec2f *__restrict films, uint64_t sample, size_t begin, size_t end,
-                                     uint64_t *__restrict dropped) {
+// Per entry, L (RGB) in the lanes of one vector, masked as mv_entry_value selects.
+MVPT_MULTI_ISA void mv_sum_entries(const MvSplatTerms &t, const Spectrum *__restrict f_nee,
+                                   const Spectrum *__restrict f_bounce, size_t n, MvEntryRadiance *__restrict sum) {
     using namespace simd;
     static_assert(sizeof(Spectrum) == 12, "entries are read as 16 bytes from each Spectrum");
+    if (!t.valid) return;
     const i32x4 rgb = {-1, -1, -1, 0}, none = {};
-    const i32x4 nee_mask = t.nee ? rgb : none, bounce_mask = t.bounce ? rgb : none, valid_mask = t.valid ? rgb : none;
+    const i32x4 nee_mask = t.nee ? rgb : none, bounce_mask = t.bounce ? rgb : none;
     const f32x4 nw = {t.nee_weight[0], t.nee_weight[1], t.nee_weight[2], 0.f};
     const f32x4 sfx = {t.suffix[0], t.suffix[1], t.suffix[2], 0.f};
+    auto masked = [](f32x4 v, i32x4 mask) { return bit_cast<f32x4>(bit_cast<i32x4>(v) & mask); };
+    for (size_t i = 0; i < n; ++i) {
+        const f32x4 L = masked(load<f32x4>(&f_nee[i].r) * nw, nee_mask) +
+                        masked(load<f32x4>(&f_bounce[i].r) * t.b_scale * sfx, bounce_mask);
+        store(sum[i].v, load<f32x4>(sum[i].v) + L);
+    }
+}
+
+// Per entry, the four values W*L (RGB) and W in the lanes of one vector, then x = v 2^30 + 1.5
+// 2^52, which holds v 2^30 rounded to an integer (to nearest even) in its low bits: exactly
+// to_fixed's llrint when |v| < 2^21. Other values that fit take to_fixed per channel.
+MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvEntryRadiance *__restrict sum,
+                                       const float *__restrict w, float l_scale, const int *__restrict slots,
+                                       const uint32_t *__restrict pixels, const Vec2f *__restrict films,
+                                       uint64_t sample, size_t begin, size_t end, uint64_t *__restrict dropped) {
+    using namespace simd;
     const f32x4 exact = f32x4{} + 0x1p21f, fits = f32x4{} + float(SplatMax);
     const f64x4 scale = f64x4{} + SplatScale, magic = f64x4{} + 0x1.8p52;
     const i64x4 magic_bits = bit_cast<i64x4>(magic);
-    auto masked = [](f32x4 v, i32x4 mask) { return bit_cast<f32x4>(bit_cast<i32x4>(v) & mask); };
     auto all = [](i32x4 m) { return (m[0] & m[1] & m[2] & m[3]) != 0; };
     size_t lost = 0;
     // In a large cache, the entries of the next few views are loaded while this one's is summed.
@@ -61,10 +71,8 @@ MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t,
     for (size_t i = begin; i < std::min(end, begin + ahead); ++i) cache.prefetch(slots[i], films[i]);
     for (size_t i = begin; i < end; ++i) {
         if (ahead && i + ahead < end) cache.prefetch(slots[i + ahead], films[i + ahead]);
-        const f32x4 L = masked(load<f32x4>(&f_nee[i].r) * nw, nee_mask) +
-                        masked(load<f32x4>(&f_bounce[i].r) * t.b_scale * sfx, bounce_mask);
-        const f32x4 v = bit_cast<f32x4>(bit_cast<i32x4>(masked(L * w[i], valid_mask)) |
-                                        (bit_cast<i32x4>(f32x4{} + w[i]) & ~rgb)); // W*L, W
+        f32x4 v = load<f32x4>(sum[i].v) * (w[i] * l_scale); // W*L, W
+        v[3] = w[i];
         if (!cache.is_box(slots[i])) { // spread over the pixels the view's filter covers
             if (!cache.add(slots[i], pixels[i], films[i], sample, Spectrum(v[0], v[1], v[2]), v[3]))
                 ++dropped[slots[i]], ++lost;
@@ -88,6 +96,54 @@ MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t,
     return lost;
 }
 
+namespace {
+
+/// The terms one split's entries have in common once its suffix and shadow ray are traced.
+MvSplatTerms split_terms(const MvPendingSamples &pending, const MvPendingSamples::Sample &rec) {
+    const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
+    return {rec.nee_weight, suffix, rec.b_scale, rec.nee && (rec.shadow < 0 || !pending.shadow_blocked[rec.shadow]),
+            !suffix.is_black(), rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
+}
+
+/// A medium vertex's contributions: native-only radiance of each view (W = 0).
+void splat_medium_vertex(const MvPendingSamples &pending, const MvPendingSamples::Sample &rec, MvSplatSink &sink) {
+    const MvSplatTerms t = split_terms(pending, rec);
+    size_t lost = 0;
+    for (uint32_t i = rec.first; i < rec.first + rec.count; ++i)
+        lost += !sink.native(pending.slot[i], pending.pixel[i], pending.film[i], rec.hash, Spectrum(0.f), 0.f,
+                             mv_entry_value(t, pending.f_nee[i], pending.f_bounce[i], pending.w[i]));
+    if (lost) sink.lost(rec.key);
+}
+
+/// The group of splits starting at `group` (§7): each entry's L summed over them, then W times
+/// their mean, and W, splatted; the native view's entry (i = 0) with E.
+void splat_shared_vertex(MvPendingSamples &pending, const MvPendingSamples::Sample *group, MvSplatSink &sink) {
+    const uint32_t first = group[0].first, n = group[0].count;
+    if (pending.radiance_sum.size() < n) pending.radiance_sum.resize(n);
+    MvEntryRadiance *sum = pending.radiance_sum.data();
+    std::fill_n(sum, n, MvEntryRadiance{});
+    for (uint32_t b = 0; b < group[0].splits; ++b) {
+        const MvPendingSamples::Sample &rec = group[b];
+        MvSplatTerms t = split_terms(pending, rec);
+        const bool delta = t.bounce && rec.delta_view >= 0; // a delta lobe's direction serves its view only
+        t.bounce = t.bounce && !delta;
+        mv_sum_entries(t, pending.f_nee.data() + rec.first, pending.f_bounce.data() + rec.first, n, sum);
+        if (delta && t.valid)
+            for (int c = 0; c < 3; ++c) sum[rec.delta_view].v[c] += rec.delta_bounce[c] * t.suffix[c];
+    }
+    const float *w = pending.w.data() + first;
+    const int *slots = pending.slot.data() + first;
+    const uint32_t *pixels = pending.pixel.data() + first;
+    const Vec2f *films = pending.film.data() + first;
+    const float mean = 1.f / float(group[0].splits), w0 = w[0] * mean;
+    const Spectrum lw0(sum[0].v[0] * w0, sum[0].v[1] * w0, sum[0].v[2] * w0);
+    size_t lost = !sink.native(slots[0], pixels[0], films[0], group[0].hash, lw0, w[0], group[0].e);
+    lost += mv_splat_entries(sink.cache, sum, w, mean, slots, pixels, films, group[0].hash, 1, n, sink.dropped);
+    if (lost) sink.lost(group[0].key);
+}
+
+} // namespace
+
 void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
                        RayCounters &counters, MvViewStats *stats) {
     const size_t n_suffix = pending.rays.size();
@@ -109,44 +165,9 @@ void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending
     if (!pending.shadow_rays.empty())
         ctx.scene->occluded(pending.shadow_rays.data(), pending.shadow_rays.size(), pending.shadow_blocked.data());
 
-    for (const MvPendingSamples::Sample &rec : pending.samples) {
-        const Spectrum suffix = rec.suffix >= 0 ? pending.radiance[rec.suffix] : Spectrum(0.f);
-        const bool bounce = !suffix.is_black();
-        const MvSplatTerms t{rec.nee_weight, suffix, rec.b_scale, rec.nee && (rec.shadow < 0 || !pending.shadow_blocked[rec.shadow]),
-                            bounce && rec.delta_view < 0, rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
-        const uint32_t first = rec.first, n = rec.count;
-        const Spectrum *f_nee = pending.f_nee.data() + first, *f_bounce = pending.f_bounce.data() + first;
-        const float *w = pending.w.data() + first;
-        const int *slots = pending.slot.data() + first;
-        const uint32_t *pixels = pending.pixel.data() + first;
-        const Vec2f *films = pending.film.data() + first;
-        if (rec.medium) { // a medium vertex's contributions are native-only radiance of each view (W = 0)
-            size_t lost = 0;
-            for (uint32_t i = 0; i < n; ++i)
-                lost += !sink.native(slots[i], pixels[i], films[i], rec.hash, Spectrum(0.f), 0.f,
-                                     mv_entry_value(t, f_nee[i], f_bounce[i], w[i]));
-            if (lost) sink.lost(rec.key);
-            continue;
-        }
-        // Two entries on their own: a delta lobe's direction serves its view only, and the
-        // native view's entry (i = 0) also carries E.
-        const int delta = bounce ? rec.delta_view : -1;
-        auto value = [&](int i) {
-            if (i != delta) return mv_entry_value(t, f_nee[i], f_bounce[i], w[i]);
-            Spectrum L = t.nee ? f_nee[i] * rec.nee_weight : Spectrum(0.f);
-            L += rec.delta_bounce * suffix;
-            return t.valid ? L * w[i] : Spectrum(0.f);
-        };
-        size_t lost = !sink.native(slots[0], pixels[0], films[0], rec.hash, value(0), w[0], rec.e);
-        if (delta > 0) {
-            lost += !sink.shared(slots[delta], pixels[delta], films[delta], rec.hash, value(delta), w[delta]);
-            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1,
-                                     size_t(delta), sink.dropped);
-            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash,
-                                     size_t(delta) + 1, n, sink.dropped);
-        } else
-            lost += mv_splat_entries(sink.cache, t, f_nee, f_bounce, w, slots, pixels, films, rec.hash, 1, n, sink.dropped);
-        if (lost) sink.lost(rec.key);
+    for (size_t r = 0; r < pending.samples.size(); r += std::max(pending.samples[r].splits, 1u)) {
+        if (pending.samples[r].medium) splat_medium_vertex(pending, pending.samples[r], sink);
+        else splat_shared_vertex(pending, &pending.samples[r], sink);
     }
     pending.clear();
 }

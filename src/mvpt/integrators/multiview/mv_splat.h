@@ -14,6 +14,12 @@ namespace mvpt {
 
 class Medium;
 
+/// An entry's radiance L summed over the splits, in the first three of four floats (the fourth
+/// is zero), as one vector.
+struct alignas(16) MvEntryRadiance {
+    float v[4];
+};
+
 /// Native samples whose suffix (the path continuing from the shared bounce, §7) waits to
 /// be traced with the other samples of its tile as one wavefront of the path tracer
 /// (PathIntegrator::trace_batch), and whose NEE shadow ray waits likewise;
@@ -35,6 +41,10 @@ struct MvPendingSamples {
         /// A medium vertex (§10): its contributions are added as native-only radiance (to E,
         /// with W = 0), since no fixed sum of their weights is known.
         bool medium = false;
+        /// The splits of one shared vertex (§7) are consecutive records, each with its own entries'
+        /// f_nee and f_bounce, suffix and light sample; the first holds the entries' slots, pixels,
+        /// film positions and W, E and the group's size here (0 in the others).
+        uint32_t splits = 1;
         uint64_t hash = 0; ///< the native sample's Sampler::sample_hash (for the splats' taps)
         SampleKey key = NoSample; ///< the native sample, for the report of dropped contributions
         float b_scale = 0.f;
@@ -49,6 +59,7 @@ struct MvPendingSamples {
     std::vector<Vec2f> film;     ///< film position (full-film pixels)
     std::vector<float> w;
     std::vector<Spectrum> f_nee, f_bounce; ///< with one more element than the others
+    std::vector<MvEntryRadiance> radiance_sum; ///< scratch: a group's L summed over its splits, per entry
     size_t entries = 0; ///< entries in use (the arrays above keep their size between tiles)
     /// Room for n more entries; returns the first.
     size_t add_entries(size_t n);
@@ -77,14 +88,18 @@ struct MvSplatTerms {
 /// zero when the sample is not valid.
 Spectrum mv_entry_value(const MvSplatTerms &t, const Spectrum &f_nee, const Spectrum &f_bounce, float w);
 
-/// Adds entries [begin, end) of one sample to `cache`: W·L (mv_entry_value) and W at film
-/// position films[i] (window pixel pixels[i]) of view slots[i], of the native sample with
-/// Sampler::sample_hash `sample`, the same bits as SplatCache::add; entries that do not fit are
-/// counted in dropped[slot] (and returned). f_nee and f_bounce are read 16 bytes per entry: one
-/// Spectrum past `end` must be readable.
-size_t mv_splat_entries(SplatCache &cache, const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce,
-                      const float *w, const int *slots, const uint32_t *pixels, const Vec2f *films, uint64_t sample,
-                      size_t begin, size_t end, uint64_t *dropped);
+/// Adds to sum[0, n) each entry's L (mv_entry_value without W) of one split; f_nee and f_bounce
+/// are read 16 bytes per entry: one Spectrum past n must be readable.
+void mv_sum_entries(const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum *f_bounce, size_t n,
+                    MvEntryRadiance *sum);
+
+/// Adds entries [begin, end) of one sample to `cache`: W·L and W, with W = w[i] and L = sum[i] *
+/// l_scale (the mean of the splits' sum), at film position films[i] (window pixel pixels[i]) of view slots[i], of the native
+/// sample with Sampler::sample_hash `sample`, the same bits as SplatCache::add; entries that do
+/// not fit are counted in dropped[slot] (and returned).
+size_t mv_splat_entries(SplatCache &cache, const MvEntryRadiance *sum, const float *w, float l_scale, const int *slots,
+                        const uint32_t *pixels, const Vec2f *films, uint64_t sample, size_t begin, size_t end,
+                        uint64_t *dropped);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
 /// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).

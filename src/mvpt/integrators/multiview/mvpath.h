@@ -56,6 +56,10 @@ struct MvConfig {
     /// by default the eps of the relMSE that `mvpt compare` and the benchmarks report, so
     /// that pixels darker than ~0.1 count by absolute error there as well.
     float adaptive_eps = 0.01f;
+    /// Splits of the shared vertex (docs/multiview-path-tracing.md §7, "Splitting"): light
+    /// samples and bounces per native sample, each shared by every sharing view and weighted
+    /// 1/splits. The shifts, visibility and densities D of the first vertex are paid once.
+    int splits = 2;
     /// Visibility cells (accel/rig_visibility.h) along the scene's longest side; 0 turns them
     /// off. Static scenes and cameras only.
     int rig_cells = 128;
