@@ -177,6 +177,13 @@ std::string bmp_incomplete(const std::string &data) {
     return {};
 }
 
+/// Refuses a file in which a check above found `missing` (empty: the file is whole).
+void require_whole(const std::string &missing, const char *format) {
+    if (!missing.empty())
+        throw std::runtime_error(std::string("cannot read image: a truncated or corrupt ") + format + " file (" +
+                                 missing + ")");
+}
+
 std::string read_file_bytes(const fs::path &path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error(std::string("cannot open the file: ") + std::strerror(errno));
@@ -226,19 +233,14 @@ ImageRGB read_image(const fs::path &path, bool raw, size_t max_pixels) {
         throw std::runtime_error("cannot read image: " + std::to_string(w) + " x " + std::to_string(h) +
                                  " pixels, more than the " + std::to_string(max_pixels) + " an image may have");
     if (ext == ".hdr") {
-        if (const std::string missing = radiance_incomplete(data); !missing.empty())
-            throw std::runtime_error("cannot read image: a truncated or corrupt Radiance HDR file (" + missing + ")");
+        require_whole(radiance_incomplete(data), "Radiance HDR");
         float *d = stbi_loadf_from_memory(bytes, size, &w, &h, &n, 3);
         if (!d) throw std::runtime_error(std::string("cannot read image: ") + stbi_failure_reason());
         img.rgb.assign(d, d + size_t(w) * h * 3);
         stbi_image_free(d);
     } else {
-        if (data.compare(0, 2, "\xFF\xD8") == 0)
-            if (const std::string missing = jpeg_incomplete(data); !missing.empty())
-                throw std::runtime_error("cannot read image: a truncated or corrupt JPEG file (" + missing + ")");
-        if (data.compare(0, 2, "BM") == 0)
-            if (const std::string missing = bmp_incomplete(data); !missing.empty())
-                throw std::runtime_error("cannot read image: a truncated or corrupt BMP file (" + missing + ")");
+        if (data.compare(0, 2, "\xFF\xD8") == 0) require_whole(jpeg_incomplete(data), "JPEG");
+        if (data.compare(0, 2, "BM") == 0) require_whole(bmp_incomplete(data), "BMP");
         unsigned char *d = stbi_load_from_memory(bytes, size, &w, &h, &n, 3);
         if (!d) throw std::runtime_error(std::string("cannot read image: ") + stbi_failure_reason());
         img.rgb.resize(size_t(w) * h * 3);

@@ -370,13 +370,12 @@ void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, cons
 /// values, and l's in-scattering along its own (unless the medium vertices share it).
 void camera_segments(const MvContext &ctx, NativeSample &s, const MvScratch &sc, size_t ns, const Spectrum &le_y,
                      Spectrum *f_nee, Spectrum *fs, MvPendingSamples::Sample &rec, RayCounters &counters) {
-    // (E, with l's in-scattering, belongs to the first split alone: rec.splits > 0.)
     for (size_t i = 0; i < ns; ++i) {
         const Spectrum &tr = sc.tr[sc.sharing[i]];
         f_nee[i] *= tr, fs[i] *= tr;
     }
     if (rec.delta_view >= 0) rec.delta_bounce *= sc.tr[sc.sharing[rec.delta_view]];
-    if (rec.splits == 0) return;
+    if (rec.splits == 0) return; // E, with l's in-scattering, is the first split's alone
     const Spectrum in_scattered =
         ctx.medium_vertices ? Spectrum(0.f) : mv_in_scattering(ctx, s.slot, s.ray, s.media, s.sampler, counters);
     rec.e = (le_y * s.media.walk.tr + in_scattered) * (1.f / s.n);
@@ -436,6 +435,7 @@ void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const 
     shared_bounce(ctx, s, bsdf, wi_s, ns, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
     if (b == 0) rec.e = le_y * (1.f / s.n);
     if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
+    rec.hash = s.sampler.sample_hash(); // (the splats' taps take the first split's: the sample's)
     if (b == 0) queue_shares(sc, ns, first, pending);
     pending.samples.push_back(rec);
 }
@@ -459,13 +459,10 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     const size_t ns = sharing_views(ctx, s, bsdf, sc, counters);
     const Vec3f *wi_s = sharing_directions(sc, ns);
     const Sampler stream = s.sampler;
-    s.sampler.set_dimension(DimCameraEnd);
-    const uint64_t hash = s.sampler.sample_hash(); // the splats' taps: the sample's, for every split
     const int splits = ctx.cfg.splits;
     for (int b = 0; b < splits; ++b) {
         if (b > 0) s.sampler = stream.rekeyed(SplitKey + uint64_t(b));
         share_split(ctx, s, bsdf, wi_s, ns, splits, b, valid, le_y, sc, pending, counters);
-        pending.samples.back().hash = hash;
     }
     s.sampler = stream;
     s.st.sharing += ns;

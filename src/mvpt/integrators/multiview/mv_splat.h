@@ -43,7 +43,7 @@ struct MvPendingSamples {
         bool medium = false;
         /// The splits of one shared vertex (§7) are consecutive records, each with its own entries'
         /// f_nee and f_bounce, suffix and light sample; the first holds the entries' slots, pixels,
-        /// film positions and W, E and the group's size here (0 in the others).
+        /// film positions and W, E, the splats' hash and the group's size here (0 in the others).
         uint32_t splits = 1;
         uint64_t hash = 0; ///< the native sample's Sampler::sample_hash (for the splats' taps)
         SampleKey key = NoSample; ///< the native sample, for the report of dropped contributions
