@@ -326,4 +326,5 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "warnings": _warnings(raw, results),
         "views": views,
     } | ({"estimator": raw["estimator"], "splits": raw["splits"], "multiview": dict(raw["multiview"])}
-         if raw["method"] == "mvpt" else {})
+         if raw["method"] == "mvpt" else {}) \
+      | ({"split_pilot": dict(raw["split_pilot"])} if "split_pilot" in raw else {})

@@ -171,6 +171,14 @@ public:
         if (s.method == "mvpt") {
             d["estimator"] = s.estimator;
             d["splits"] = s.splits;
+            if (s.split_pilot[3] > 0.0) {
+                nb::dict pilot;
+                pilot["a"] = s.split_pilot[0];
+                pilot["r"] = s.split_pilot[1];
+                pilot["c0"] = s.split_pilot[2];
+                pilot["c1"] = s.split_pilot[3];
+                d["split_pilot"] = pilot;
+            }
             d["multiview"] = mv_stats_dict(s.mv);
         }
         nb::list notes;

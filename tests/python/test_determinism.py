@@ -102,3 +102,33 @@ def test_multiview_threads_1_2_3(rfilter):
         for vid in r.images:
             assert r.contributions[vid].tobytes() == runs[0].contributions[vid].tobytes()
             assert r.weight_sum[vid].tobytes() == runs[0].weight_sum[vid].tobytes()
+
+
+def _auto_splits_room():
+    return mvpt.load_string(scene(views(3, res=24, spp=6), geometry=ROOM, max_depth=-1).replace(
+        '<integrator type="path">', '<integrator type="mvpath"><string name="splits" value="auto"/>'))
+
+
+def test_multiview_auto_splits_threads_1_2_3():
+    """With `splits` auto the render chooses its splits from a pilot of its own samples: the
+    same number, and the same image bits, for 1, 2 and 3 threads."""
+    s = _auto_splits_room()
+    runs = [mvpt.render(s, method="mvpt", threads=t) for t in (1, 2, 3)]
+    chosen = runs[0].stats["splits"]
+    assert 1 <= chosen <= 8
+    assert runs[0].stats["split_pilot"]["r"] > 0.0  # the pilot saw variance that splitting removes
+    for r in runs[1:]:
+        assert r.stats["splits"] == chosen
+        assert r.stats["split_pilot"] == runs[0].stats["split_pilot"]
+        _assert_identical(runs[0], r)
+
+
+def test_multiview_auto_splits_are_those_of_every_range():
+    """The pilot depends on the scene and the settings alone: ranges of passes of a render (as
+    on a cluster) choose what the whole render chooses, so their states merge into it."""
+    s = _auto_splits_room()
+    whole = mvpt.render(s, method="mvpt", passes=(0, 6), threads=2)
+    for first, count in ((0, 2), (2, 4)):
+        part = mvpt.render(s, method="mvpt", passes=(first, count), threads=1)
+        assert part.stats["splits"] == whole.stats["splits"]
+        assert part.stats["split_pilot"] == whole.stats["split_pilot"]

@@ -56,6 +56,9 @@ CASES = {
     "root_not_scene": Case('<scena version="3.0.0">\n</scena>\n', "<scena", r"root element must be <scene>"),
     "empty_file": Case("", "", r"no root element|empty"),
     # --- structure ----------------------------------------------------------------------
+    "mvpath_splits_word": Case(scene().replace('<integrator type="path">',
+                                               '<integrator type="mvpath"><string name="splits" value="many"/>'),
+                               '<string name="splits"', r"'splits' must be 'auto' or an integer in \[1, 64\], got 'many'"),
     "unknown_plugin_type": Case(scene(body='    <shape type="spheroid"/>\n'), '<shape type="spheroid"',
                                 r"unknown shape type 'spheroid'.*known:.*rectangle"),
     "unknown_element": Case(_with_shape('<colour name="x" value="1"/>'), "<colour", r"unknown element <colour>"),

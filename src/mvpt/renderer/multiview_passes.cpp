@@ -7,6 +7,7 @@
 
 #include "../integrators/multiview/mv_adaptive.h"
 #include "../integrators/multiview/mv_sample.h"
+#include "../integrators/multiview/mv_split_choice.h"
 #include "../integrators/multiview/mvpath.h"
 #include "../integrators/path/volpath.h"
 #include "../core/sampler.h"
@@ -29,6 +30,14 @@ namespace {
 constexpr uint64_t RegionOrderKey = 0x726567696f6e; // "region"
 /// The key of a thinned pass's draws of which native samples it takes.
 constexpr uint64_t ThinKey = 0x7468696e; // "thin"
+/// The key of the pilot's seeds and pixels (pilot_splits), and its size: native-sample pairs
+/// over all views (at most one per PilotShare pixels), and at least per view.
+constexpr uint64_t PilotKey = 0x70696c6f74; // "pilot"
+constexpr size_t PilotPixels = 8192, PilotShare = 8, MinPilotPixels = 16;
+constexpr int PilotTask = 32; ///< cells of one pilot task
+/// Under a time budget, the splits leave time for at least this many passes (as the pilot's
+/// pace predicts them): the warm-up of the adaptive maps and two adaptive passes.
+constexpr double MinBudgetPasses = 6.0;
 /// A pass thinned to share q lasts about (ThinOverhead + q) times a whole pass (its sampling and
 /// splatting shrink with q, the fold and the tiles' fixed costs do not; 32 views of 96^2, two
 /// threads: 0.14 at q = 0.1, 0.35 at 0.25, 0.5-0.6 at 0.5, 0.82 at 0.75). Under a time budget,
@@ -110,6 +119,17 @@ private:
     template <class Skipped> void uncount(size_t begin, const Skipped &skipped);
     /// After a whole pass: the native-sample maps of the next (§8), on their schedule.
     void update_maps();
+    /// The splits of the shared vertex (§7, "Choosing the number of splits"): a pilot of two
+    /// native samples at each of a fixed set of pixels of every view, from seeds of its own
+    /// and with one native sample per pixel everywhere, its contributions recorded, not
+    /// splatted. A function of the scene and the settings alone: every range, resume and
+    /// thread count of a render chooses the same.
+    int pilot_splits();
+    /// The pilot's native samples of view `slot` into `prim`: two at one pixel of each of cells
+    /// [begin, end) of a grid of `cells` (x, y) over the crop window (pilot_cells).
+    void pilot_samples(int slot, std::pair<int, int> cells, int begin, int end, MvPrimaries &prim) const;
+    /// The pilot's grid over view `slot`'s crop window: about `pixels` cells, at most one per pixel.
+    std::pair<int, int> pilot_cells(int slot, size_t pixels) const;
     /// The threads' caches flushed and the pass's sums (times `scale`) folded into the
     /// accumulators, in the render's arena.
     void fold_pass(double scale, double weight = 1.0);
@@ -182,6 +202,89 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
     m_region_end.push_back(m_tiles.size());
     arena.execute(
         [&] { m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted); });
+    if (m_cfg.splits == 0) m_cfg.splits = m_r.m_mv.cfg.splits = pilot_splits();
+    r.m_stats.splits = m_cfg.splits;
+}
+
+std::pair<int, int> Renderer::MultiviewPasses::pilot_cells(int slot, size_t pixels) const {
+    const Film &mf = m_r.m_films[size_t(slot)];
+    const int side = int(std::ceil(std::sqrt(double(pixels))));
+    return {std::min(side, mf.width), std::min(side, mf.height)};
+}
+
+void Renderer::MultiviewPasses::pilot_samples(int slot, std::pair<int, int> cells, int begin, int end,
+                                              MvPrimaries &prim) const {
+    const Film &mf = m_r.m_films[size_t(slot)];
+    const SampleWindow &w = m_r.m_mv.windows[size_t(slot)];
+    const auto [gx, gy] = cells;
+    const uint64_t key = hash_ints(m_r.m_mv.seeds[size_t(slot)], m_r.m_mv.views[size_t(slot)].scene_index, PilotKey);
+    for (int c = begin; c < end; ++c) {
+        const int i = c % gx, j = c / gx;
+        const int x0 = i * mf.width / gx, x1 = (i + 1) * mf.width / gx;
+        const int y0 = j * mf.height / gy, y1 = (j + 1) * mf.height / gy;
+        const uint64_t h = hash_ints(key, uint64_t(i), uint64_t(j));
+        const int x = x0 + int(uint32_t(h) % uint32_t(x1 - x0)), y = y0 + int(uint32_t(h >> 32) % uint32_t(y1 - y0));
+        for (uint32_t index = 0; index < 2; ++index) prim.push(x + w.margin + w.x0, y + w.margin + w.y0, index);
+    }
+}
+
+int Renderer::MultiviewPasses::pilot_splits() {
+    const size_t views = m_r.m_mv.views.size();
+    if (views < 2) return 1; // nothing is shared
+    MvContext pilot = m_r.m_mv;
+    pilot.cfg.splits = PilotSplits;
+    for (uint32_t &seed : pilot.seeds) seed = uint32_t(hash_ints(seed, PilotKey));
+    size_t largest = 0; // every view takes one native sample per pixel, whatever the maps say now
+    for (const SampleWindow &w : pilot.windows) largest = std::max(largest, size_t(w.width()) * size_t(w.height()));
+    const std::vector<uint16_t> ones(largest, 1);
+    pilot.native_map.assign(views, ones.data());
+    // Tasks of PilotTask cells of one view, each recording into a probe of its own.
+    struct Task {
+        int slot, begin, end;
+        std::pair<int, int> cells;
+    };
+    std::vector<Task> tasks;
+    const size_t pairs = std::min(PilotPixels, size_t(m_pixels_total) / PilotShare);
+    for (size_t slot = 0; slot < views; ++slot) {
+        const auto cells = pilot_cells(int(slot), std::max(MinPilotPixels, pairs / views));
+        for (int c = 0; c < cells.first * cells.second; c += PilotTask)
+            tasks.push_back({int(slot), c, std::min(c + PilotTask, cells.first * cells.second), cells});
+    }
+    std::vector<MvSplitProbe> probes(tasks.size());
+    std::atomic<size_t> taken{0};
+    const auto t0 = std::chrono::steady_clock::now();
+    arena().execute([&] {
+        tbb::parallel_for(size_t(0), tasks.size(), [&](size_t t) {
+            const int slot = tasks[t].slot;
+            MvThreadState &ts = m_state.local();
+            MvSplatSink sink{ts.cache, ts.dropped.data(), &ts.first_dropped}; // (nothing is splatted)
+            std::vector<MvViewStats> stats(views);
+            RayCounters counters;
+            MvPrimaries &prim = ts.primaries;
+            prim.clear();
+            pilot_samples(slot, tasks[t].cells, tasks[t].begin, tasks[t].end, prim);
+            taken += prim.size();
+            ts.pending.probe = &probes[t];
+            mv_trace_primaries(pilot, slot, prim);
+            for (size_t i = 0; i < prim.size(); ++i)
+                mv_native_sample(pilot, slot, prim, i, ts.scratch, ts.pending, sink, counters, stats.data());
+            mv_finish_samples(pilot, slot, ts.pending, sink, counters, stats.data());
+            ts.pending.probe = nullptr;
+        });
+    });
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps);
+    m_r.m_stats.split_pilot = {st.a, st.r, st.c0, st.c1};
+    int most = MaxChosenSplits;
+    if (const double budget = m_r.m_opts.time_budget; budget > 0.0 && st.c1 > 0.0) {
+        // A pass of B splits lasts about the pilot's time per unit of model cost times its own
+        // cost; budgets make renders depend on time anyway, so the choice may too.
+        double pass_samples = 0.0;
+        for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
+        const double per_unit = seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
+        while (most > 1 && MinBudgetPasses * per_unit * pass_samples * (st.c0 + most * st.c1) > budget) --most;
+    }
+    return choose_splits(st, most);
 }
 
 bool Renderer::MultiviewPasses::done(int pass) const {

@@ -11,6 +11,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -112,6 +113,8 @@ struct RenderStats {
     /// "pt" or "mvpt" (what ran), and the multi-view estimator ("balance" / "weighted").
     std::string method = "pt", estimator;
     int splits = 0; ///< multi-view: light samples and bounces per shared vertex (MvConfig::splits)
+    /// Multi-view with splits chosen per render: the pilot's a, r, c0 and c1 (SplitStatistics), else zeros.
+    std::array<double, 4> split_pilot{};
     /// Things the user should know about the run (e.g. a filter replaced by a box).
     std::vector<std::string> notes;
     /// Things that make the images useless (a scene that cannot produce light).

@@ -199,8 +199,10 @@ struct NativeSample {
 /// Radiance only the native strategy produces goes to l's own pixel with the plain weight
 /// 1/n_l; it still counts W = 1/n_l so that the weighted estimator's sum of W covers the whole
 /// pixel.
-void splat_native_only(NativeSample &s, MvSplatSink &sink, const RayCounters &counters, const Spectrum &L) {
-    if (!sink.native(s.slot, s.pixel, s.film, s.sampler.sample_hash(), Spectrum(0.f), 1.f / s.n, L * (1.f / s.n)))
+void splat_native_only(NativeSample &s, MvSplatSink &sink, MvSplitProbe *probe, const RayCounters &counters,
+                       const Spectrum &L) {
+    if (probe) mv_probe_native(*probe, s.key, L * (1.f / s.n));
+    else if (!sink.native(s.slot, s.pixel, s.film, s.sampler.sample_hash(), Spectrum(0.f), 1.f / s.n, L * (1.f / s.n)))
         sink.lost(s.key);
     ++s.st.sharing;
     s.st.rays += counters.rays + counters.shadow_rays - s.rays_before;
@@ -219,18 +221,20 @@ bool trace_unshared(const MvContext &ctx, NativeSample &s, bool hit, MvScratch &
     const bool unshared = !hit || !s.si.shape->bsdf->has_smooth() || max_depth <= 1 || ctx.views.size() < 2;
     if (ctx.volpath && unshared) {
         if (!ctx.medium_vertices) {
-            splat_native_only(s, sink, counters, ctx.volpath->li_in(scene, s.ray, cam.medium.get(), s.sampler, counters));
+            splat_native_only(s, sink, pending.probe, counters,
+                              ctx.volpath->li_in(scene, s.ray, cam.medium.get(), s.sampler, counters));
             return true;
         }
         // The in-scattering along the segment is the medium vertex's; the rest is l's alone.
         splat_native_only(
-            s, sink, counters,
+            s, sink, pending.probe, counters,
             ctx.volpath->li_in(scene, s.ray, cam.medium.get(), s.sampler, counters, VolPathPart::ReachesSurface));
         mv_medium_vertex(ctx, s.slot, s.media.near, s.xi, s.pixel, s.film, s.key, s.sampler, sc, pending, counters, s.st);
         return true;
     }
     if (!hit) {
-        splat_native_only(s, sink, counters, env && !pc.hide_emitters ? env->eval_environment(s.ray.d) : Spectrum(0.f));
+        const Spectrum le = env && !pc.hide_emitters ? env->eval_environment(s.ray.d) : Spectrum(0.f);
+        splat_native_only(s, sink, pending.probe, counters, le);
         return true;
     }
     if (!unshared) return false;
@@ -240,7 +244,7 @@ bool trace_unshared(const MvContext &ctx, NativeSample &s, bool hit, MvScratch &
     state.valid = !pc.hide_emitters && env != nullptr;
     Spectrum L = ctx.path->trace(scene, s.ray, state, s.sampler, counters, &s.si);
     if (ctx.views.size() >= 2 && max_depth > 1) s.st.rejected[int(ShiftTest::Bsdf)] += ctx.views.size() - 1;
-    splat_native_only(s, sink, counters, L);
+    splat_native_only(s, sink, pending.probe, counters, L);
     return true;
 }
 

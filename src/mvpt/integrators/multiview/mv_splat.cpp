@@ -1,6 +1,7 @@
 // The end of a tile's native samples (§7): their suffixes traced as one wavefront, their
 // shared NEE's shadow rays as packets, and each sharing view's contribution W·L splatted.
 #include "mv_splat.h"
+#include "mv_split_choice.h"
 #include "../path/path.h"
 #include "../path/volpath.h"
 
@@ -105,9 +106,17 @@ MvSplatTerms split_terms(const MvPendingSamples &pending, const MvPendingSamples
             !suffix.is_black(), rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
 }
 
+double luminance(const Spectrum &s) { return (double(s[0]) + double(s[1]) + double(s[2])) / 3.0; }
+
 /// A medium vertex's contributions: native-only radiance of each view (W = 0).
 void splat_medium_vertex(const MvPendingSamples &pending, const MvPendingSamples::Sample &rec, MvSplatSink &sink) {
     const MvSplatTerms t = split_terms(pending, rec);
+    if (pending.probe) { // the native view's entry (the first)
+        const uint32_t i = rec.first;
+        const Spectrum lw = mv_entry_value(t, pending.f_nee[i], pending.f_bounce[i], pending.w[i]);
+        mv_probe_native(*pending.probe, rec.key, lw);
+        return;
+    }
     size_t lost = 0;
     for (uint32_t i = rec.first; i < rec.first + rec.count; ++i)
         lost += !sink.native(pending.slot[i], pending.pixel[i], pending.film[i], rec.hash, Spectrum(0.f), 0.f,
@@ -115,9 +124,30 @@ void splat_medium_vertex(const MvPendingSamples &pending, const MvPendingSamples
     if (lost) sink.lost(rec.key);
 }
 
+/// The pilot's record of the group of splits starting at `group`: E and each split's W L of the
+/// native view's entry (the first).
+void probe_shared_vertex(const MvPendingSamples &pending, const MvPendingSamples::Sample *group) {
+    MvPilotSample x;
+    x.key = group[0].key;
+    x.e = luminance(group[0].e);
+    x.sharing = group[0].count;
+    const uint32_t i = group[0].first;
+    for (uint32_t b = 0; b < std::min(group[0].splits, uint32_t(PilotSplits)); ++b) {
+        const MvPendingSamples::Sample &rec = group[b];
+        MvSplatTerms t = split_terms(pending, rec);
+        const bool delta = t.bounce && rec.delta_view >= 0;
+        t.bounce = t.bounce && !delta;
+        Spectrum lw = mv_entry_value(t, pending.f_nee[rec.first], pending.f_bounce[rec.first], pending.w[i]);
+        if (delta && t.valid && rec.delta_view == 0) lw += rec.delta_bounce * t.suffix * pending.w[i];
+        x.split[b] = luminance(lw);
+    }
+    pending.probe->samples.push_back(x);
+}
+
 /// The group of splits starting at `group` (§7): each entry's L summed over them, then W times
 /// their mean, and W, splatted; the native view's entry (i = 0) with E.
 void splat_shared_vertex(MvPendingSamples &pending, const MvPendingSamples::Sample *group, MvSplatSink &sink) {
+    if (pending.probe) return probe_shared_vertex(pending, group);
     const uint32_t first = group[0].first, n = group[0].count;
     if (pending.radiance_sum.size() < n) pending.radiance_sum.resize(n);
     MvEntryRadiance *sum = pending.radiance_sum.data();
@@ -143,6 +173,13 @@ void splat_shared_vertex(MvPendingSamples &pending, const MvPendingSamples::Samp
 }
 
 } // namespace
+
+void mv_probe_native(MvSplitProbe &probe, const SampleKey &key, const Spectrum &e) {
+    MvPilotSample x;
+    x.key = key;
+    x.e = luminance(e);
+    probe.samples.push_back(x);
+}
 
 void mv_finish_samples(const MvContext &ctx, int slot, MvPendingSamples &pending, MvSplatSink &sink,
                        RayCounters &counters, MvViewStats *stats) {

@@ -13,6 +13,7 @@
 namespace mvpt {
 
 class Medium;
+struct MvSplitProbe;
 
 /// An entry's radiance L summed over the splits, in the first three of four floats (the fourth
 /// is zero), as one vector.
@@ -74,6 +75,9 @@ struct MvPendingSamples {
     /// The shared NEE's shadow rays, traced as packets with the suffixes; results.
     std::vector<Ray> shadow_rays;
     std::vector<uint8_t> shadow_blocked;
+    /// The pilot of the splits' choice (mv_split_choice.h): when set, each sample's
+    /// contribution to its own pixel is recorded here instead of splatted.
+    MvSplitProbe *probe = nullptr;
     void clear();
 };
 
@@ -100,6 +104,9 @@ void mv_sum_entries(const MvSplatTerms &t, const Spectrum *f_nee, const Spectrum
 size_t mv_splat_entries(SplatCache &cache, const MvEntryRadiance *sum, const float *w, float l_scale, const int *slots,
                         const uint32_t *pixels, const Vec2f *films, uint64_t sample, size_t begin, size_t end,
                         uint64_t *dropped);
+
+/// Records radiance `e` that no split changes of native sample `key` into `probe`.
+void mv_probe_native(MvSplitProbe &probe, const SampleKey &key, const Spectrum &e);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
 /// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).

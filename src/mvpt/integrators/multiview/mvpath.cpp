@@ -13,7 +13,8 @@
 //     <float name="adaptive_budget" value="1.25"/>           mean native samples per pixel and pass
 //     <float name="adaptive_eps" value="0.01"/>              eps of the relative error the maps even out
 //     <integer name="rig_cells" value="128"/>                 cells proven to see the rig unblocked (0: off)
-//     <integer name="splits" value="2"/>                      light samples and bounces per shared vertex (§7)
+//     <integer name="splits" value="2"/>                      light samples and bounces per shared vertex (§7),
+//                                                             1-64, or <string ... value="auto"/>: chosen per render
 //   </integrator>
 #include "mvpath.h"
 
@@ -51,7 +52,13 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     if (!(cfg.adaptive_eps >= 0.f && cfg.adaptive_eps < INFINITY))
         props.fail("adaptive_eps", "'adaptive_eps' must be a finite number >= 0");
     cfg.rig_cells = int(props.get_int_in("rig_cells", 128, 0, 1024));
-    cfg.splits = int(props.get_int_in("splits", cfg.splits, 1, 64));
+    if (props.is_string("splits")) {
+        const std::string word = props.get_string("splits");
+        if (word != "auto") props.fail("splits", "'splits' must be 'auto' or an integer in [1, 64], got '" + word + "'");
+        cfg.splits = 0; // chosen per render
+    } else {
+        cfg.splits = int(props.get_int_in("splits", cfg.splits, 1, 64));
+    }
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
 }
 

@@ -1,0 +1,95 @@
+// The splits of the shared vertex chosen from a pilot (§7, "Choosing the number of splits").
+#include "mv_split_choice.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+namespace mvpt {
+
+namespace {
+
+/// The model cost of a native sample, in path-traced samples (docs/performance.md, "Choosing
+/// the number of splits"): c0 = 1 + KappaShift (|S| - 1) for the camera ray, the shifts, the
+/// visibility, the sums D and the splats of a shared vertex, and c1 = SplitPath + KappaLobe |S|
+/// per split for its light sample, bounce and suffix and the lobes of every sharing view. A
+/// sample that no view shares costs one path: 1 + 0 B.
+constexpr double KappaShift = 0.04, SplitPath = 1.3, KappaLobe = 0.005;
+/// choose_splits takes the fewest splits whose variance times cost is within this of the least.
+constexpr double SplitTolerance = 1.05;
+
+/// The samples of one view ordered by pixel, then sample index, each native sample's records
+/// summed into one.
+std::vector<MvPilotSample> merged(std::vector<MvPilotSample> s) {
+    auto order = [](const MvPilotSample &a) { return std::make_tuple(a.key[2], a.key[3], a.key[0]); };
+    std::sort(s.begin(), s.end(), [&](const auto &a, const auto &b) { return order(a) < order(b); });
+    std::vector<MvPilotSample> out;
+    for (const MvPilotSample &r : s) {
+        if (out.empty() || out.back().key != r.key) {
+            out.push_back(r);
+            continue;
+        }
+        MvPilotSample &m = out.back();
+        m.e += r.e;
+        for (int b = 0; b < PilotSplits; ++b) m.split[b] += r.split[b];
+        m.sharing = std::max(m.sharing, r.sharing);
+    }
+    return out;
+}
+
+/// A sample's estimate at its pixel, E + the mean of its splits, and one split's variance
+/// (unbiased, over the splits).
+std::pair<double, double> estimate(const MvPilotSample &s) {
+    double mean = 0.0, var = 0.0;
+    for (double v : s.split) mean += v;
+    mean /= PilotSplits;
+    for (double v : s.split) var += (v - mean) * (v - mean);
+    return {s.e + mean, var / (PilotSplits - 1)};
+}
+
+} // namespace
+
+SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps) {
+    SplitStatistics st;
+    uint64_t samples = 0;
+    for (const MvSplitProbe &probe : probes) {
+        const std::vector<MvPilotSample> s = merged(probe.samples);
+        for (const MvPilotSample &x : s) {
+            const double ns = x.sharing;
+            st.c0 += x.sharing ? 1.0 + KappaShift * (ns - 1.0) : 1.0;
+            st.c1 += x.sharing ? SplitPath + KappaLobe * ns : 0.0;
+            ++samples;
+        }
+        // Pairs of samples of one pixel: (X1 - X2)^2 / 2 estimates the variance of one, a + r / PilotSplits.
+        for (size_t i = 0; i + 1 < s.size(); ++i) {
+            if (s[i].key[2] != s[i + 1].key[2] || s[i].key[3] != s[i + 1].key[3]) continue;
+            const auto [x1, r1] = estimate(s[i]);
+            const auto [x2, r2] = estimate(s[i + 1]);
+            const double m = 0.5 * (x1 + x2), weight = 1.0 / (m * m + eps);
+            const double total = 0.5 * (x1 - x2) * (x1 - x2), r = 0.5 * (r1 + r2);
+            st.a += weight * (total - r / PilotSplits);
+            st.r += weight * r;
+            ++st.pixels, ++i;
+        }
+    }
+    if (samples) st.c0 /= double(samples), st.c1 /= double(samples);
+    return st;
+}
+
+int choose_splits(const SplitStatistics &s, int most) {
+    if (!(s.r > 0.0) || !(s.c1 > 0.0) || !std::isfinite(s.a + s.r)) return 1;
+    // a may come out below zero (the pairs' spread is itself noisy): splitting then removes
+    // nearly all the variance, and the cost alone bounds B.
+    const double a = std::max(s.a, 0.0);
+    auto cost = [&](int b) { return (a + s.r / b) * (s.c0 + b * s.c1); };
+    const int last = std::clamp(most, 1, MaxChosenSplits);
+    double best = INFINITY;
+    for (int b = 1; b <= last; ++b) best = std::min(best, cost(b));
+    // The product is flat near its least and the pilot's a is noisy: the fewest splits within
+    // SplitTolerance of the least (shorter passes, the same efficiency within the model's error).
+    for (int b = 1; b <= last; ++b)
+        if (cost(b) <= SplitTolerance * best) return b;
+    return last;
+}
+
+} // namespace mvpt

@@ -1,0 +1,54 @@
+// The number of splits of the shared vertex chosen per render (docs/multiview-path-tracing.md
+// §7, "Choosing the number of splits"): a pilot of native samples, two per pixel at a fixed set
+// of pixels, each with PilotSplits splits, gives the variance of a pixel's estimate that splitting
+// removes and the part it leaves, and the model of a native sample's cost in the views that share
+// it; the splits B minimise their product.
+#pragma once
+
+#include "../../render/splat_film.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace mvpt {
+
+/// Splits of each pilot sample's shared vertex.
+inline constexpr int PilotSplits = 8;
+/// The most splits a render chooses: beyond, the variance times cost changes by a few per cent
+/// on the scenes measured (docs/performance.md) while passes grow longer.
+inline constexpr int MaxChosenSplits = 8;
+
+/// What one native sample of the pilot brought to its own pixel (luminance, the mean of RGB):
+/// the part no split changes (native-only radiance E, medium vertices) and, per split b, the
+/// shared part W L_b (zero for a sample whose first vertex is not shared).
+struct MvPilotSample {
+    SampleKey key = NoSample;
+    double e = 0.0;
+    double split[PilotSplits] = {};
+    uint32_t sharing = 0; ///< |S|, the views sharing its first vertex (0: not shared)
+};
+
+/// The pilot's records of one view, in any order, several per native sample allowed
+/// (mv_finish_samples and the unshared paths add to it instead of splatting).
+struct MvSplitProbe {
+    std::vector<MvPilotSample> samples;
+};
+
+/// What the choice is made from, summed over the pilot's pixels, each weighted by 1 / (m^2 +
+/// eps) (m: the pixel's pilot mean): the variance of one native sample's estimate at its pixel,
+/// a + r / B, split into a (from where the sample lands and what it finds there) and r (what
+/// y receives: one split's variance); and the mean model costs of a native sample, c0 + B c1.
+struct SplitStatistics {
+    double a = 0.0, r = 0.0;
+    double c0 = 0.0, c1 = 0.0;
+    uint64_t pixels = 0;
+};
+
+/// The pilot's statistics from the records of every view (pairs of samples at each pixel).
+SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps);
+
+/// The fewest splits in [1, min(most, MaxChosenSplits)] whose (a + r / B) (c0 + B c1), the
+/// variance of a pixel at equal time, is within 5 % of the least there; 1 without statistics.
+int choose_splits(const SplitStatistics &s, int most = MaxChosenSplits);
+
+} // namespace mvpt
