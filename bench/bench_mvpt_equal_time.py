@@ -103,6 +103,8 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--ref-spp", type=int, default=4096)
     ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--splits", type=lambda t: t if t == "auto" else int(t), default=None,
+                    help="mvpt's splits of the shared vertex: 1-64 or auto (default: the scene's)")
     ap.add_argument("--cache", type=Path, default=ROOT / "out" / "bench-cache")
     ap.add_argument("--quick", action="store_true", help="res 32, 2 s, 2 rounds, 512-spp reference")
     args = ap.parse_args(argv)
@@ -129,7 +131,9 @@ def main(argv=None) -> int:
         for rnd in range(args.rounds):
             order = ("pt", "mvpt") if rnd % 2 == 0 else ("mvpt", "pt")
             for method in order:
-                r = mvpt.render(scene, time=args.time, seed=1000 + rnd, threads=args.threads, method=method)
+                splits = args.splits if method == "mvpt" else None
+                r = mvpt.render(scene, time=args.time, seed=1000 + rnd, threads=args.threads, method=method,
+                                splits=splits)
                 per_view = {v: metrics.relmse(r.images[v], ref[v]) for v in views}
                 per_view["overall"] = pooled_relmse(r.images, ref)
                 err[method].append(per_view)
@@ -154,7 +158,8 @@ def main(argv=None) -> int:
         mv_rate = statistics.median(s["samples_per_second"] for s in stats["mvpt"])
         print(f"\nreference noise adds {ref_all:.2e} to every relMSE ({100 * ref_all / med['mvpt']['overall']:.0f}% of "
               f"mvpt's); pt {pt_rate / 1e6:.3f} M samples/s, mvpt {mv_rate / 1e6:.3f} M native samples/s "
-              f"(cost ratio {pt_rate / mv_rate:.2f}); mvpt mean |S| {mv['mean_sharing']:.2f}, "
+              f"(cost ratio {pt_rate / mv_rate:.2f}); mvpt splits {[s['splits'] for s in stats['mvpt']]}, "
+              f"mean |S| {mv['mean_sharing']:.2f}, "
               f"{mv['rays_per_native_sample']:.1f} rays per native sample, rejected shifts "
               f"{ {k: round(100 * n / max(1, mv['shifts_tried']), 1) for k, n in mv['rejected'].items()} } %")
         own = med["mvpt"]["overall"] - ref_all

@@ -119,7 +119,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
            progress: Optional[Callable[[dict], None]] = None, poll: float = 0.1,
            method: str = "scene", state: Optional[str | os.PathLike] = None, checkpoint: float = 0.0,
            resume: Optional[str | os.PathLike] = None, state_at_end: bool = True,
-           state_extra: Optional[dict] = None, passes: Optional[Sequence[int]] = None) -> RenderResult:
+           state_extra: Optional[dict] = None, passes: Optional[Sequence[int]] = None,
+           splits: Optional[int | str] = None) -> RenderResult:
     """Render all views (or `views`: ids or indices) of `scene`.
 
     method: "pt" (independent path tracing of every view), "mvpt" (multi-view path tracing,
@@ -156,7 +157,11 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     passes: (first, count) renders one range of a render split over processes or machines
     (docs/distributed.md): `count` passes of every view, taking the samples of passes
     first .. first + count - 1 (spp is ignored); the states of ranges that do not overlap
-    (or of other seeds) combine with `merge`."""
+    (or of other seeds) combine with `merge`.
+
+    splits: with "mvpt", the splits of the shared vertex instead of the scene's `mvpath`
+    setting: 1 to 64, or "auto" (chosen per render; stats["splits"] says which)."""
+    splits_option = _splits_option(splits)
     if not 0 <= int(spp) < 2**31:
         raise ValueError(f"spp must lie in [0, 2^31), got {spp}")
     if not float(time) >= 0.0:
@@ -184,7 +189,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     if state is not None or resume is not None:
         ids = [v["id"] for v in scene.views]
         settings = dict(method=method, spp=0 if passes else int(spp), time=float(time),
-                        seed=None if seed is None else int(seed), views=[ids[i] for i in index] or ids, passes=passes)
+                        seed=None if seed is None else int(seed), views=[ids[i] for i in index] or ids, passes=passes,
+                        splits=splits)
         header = state_file.make_header(scene, settings, state_extra)
     if resume is not None:
         state_file.check_resumable(resume, header)
@@ -194,7 +200,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
                           state_header=json.dumps(header) if state is not None else "",
                           checkpoint_interval=float(checkpoint), state_at_end=bool(state_at_end),
                           resume_path=os.fspath(resume) if resume is not None else "",
-                          first_pass=passes[0] if passes else 0, pass_count=passes[1] if passes else 0)
+                          first_pass=passes[0] if passes else 0, pass_count=passes[1] if passes else 0,
+                          splits=splits_option)
     job.start()
     interrupted = None
     try:
@@ -212,12 +219,23 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
             while not job.wait(poll):
                 pass
     result = _result(scene, job, index, dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads),
-                                             method=method, passes=passes))
+                                             method=method, passes=passes, splits=splits))
     if interrupted is not None:
         result.stats["cancelled"] = True
         if not isinstance(interrupted, KeyboardInterrupt):
             raise interrupted
     return result
+
+
+def _splits_option(splits) -> int:
+    """render(splits=...) for the renderer: -1 (the scene's), 0 (auto) or 1 to 64."""
+    if splits is None:
+        return -1
+    if splits == "auto":
+        return 0
+    if isinstance(splits, bool) or not isinstance(splits, int) or not 1 <= splits <= 64:
+        raise ValueError(f"splits must be 'auto' or an integer in [1, 64], got {splits!r}")
+    return splits
 
 
 def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int = 0,

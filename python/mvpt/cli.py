@@ -22,6 +22,7 @@ from ._core import SceneError
 from . import displays, reports_cli, state_cli
 from .cli_common import EXIT_ERROR, EXIT_OK, EXIT_USAGE, write_all
 from .cli_common import count as _count, define as _define, error as _error, seconds as _seconds, seed as _seed
+from .cli_common import splits as _splits
 from .summary import print_summary
 
 class _Parser(argparse.ArgumentParser):
@@ -132,7 +133,7 @@ def _render(scene_path: Path, args, stem: str) -> int:
                             views=views, progress=bar, method=args.method, state=state,
                             checkpoint=args.checkpoint, resume=resume, state_at_end=keep_state,
                             state_extra={"command": state_cli.command_record(scene_path, args, stem)},
-                            passes=args.passes)
+                            passes=args.passes, splits=args.splits)
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
         return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
@@ -170,7 +171,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
                                     views=views, rig=args.rig, defines=dict(args.define or []),
                                     address=None if args.ray == "local" else args.ray, workers=args.workers,
                                     task_cpus=args.threads, progress=bar, shared=args.shared_scene,
-                                    wheel=args.wheel)
+                                    wheel=args.wheel, splits=args.splits)
     except KeyboardInterrupt:
         bar.finish(done=False)
         print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
@@ -209,6 +210,9 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=("pt", "mvpt"), default="scene",
                    help="pt: independent path tracing of every view; mvpt: multi-view path tracing "
                         "(default: the scene's integrator, 'mvpath' meaning mvpt)")
+    p.add_argument("--splits", type=_splits, default=None, metavar="N|auto",
+                   help="mvpt: light samples and bounces per shared first vertex, 1 to 64, or auto (chosen "
+                        "per render); default: the scene's mvpath setting, else 2")
     p.add_argument("--rig", default=None, metavar="SPEC",
                    help="replace the sensors by a rig around the first one: stereo:ipd=0.064, "
                         "linear:n=45,baseline=0.5, grid:9x9,spacing=0.05[,focus_distance=D], "

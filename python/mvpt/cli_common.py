@@ -68,6 +68,19 @@ def seed(text: str) -> int:
     return v
 
 
+def splits(text: str) -> int | str:
+    """--splits: 'auto' or an integer in [1, 64]."""
+    if text == "auto":
+        return text
+    try:
+        v = int(text)
+    except ValueError:
+        v = 0
+    if not 1 <= v <= 64:
+        raise argparse.ArgumentTypeError(f"expected 'auto' or an integer in [1, 64], got '{text}'")
+    return v
+
+
 def define(text: str) -> tuple:
     name, eq, value = text.partition("=")
     if not eq or not name.strip():

@@ -67,7 +67,8 @@ def render_range(pack, scene_file: str, rig: str, defines: dict, shared: bool, s
     with tempfile.TemporaryDirectory(prefix="mvpt-range-") as tmp:
         path = Path(tmp) / "range.mvpt-state"
         r = api.render(scene, seed=settings["seed"], method=settings["method"], views=settings["views"],
-                       threads=threads, time=time_budget, passes=(first, count), state=path)
+                       threads=threads, time=time_budget, passes=(first, count), state=path,
+                       splits=settings.get("splits"))
         return first, count, path.read_bytes(), r.stats["seconds"], os.path.dirname(api.__file__)
 
 
@@ -89,7 +90,7 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
            defines: Optional[dict] = None, address: Optional[str] = None, workers: int = 0,
            task_cpus: int = 0, tasks_per_worker: int = 4, shared: bool = False, max_retries: int = 3,
            progress: Optional[Callable[[dict], None]] = None, keep_state: Optional[str | os.PathLike] = None,
-           wheel: Optional[str | os.PathLike] = None) -> api.RenderResult:
+           wheel: Optional[str | os.PathLike] = None, splits: Optional[int | str] = None) -> api.RenderResult:
     """Render `scene_path` on a Ray cluster: `spp` passes (0: the sensors' largest sample_count)
     in `workers` * `tasks_per_worker` ranges, `workers` at a time, each task with `task_cpus`
     cores (0: the cluster's CPUs divided among the workers). address: a running cluster
@@ -100,7 +101,7 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
     py_modules), for clusters whose nodes lack mvpt. time: a wall-clock budget for the whole render
     (ranges started before it ends stop at it). The result is that of api.merge of the ranges'
     states, in their order; stats["distributed"] has the tasks, their seconds and the bytes that
-    crossed the network."""
+    crossed the network. splits: as api.render's (every range chooses the same under "auto")."""
     ray = _ray()
     defines = {str(k): str(v) for k, v in (defines or {}).items()}
     scene = api.load_file(scene_path, rig=rig, **defines)
@@ -125,7 +126,7 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
         pack, scene_file = (None, str(Path(scene_path).resolve())) if shared else pack_scene(scene)
         pack_ref = ray.put(pack)
         task = ray.remote(num_cpus=cpus, max_retries=int(max_retries), retry_exceptions=False)(render_range)
-        settings = dict(seed=seed, method=method, views=view_ids)
+        settings = dict(seed=seed, method=method, views=view_ids, splits=splits)
         ranges = plan_ranges(total, workers * max(1, int(tasks_per_worker)))
         return _run(ray, task, pack_ref, len(pack or b""), scene, scene_file, rig or "", defines, shared,
                     settings, ranges, workers, cpus, float(time), progress, keep_state)

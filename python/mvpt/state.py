@@ -18,7 +18,7 @@ SUFFIX = ".mvpt-state"
 StateError = _core.StateError
 
 # Settings that determine the image (threads do not: images are identical for any count).
-IMAGE_SETTINGS = ("method", "spp", "time", "seed", "views", "passes")
+IMAGE_SETTINGS = ("method", "spp", "time", "seed", "views", "passes", "splits")
 # What ranges of one render may differ in (each takes other samples); the rest must be equal.
 RANGE_SETTINGS = ("seed", "passes", "spp", "time")
 
@@ -53,7 +53,7 @@ def make_header(scene, settings: dict, extra: dict | None = None, identity: dict
     the command line's outputs, which a resume reuses but which do not change the image)."""
     first, count = settings["passes"] or (0, None)
     return {"mvpt": __version__, "scene": identity or scene_identity(scene),
-            "settings": {k: settings[k] for k in IMAGE_SETTINGS}, "extra": extra or {},
+            "settings": {k: settings.get(k) for k in IMAGE_SETTINGS}, "extra": extra or {},
             "parts": [[settings["seed"], first, count]]}
 
 

@@ -13,7 +13,7 @@ from .cli_common import error as _error
 from .summary import print_summary
 
 # The options that make a render's image: `--resume` takes them from the state file.
-IMAGE_OPTIONS = ("define", "spp", "time", "seed", "method", "rig", "views", "passes")
+IMAGE_OPTIONS = ("define", "spp", "time", "seed", "method", "rig", "views", "passes", "splits")
 # What a resume or a merge reuses of the first run's command line (outputs included).
 RECORDED_OPTIONS = IMAGE_OPTIONS + ("aovs", "multiview_exr", "stereo", "quilt", "contact_sheet", "gif", "mp4",
                                     "fps", "exposure")

@@ -183,7 +183,7 @@ def test_stats_content(small):
     r = mvpt.render(small, spp=2, seed=3, threads=2)
     s = r.stats
     assert s["settings"] == {"spp": 2, "time": 0.0, "seed": 3, "threads": 2, "views": ["v0", "v1"], "passes": None,
-                             "integrator": "path", "method": "scene"}
+                             "integrator": "path", "method": "scene", "splits": None}
     assert s["method"] == "pt" and s["notes"] == []
     assert s["passes"] == 2 and s["samples"] == 2 * 16 * 16 * 2
     assert s["wall_time"] > 0 and s["samples_per_second"] == pytest.approx(s["samples"] / s["wall_time"])
@@ -293,3 +293,17 @@ def test_ray_embree_cannot_trace_is_a_miss():
     proc = subprocess.run([sys.executable, "-c", code, os.path.dirname(__file__)], capture_output=True, text=True,
                           timeout=60, env=env)
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-2000:]
+
+
+def test_render_splits_option():
+    """render(splits=...) overrides the scene's `mvpath` setting: a number as given, "auto" chosen
+    per render (with the pilot's statistics), anything else refused before rendering."""
+    s = mvpt.load_string(scene(views(3, res=16, spp=2)))
+    assert mvpt.render(s, method="mvpt", splits=3).stats["splits"] == 3
+    auto = mvpt.render(s, method="mvpt", splits="auto").stats
+    assert 1 <= auto["splits"] <= 8 and auto["split_pilot"]["r"] > 0.0
+    assert auto["settings"]["splits"] == "auto"
+    assert "split_pilot" not in mvpt.render(s, method="mvpt").stats  # the scene's (default) 2
+    for bad in (0, 65, "many", 2.5, True):
+        with pytest.raises(ValueError, match="splits must be 'auto' or an integer"):
+            mvpt.render(s, method="mvpt", splits=bad)

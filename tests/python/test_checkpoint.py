@@ -89,7 +89,7 @@ def test_resume_refuses_other_settings(tmp_path, monkeypatch):
     mvpt.render(scene, spp=4, seed=1, method="mvpt", state=state)
     mvpt.render(scene, spp=4, seed=1, method="mvpt", resume=state)  # the same: accepted
     for change, word in ((dict(spp=8), "spp"), (dict(seed=2), "seed"), (dict(method="pt"), "method"),
-                         (dict(views=[0]), "views"), (dict(time=1.0), "time")):
+                         (dict(views=[0]), "views"), (dict(time=1.0), "time"), (dict(splits="auto"), "splits")):
         kw = dict(spp=4, seed=1, method="mvpt") | change
         with pytest.raises(mvpt.StateError, match=f"cannot resume from .*{word}: "):
             mvpt.render(scene, **kw, resume=state)

@@ -269,6 +269,8 @@ def test_views_by_id_and_index(tmp_path):
     (["--passes", "0:0"], "FIRST:COUNT"),
     (["--passes", f"{2**31 - 1}:2"], "FIRST:COUNT"),
     (["--seed", "-1"], "--seed"),
+    (["--splits", "0"], "--splits"),
+    (["--splits", "many"], "--splits"),
     (["-D", "novalue"], "NAME=VALUE"),
     (["--frobnicate"], "unrecognized arguments"),
 ])

@@ -527,6 +527,7 @@ bool Renderer::adaptive_maps(const MvConfig &cfg) const {
 std::vector<SplatFootprint> Renderer::prepare_multiview_render(MvConfig &cfg) {
     const MultiviewSettings settings = multiview_settings(m_scene);
     cfg = settings.cfg;
+    if (m_opts.splits >= 0) cfg.splits = m_opts.splits;
     m_stats.method = "mvpt";
     m_stats.estimator = cfg.estimator == MvEstimator::Balance ? (cfg.mis_selected_only ? "balance-selected" : "balance")
                                                               : (cfg.mis_selected_only ? "weighted-selected" : "weighted");

@@ -30,6 +30,7 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     if (m_opts.first_pass < 0 || m_opts.pass_count < 0 || m_opts.first_pass > INT32_MAX - m_opts.pass_count)
         throw std::invalid_argument("the pass range must lie in [0, 2^31)");
     if (!(m_opts.time_budget >= 0.0)) throw std::invalid_argument("time budget must be >= 0");
+    if (m_opts.splits < -1 || m_opts.splits > 64) throw std::invalid_argument("splits must be auto or 1 to 64");
     if (scene.lights().empty()) m_stats.warnings.push_back("the scene has no emitter: every image is black");
     m_multiview = m_opts.method == RenderMethod::MultiView ||
                   (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));

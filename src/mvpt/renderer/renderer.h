@@ -61,6 +61,9 @@ struct RenderOptions {
     /// thinned to this share, as a time budget thins a last pass (docs/multiview-path-tracing.md,
     /// "A last pass thinned to the budget").
     double thin_last_pass = 1.0;
+    /// Multi-view: the splits of the shared vertex instead of the scene's `mvpath` setting (-1:
+    /// the scene's; 0: chosen per render; 1-64).
+    int splits = -1;
 };
 
 /// Result of one view: crop-window-sized images, row-major, y down.
