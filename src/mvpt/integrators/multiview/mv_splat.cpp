@@ -106,6 +106,15 @@ MvSplatTerms split_terms(const MvPendingSamples &pending, const MvPendingSamples
             !suffix.is_black(), rec.suffix >= 0 ? pending.valid[rec.suffix] != 0 : rec.valid};
 }
 
+/// The terms of one split of a shared vertex: a delta lobe's bounce serves its view only, so it
+/// is left out of t.bounce and *delta says so.
+MvSplatTerms shared_split_terms(const MvPendingSamples &pending, const MvPendingSamples::Sample &rec, bool *delta) {
+    MvSplatTerms t = split_terms(pending, rec);
+    *delta = t.bounce && rec.delta_view >= 0;
+    t.bounce = t.bounce && !*delta;
+    return t;
+}
+
 double luminance(const Spectrum &s) { return (double(s[0]) + double(s[1]) + double(s[2])) / 3.0; }
 
 /// A medium vertex's contributions: native-only radiance of each view (W = 0).
@@ -134,9 +143,8 @@ void probe_shared_vertex(const MvPendingSamples &pending, const MvPendingSamples
     const uint32_t i = group[0].first;
     for (uint32_t b = 0; b < std::min(group[0].splits, uint32_t(PilotSplits)); ++b) {
         const MvPendingSamples::Sample &rec = group[b];
-        MvSplatTerms t = split_terms(pending, rec);
-        const bool delta = t.bounce && rec.delta_view >= 0;
-        t.bounce = t.bounce && !delta;
+        bool delta;
+        const MvSplatTerms t = shared_split_terms(pending, rec, &delta);
         Spectrum lw = mv_entry_value(t, pending.f_nee[rec.first], pending.f_bounce[rec.first], pending.w[i]);
         if (delta && t.valid && rec.delta_view == 0) lw += rec.delta_bounce * t.suffix * pending.w[i];
         x.split[b] = luminance(lw);
@@ -154,9 +162,8 @@ void splat_shared_vertex(MvPendingSamples &pending, const MvPendingSamples::Samp
     std::fill_n(sum, n, MvEntryRadiance{});
     for (uint32_t b = 0; b < group[0].splits; ++b) {
         const MvPendingSamples::Sample &rec = group[b];
-        MvSplatTerms t = split_terms(pending, rec);
-        const bool delta = t.bounce && rec.delta_view >= 0; // a delta lobe's direction serves its view only
-        t.bounce = t.bounce && !delta;
+        bool delta;
+        const MvSplatTerms t = shared_split_terms(pending, rec, &delta);
         mv_sum_entries(t, pending.f_nee.data() + rec.first, pending.f_bounce.data() + rec.first, n, sum);
         if (delta && t.valid)
             for (int c = 0; c < 3; ++c) sum[rec.delta_view].v[c] += rec.delta_bounce[c] * t.suffix[c];

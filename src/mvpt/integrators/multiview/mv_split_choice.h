@@ -2,7 +2,7 @@
 // §7, "Choosing the number of splits"): a pilot of native samples, two per pixel at a fixed set
 // of pixels, each with PilotSplits splits, gives the variance of a pixel's estimate that splitting
 // removes and the part it leaves, and the model of a native sample's cost in the views that share
-// it; the splits B minimise their product.
+// it; B is the fewest splits whose variance times cost is near the least.
 #pragma once
 
 #include "../../render/splat_film.h"
@@ -28,8 +28,8 @@ struct MvPilotSample {
     uint32_t sharing = 0; ///< |S|, the views sharing its first vertex (0: not shared)
 };
 
-/// The pilot's records of one view, in any order, several per native sample allowed
-/// (mv_finish_samples and the unshared paths add to it instead of splatting).
+/// Pilot records, in any order, several per native sample allowed (mv_finish_samples and the
+/// unshared paths add to it instead of splatting); both samples of a pixel in one probe.
 struct MvSplitProbe {
     std::vector<MvPilotSample> samples;
 };
