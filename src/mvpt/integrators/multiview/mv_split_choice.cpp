@@ -18,8 +18,8 @@ constexpr double KappaShift = 0.04, SplitPath = 1.3, KappaLobe = 0.005;
 /// choose_splits takes the fewest splits whose variance times cost is within this of the least.
 constexpr double SplitTolerance = 1.05;
 
-/// The samples of one view ordered by pixel, then sample index, each native sample's records
-/// summed into one.
+/// The samples of one probe (of one view) ordered by pixel, then sample index, each native
+/// sample's records summed into one.
 std::vector<MvPilotSample> merged(std::vector<MvPilotSample> s) {
     auto order = [](const MvPilotSample &a) { return std::make_tuple(a.key[2], a.key[3], a.key[0]); };
     std::sort(s.begin(), s.end(), [&](const auto &a, const auto &b) { return order(a) < order(b); });
