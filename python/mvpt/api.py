@@ -160,7 +160,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     (or of other seeds) combine with `merge`.
 
     splits: with "mvpt", the splits of the shared vertex instead of the scene's `mvpath`
-    setting: 1 to 64, or "auto" (chosen per render; stats["splits"] says which)."""
+    setting (whose default is "auto"): 1 to 64, or "auto" (chosen per render; stats["splits"]
+    says which)."""
     splits_option = _splits_option(splits)
     if not 0 <= int(spp) < 2**31:
         raise ValueError(f"spp must lie in [0, 2^31), got {spp}")

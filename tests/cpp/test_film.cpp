@@ -207,3 +207,65 @@ TEST(Film, RefusesTheStateOfAnotherFilm) {
     EXPECT_THROW(other_estimator.load(in2), StateError);
     std::remove(path.c_str());
 }
+
+namespace {
+/// Adds to `pass` at view-pixel `key` the sums W*L + E = s (RGB, E's mean e) and W = w.
+void add_sums(MvPassFilm &pass, uint32_t key, const double s[3], double w, double e) {
+    SplatEntry entry;
+    for (int c = 0; c < 3; ++c) entry.lw[c] = to_fixed(s[c]);
+    entry.w = to_fixed(w), entry.e[0] = to_fixed(e);
+    entry.key = key, entry.count = 1;
+    pass.add(entry);
+}
+} // namespace
+
+TEST(Film, FirstTwoPassesTakeEachOthersRatioAsBeta) {
+    // Two pixels, two passes: pixel 0 gets (S, W) = ((0.3, 0.6, 0.9), 0.5) then ((0.8, 0.8, 0.8), 2);
+    // pixel 1 nothing, then ((0.2, 0.2, 0.2), 0.25). Each pass takes the other's S / W as beta:
+    // pixel 0: v1 = S1 + (0.4)(1 - 0.5), v2 = S2 + (0.6, 1.2, 1.8)(1 - 2); pixel 1: v1 = 0.8, v2 = 0.2.
+    const double s1[3] = {0.3, 0.6, 0.9}, s2[3] = {0.8, 0.8, 0.8}, s3[3] = {0.2, 0.2, 0.2};
+    const double v1[3] = {0.5, 0.8, 1.1}, v2[3] = {0.2, -0.4, -1.0};
+    Film film(2, 1, 0, MvEstimator::Balance, true, true), plain(2, 1, 0, MvEstimator::Balance, true, true);
+    MvPassFilm pass({SplatFootprint::box(2, 1)}, false);
+    add_sums(pass, 0, s1, 0.5, 0.1);
+    film.hold(pass, 0, 0, 2);
+    film.holding = true;
+    EXPECT_EQ(film.count[0], 0u);
+    EXPECT_EQ(film.native[0], 1u);
+    add_sums(pass, 0, s2, 2.0, 0.0);
+    add_sums(pass, 1, s3, 0.25, 0.0);
+    film.fold(pass, 0, 0, 2);
+    // The same estimates added one by one.
+    for (const double *v : {v1, v2}) plain.add(0, v);
+    const double p1[3] = {0.8, 0.8, 0.8};
+    for (const double *v : {p1, s3}) plain.add(1, v);
+    for (size_t p = 0; p < 2; ++p) {
+        float rgb[3], var[3], want[3], want_var[3];
+        film.develop(p, rgb, var);
+        plain.develop(p, want, want_var);
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(rgb[c], want[c], 1e-6) << p << " " << c;
+            EXPECT_NEAR(var[c], want_var[c], 1e-6) << p << " " << c;
+        }
+        EXPECT_EQ(film.count[p], 2u);
+        EXPECT_EQ(film.native[p], 2u);
+    }
+    EXPECT_FLOAT_EQ(film.weight_sum(0), 1.25f); // (0.5 + 2) / 2
+    EXPECT_FLOAT_EQ(film.e_sum[0], 0.1f);
+}
+
+TEST(Film, AHeldPassReleasedIsThePassWithoutBeta) {
+    const double s[3] = {0.3, 0.6, 0.9};
+    Film held(1, 1, 0, MvEstimator::Balance, true, false), folded(1, 1, 0, MvEstimator::Balance, true, false);
+    MvPassFilm pass({SplatFootprint::box(1, 1)}, false);
+    add_sums(pass, 0, s, 0.5, 0.0);
+    held.hold(pass, 0, 0, 1);
+    held.holding = true;
+    held.release(0, 1);
+    add_sums(pass, 0, s, 0.5, 0.0);
+    folded.fold(pass, 0, 0, 1);
+    EXPECT_EQ(held.count, folded.count);
+    EXPECT_EQ(held.sum, folded.sum);
+    EXPECT_EQ(held.w_sum, folded.w_sum);
+    EXPECT_EQ(held.native, folded.native);
+}

@@ -303,7 +303,8 @@ def test_render_splits_option():
     auto = mvpt.render(s, method="mvpt", splits="auto").stats
     assert 1 <= auto["splits"] <= 8 and auto["split_pilot"]["r"] > 0.0
     assert auto["settings"]["splits"] == "auto"
-    assert "split_pilot" not in mvpt.render(s, method="mvpt").stats  # the scene's (default) 2
+    assert "split_pilot" in mvpt.render(s, method="mvpt").stats  # the scene's: the default, auto
+    assert "split_pilot" not in mvpt.render(s, method="mvpt", splits=2).stats
     for bad in (0, 65, "many", 2.5, True):
         with pytest.raises(ValueError, match="splits must be 'auto' or an integer"):
             mvpt.render(s, method="mvpt", splits=bad)

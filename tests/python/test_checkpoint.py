@@ -67,7 +67,8 @@ def test_resume_is_bit_identical(tmp_path, name):
     scene = make()
     whole = mvpt.render(scene, spp=spp, seed=7, method=method, threads=2)
     rng = random.Random(name)
-    for stop in sorted(rng.sample(range(1, 15), 2)):
+    # After one pass the balance estimator's state holds its first pass for the second's fold.
+    for stop in [1] + sorted(rng.sample(range(2, 15), 2)):
         state = tmp_path / f"{stop}.mvpt-state"
         part = mvpt.render(scene, spp=spp, seed=7, method=method, threads=2, state=state, poll=0.001,
                            progress=_interrupt_at(stop))

@@ -123,12 +123,17 @@ def test_multiview_auto_splits_threads_1_2_3():
         _assert_identical(runs[0], r)
 
 
-def test_multiview_auto_splits_are_those_of_every_range():
+def test_multiview_auto_splits_are_those_of_every_range(tmp_path):
     """The pilot depends on the scene and the settings alone: ranges of passes of a render (as
-    on a cluster) choose what the whole render chooses, so their states merge into it."""
+    on a cluster) choose what the whole render chooses, so their states merge into it, and the
+    merge reports the splits its states took."""
     s = _auto_splits_room()
     whole = mvpt.render(s, method="mvpt", passes=(0, 6), threads=2)
+    states = []
     for first, count in ((0, 2), (2, 4)):
-        part = mvpt.render(s, method="mvpt", passes=(first, count), threads=1)
+        states.append(tmp_path / f"part{first}.mvpt-state")
+        part = mvpt.render(s, method="mvpt", passes=(first, count), threads=1, state=states[-1])
         assert part.stats["splits"] == whole.stats["splits"]
         assert part.stats["split_pilot"] == whole.stats["split_pilot"]
+    merged = mvpt.merge(s, states)
+    assert merged.stats["splits"] == whole.stats["splits"]

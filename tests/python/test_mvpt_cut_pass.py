@@ -126,7 +126,12 @@ VIEWS, SLOW_RES = 32, 96
 
 @pytest.fixture(scope="module")
 def many_views():
-    return mvpt.load_string(slow_scene(VIEWS, res=SLOW_RES, spp=64))
+    # Two splits: under a time budget `auto` would choose its splits by the budget, and with
+    # them the length of a pass that the budgets below are set from.
+    xml = slow_scene(VIEWS, res=SLOW_RES, spp=64)
+    assert '<integrator type="path">' in xml
+    return mvpt.load_string(xml.replace('<integrator type="path">',
+                                        '<integrator type="mvpath"><integer name="splits" value="2"/>', 1))
 
 
 def _regions_sampled(r) -> int:

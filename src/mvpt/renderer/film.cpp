@@ -36,30 +36,78 @@ size_t Film::bytes_per_pixel(bool multiview, MvEstimator estimator, bool adaptiv
     return b;
 }
 
+void Film::add_pass(size_t p, const MvPassEstimate &est, double wt) {
+    if (estimator == MvEstimator::Weighted) {
+        for (int c = 0; c < 3; ++c) lw[3 * p + c] += wt * est.lw[c], e[3 * p + c] += wt * est.e[c];
+        w[p] += wt * est.w;
+    }
+    add(p, est.v, wt);
+    w_sum[p] += float(wt * est.w);
+    if (!e_sum.empty()) { // the adaptive maps' statistics
+        const double s = (est.v[0] / 3.0 + est.v[1] / 3.0 + est.v[2] / 3.0) - est.e_mean;
+        e_sum[p] += float(est.e_mean);
+        e_sq[p] += float(est.e_mean * est.e_mean);
+        s_sq[p] += float(s * s);
+    }
+}
+
+namespace {
+/// The ratio (W*L + E) / W of a pass's sums (0 without contributions): a pixel's estimate from
+/// that pass alone in which how many contributions landed cancels.
+void pass_ratio(const double v[3], double w, double out[3]) {
+    for (int c = 0; c < 3; ++c) out[c] = w > 0.0 ? v[c] / w : 0.0;
+}
+} // namespace
+
 void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale, double wt) {
-    const bool weighted = estimator == MvEstimator::Weighted, adaptive = !e_sum.empty();
+    const bool weighted = estimator == MvEstimator::Weighted;
     for (size_t p = begin; p < end; ++p) {
+        const SplatEntry t = pass.take(offset + uint32_t(p));
+        received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));
+        native[p] += n(p);
+        if (holding) { // the first two passes, each with the other's ratio as beta
+            MvPassEstimate first = take_held(p), second = mv_pass_estimate(t, estimator, nullptr, scale);
+            double beta_first[3], beta_second[3];
+            pass_ratio(first.v, first.w, beta_first);
+            pass_ratio(second.v, second.w, beta_second);
+            for (int c = 0; c < 3; ++c) {
+                first.v[c] += beta_second[c] * (1.0 - first.w);
+                second.v[c] += beta_first[c] * (1.0 - second.w);
+            }
+            add_pass(p, first, 1.0);
+            add_pass(p, second, wt);
+            continue;
+        }
         double beta[3]; // the mean of the earlier passes
         const bool cv = !weighted && control_variate && count[p] > 0;
         if (cv)
             for (int c = 0; c < 3; ++c) beta[c] = sum[3 * p + c] / weight(p);
+        add_pass(p, mv_pass_estimate(t, estimator, cv ? beta : nullptr, scale), wt);
+    }
+}
+
+MvPassEstimate Film::take_held(size_t p) {
+    MvPassEstimate est;
+    for (int c = 0; c < 3; ++c) est.v[c] = sum[3 * p + c], sum[3 * p + c] = 0.0;
+    est.w = w_sum[p], w_sum[p] = 0.f;
+    if (!e_sum.empty()) est.e_mean = e_sum[p], e_sum[p] = 0.f;
+    return est;
+}
+
+void Film::hold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
+    for (size_t p = begin; p < end; ++p) {
         const SplatEntry t = pass.take(offset + uint32_t(p));
-        const MvPassEstimate est = mv_pass_estimate(t, estimator, cv ? beta : nullptr, scale);
-        if (weighted) {
-            for (int c = 0; c < 3; ++c) lw[3 * p + c] += wt * est.lw[c], e[3 * p + c] += wt * est.e[c];
-            w[p] += wt * est.w;
-        }
-        add(p, est.v, wt);
-        w_sum[p] += float(wt * est.w);
-        if (adaptive) {
-            const double s = (est.v[0] / 3.0 + est.v[1] / 3.0 + est.v[2] / 3.0) - est.e_mean;
-            e_sum[p] += float(est.e_mean);
-            e_sq[p] += float(est.e_mean * est.e_mean);
-            s_sq[p] += float(s * s);
-        }
         received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));
         native[p] += n(p);
+        const MvPassEstimate est = mv_pass_estimate(t, estimator, nullptr);
+        for (int c = 0; c < 3; ++c) sum[3 * p + c] = est.v[c];
+        w_sum[p] = float(est.w);
+        if (!e_sum.empty()) e_sum[p] = float(est.e_mean);
     }
+}
+
+void Film::release(size_t begin, size_t end) {
+    for (size_t p = begin; p < end; ++p) add_pass(p, take_held(p), 1.0);
 }
 
 void Film::develop(size_t p, float rgb[3], float variance[3]) const {
@@ -92,6 +140,7 @@ void Film::save(StateWriter &out) const {
     out.put(int32_t(margin)), out.put(level), out.put(map_total);
     out.put(w_sum), out.put(lw), out.put(e), out.put(w);
     out.put(e_sum), out.put(e_sq), out.put(s_sq), out.put(native), out.put(received), out.put(map);
+    out.put(uint32_t(holding));
 }
 
 void Film::load(StateReader &in) {
@@ -117,6 +166,7 @@ void Film::load(StateReader &in) {
     const size_t stats = adaptive ? n : 0;
     in.get(e_sum, stats), in.get(e_sq, stats), in.get(s_sq, stats);
     in.get(native, n), in.get(received, n), in.get(map, map.size());
+    holding = in.get<uint32_t>() != 0;
 }
 
 void Film::merge(const Film &o) {

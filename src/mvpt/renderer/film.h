@@ -8,6 +8,7 @@
 // its estimators and adaptive maps (§8) need of the passes so far.
 #pragma once
 
+#include "../integrators/multiview/mv_estimator.h"
 #include "../integrators/multiview/mvpath.h"
 #include "../render/splat_film.h"
 
@@ -45,6 +46,11 @@ struct Film {
     /// n_k(i) of the current pass over the view's sample window: the crop window's pixels
     /// and, around them, `margin` pixels of the filter's reach that take one sample per pass.
     std::vector<uint16_t> map;
+    /// Balance estimator with its control variate: the film's first pass is held until the
+    /// second is folded, so that each takes the other's control variate
+    /// (docs/multiview-path-tracing.md §5, "The first two passes"): meanwhile the pixels' count
+    /// is 0, `sum` holds their W*L + E, `w_sum` their W and `e_sum` (if kept) E's mean.
+    bool holding = false;
     int margin = 0;                  ///< of the map
     double level = 0.0;              ///< the level c the adaptive map was last solved for
     uint64_t map_total = 0;          ///< the sum of n over the crop window this pass (its native samples)
@@ -90,7 +96,15 @@ struct Film {
     /// (read and cleared), each as one estimate (the sums times `scale`: mv_pass_estimate) of
     /// weight `wt` (a thinned pass: scale 1/q, weight q; the caller adds 1 - q to short_weight
     /// once every pixel is folded).
+    /// While `holding`, the pixels' held pass is added first, each of the two with the other's
+    /// ratio (W*L + E) / W as beta.
     void fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale = 1.0, double wt = 1.0);
+    /// Multi-view: pixels [begin, end) of the film's first pass (whole), from `pass` as fold reads
+    /// it, held (the caller sets `holding` once every pixel is).
+    void hold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end);
+    /// Multi-view: the held pass's pixels [begin, end) added as estimates without a control
+    /// variate (no second pass came; the caller then clears `holding`).
+    void release(size_t begin, size_t end);
     /// Multi-view: mean over passes of the sum of W of pixel p (1 in expectation for the balance estimator).
     float weight_sum(size_t p) const { return count[p] ? float(double(w_sum[p]) / weight(p)) : 0.f; }
 
@@ -100,6 +114,13 @@ struct Film {
     /// Adds the accumulators of `other` (the same view, disjoint passes): sums add, the
     /// squared deviations combine with the difference of the means (Chan et al.).
     void merge(const Film &other);
+
+private:
+    /// Pixel p's held pass, taken out of the accumulators that held it.
+    MvPassEstimate take_held(size_t p);
+    /// Adds pass estimate `est` of weight `wt` to pixel p: the estimate and what the estimators
+    /// and the adaptive maps keep of it.
+    void add_pass(size_t p, const MvPassEstimate &est, double wt);
 };
 
 } // namespace mvpt

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <tuple>
@@ -36,8 +37,10 @@ constexpr uint64_t PilotKey = 0x70696c6f74; // "pilot"
 constexpr size_t PilotPixels = 8192, PilotShare = 8, MinPilotPixels = 16;
 constexpr int PilotTask = 32; ///< cells of one pilot task
 /// Under a time budget, the splits leave time for at least this many passes (as the pilot's
-/// pace predicts them): the warm-up of the adaptive maps and two adaptive passes.
-constexpr double MinBudgetPasses = 6.0;
+/// pace predicts them, then the first pass's length): the two passes that are each other's
+/// control variate (§5) and one whose control variate comes from both (docs/performance.md,
+/// "Choosing the number of splits": 3 and 4 measured on four cases).
+constexpr double MinBudgetPasses = 3.0;
 /// A pass thinned to share q lasts about (ThinOverhead + q) times a whole pass (its sampling and
 /// splatting shrink with q, the fold and the tiles' fixed costs do not; 32 views of 96^2, two
 /// threads: 0.14 at q = 0.1, 0.35 at 0.25, 0.5-0.6 at 0.5, 0.82 at 0.75). Under a time budget,
@@ -87,7 +90,7 @@ MultiviewSettings multiview_settings(const Scene &scene) {
 class Renderer::MultiviewPasses final : public PassSchedule {
 public:
     /// Prepares the method and `r`'s accumulators, and reads the state a render resumes from.
-    MultiviewPasses(Renderer &r, tbb::task_arena &arena);
+    MultiviewPasses(Renderer &r, tbb::task_arena &arena, const std::atomic<bool> &cancel);
     bool done(int pass) const override;
     int step_end(int pass, double fit, double) override;
     StepTiles begin_step(int pass, int end) override;
@@ -119,20 +122,28 @@ private:
     template <class Skipped> void uncount(size_t begin, const Skipped &skipped);
     /// After a whole pass: the native-sample maps of the next (§8), on their schedule.
     void update_maps();
+    /// Whether the maps may be made after pass `pass` (update_maps: its schedule aside).
+    bool maps_after(int pass) const { return m_adaptive && pass + 1 >= std::max(2, m_cfg.adaptive_warmup); }
     /// The splits of the shared vertex (§7, "Choosing the number of splits"): a pilot of two
     /// native samples at each of a fixed set of pixels of every view, from seeds of its own
     /// and with one native sample per pixel everywhere, its contributions recorded, not
     /// splatted. A function of the scene and the settings alone: every range, resume and
-    /// thread count of a render chooses the same.
-    int pilot_splits();
+    /// thread count of a render chooses the same. Ctrl-C (`cancel`) skips its tasks not begun.
+    int pilot_splits(const std::atomic<bool> &cancel);
+    /// Under a time budget with splits chosen per render, after the render's first pass (of
+    /// `last_pass` seconds, `fit` of them left): the splits chosen again from its measured
+    /// length (§7, "Choosing the number of splits"); returns how many passes of the new splits
+    /// fit.
+    double rechoose_splits(int pass, double fit, double last_pass);
     /// The pilot's native samples of view `slot` into `prim`: two at one pixel of each of cells
     /// [begin, end) of a grid of `cells` (x, y) over the crop window (pilot_cells).
     void pilot_samples(int slot, std::pair<int, int> cells, int begin, int end, MvPrimaries &prim) const;
     /// The pilot's grid over view `slot`'s crop window: about `pixels` cells, at most one per pixel.
     std::pair<int, int> pilot_cells(int slot, size_t pixels) const;
     /// The threads' caches flushed and the pass's sums (times `scale`) folded into the
-    /// accumulators, in the render's arena.
-    void fold_pass(double scale, double weight = 1.0);
+    /// accumulators, in the render's arena; with `hold`, a whole first pass held instead where
+    /// the estimator takes a control variate (Renderer::hold_pass).
+    void fold_pass(double scale, double weight = 1.0, bool hold = false);
     /// The crop-window pixels of a tile, [x0, x1) x [y0, y1) in crop-window coordinates.
     struct CropRect {
         int x0, y0, x1, y1;
@@ -176,9 +187,14 @@ private:
     double m_share = 1.0;
     std::atomic<uint64_t> m_thin_taken{0};
     bool m_thinned = false; ///< a thinned pass ended the render
+    /// Splits chosen per render under a time budget: chosen again after the first pass from
+    /// the pilot's statistics and the seconds of a pass per unit of model cost its pace gave.
+    bool m_budget_splits = false;
+    SplitStatistics m_pilot;
+    double m_pass_unit = 0.0;
 };
 
-Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
+Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena, const std::atomic<bool> &cancel)
     : PassSchedule(arena), m_r(r), m_footprints(r.prepare_multiview_render(m_cfg)),
       m_state([this] { return MvThreadState(*m_pass_film); }) {
     const RenderOptions &o = r.m_opts;
@@ -202,7 +218,7 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena)
     m_region_end.push_back(m_tiles.size());
     arena.execute(
         [&] { m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted); });
-    if (m_cfg.splits == 0) m_cfg.splits = m_r.m_mv.cfg.splits = pilot_splits();
+    if (m_cfg.splits == 0) m_cfg.splits = m_r.m_mv.cfg.splits = pilot_splits(cancel);
     r.m_stats.splits = m_cfg.splits;
 }
 
@@ -228,7 +244,7 @@ void Renderer::MultiviewPasses::pilot_samples(int slot, std::pair<int, int> cell
     }
 }
 
-int Renderer::MultiviewPasses::pilot_splits() {
+int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
     const size_t views = m_r.m_mv.views.size();
     if (views < 2) return 1; // nothing is shared
     MvContext pilot = m_r.m_mv;
@@ -255,6 +271,7 @@ int Renderer::MultiviewPasses::pilot_splits() {
     const auto t0 = std::chrono::steady_clock::now();
     arena().execute([&] {
         tbb::parallel_for(size_t(0), tasks.size(), [&](size_t t) {
+            if (cancel.load()) return; // (the render stops before its first pass)
             const int slot = tasks[t].slot;
             MvThreadState &ts = m_state.local();
             MvSplatSink sink{ts.cache, ts.dropped.data(), &ts.first_dropped}; // (nothing is splatted)
@@ -275,16 +292,28 @@ int Renderer::MultiviewPasses::pilot_splits() {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps);
     m_r.m_stats.split_pilot = {st.a, st.r, st.c0, st.c1};
-    int most = MaxChosenSplits;
-    if (const double budget = m_r.m_opts.time_budget; budget > 0.0 && st.c1 > 0.0) {
-        // A pass of B splits lasts about the pilot's time per unit of model cost times its own
-        // cost; budgets make renders depend on time anyway, so the choice may too.
-        double pass_samples = 0.0;
-        for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
-        const double per_unit = seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
-        while (most > 1 && MinBudgetPasses * per_unit * pass_samples * (st.c0 + most * st.c1) > budget) --most;
-    }
-    return choose_splits(st, most);
+    const double budget = m_r.m_opts.time_budget;
+    if (!(budget > 0.0) || m_range || !(st.c1 > 0.0) || taken.load() == 0) return choose_splits(st);
+    // Under a time budget, a pass of B splits lasts about the pilot's time per unit of model
+    // cost times its own cost, and the splits leave time for MinBudgetPasses passes; budgets make
+    // renders depend on time anyway, so the choice may too.
+    double pass_samples = 0.0;
+    for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
+    m_pass_unit = pass_samples * seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
+    m_pilot = st;
+    m_budget_splits = m_pass_unit > 0.0;
+    return choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, budget, MinBudgetPasses));
+}
+
+double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double last_pass) {
+    // The pilot records rather than splats: what a pass spends beyond its pace (the splats, the
+    // fold between passes) is a part of a native sample's cost that no split changes.
+    const SplitStatistics &st = m_pilot;
+    const double c0 = std::max(st.c0, last_pass / m_pass_unit - m_cfg.splits * st.c1);
+    const int b = choose_splits(st, splits_fitting(st, c0, m_pass_unit, fit * last_pass, MinBudgetPasses - pass));
+    const double longer = (c0 + b * st.c1) / (c0 + m_cfg.splits * st.c1);
+    m_cfg.splits = m_r.m_mv.cfg.splits = m_r.m_stats.splits = b;
+    return fit / longer;
 }
 
 bool Renderer::MultiviewPasses::done(int pass) const {
@@ -293,8 +322,10 @@ bool Renderer::MultiviewPasses::done(int pass) const {
     return !m_unbounded && !(m_r.m_native_done < double(m_spp_target) - 1e-6);
 }
 
-int Renderer::MultiviewPasses::step_end(int pass, double fit, double) {
+int Renderer::MultiviewPasses::step_end(int pass, double fit, double last_pass) {
     m_share = 1.0;
+    if (m_budget_splits && pass == m_r.m_first_pass + 1 && fit > 0.0 && std::isfinite(fit))
+        fit = rechoose_splits(pass, fit, last_pass);
     const double forced = m_r.m_opts.thin_last_pass; // tests: the last pass of a range
     if (forced < 1.0 && m_range && pass + 1 == m_r.m_opts.pass_count) {
         m_share = forced;
@@ -369,12 +400,12 @@ uint64_t Renderer::MultiviewPasses::kept(const ChunksDone &done) const {
     return n;
 }
 
-void Renderer::MultiviewPasses::fold_pass(double scale, double weight) {
+void Renderer::MultiviewPasses::fold_pass(double scale, double weight, bool hold) {
     // What the caches still hold goes to the pass sums (exact integer sums).
     tbb::parallel_for(m_state.range(1), [](auto &r) {
         for (MvThreadState &ts : r) ts.cache.flush();
     });
-    m_r.fold_pass(*m_pass_film, scale, weight);
+    if (!hold || !m_r.hold_pass(*m_pass_film)) m_r.fold_pass(*m_pass_film, scale, weight);
 }
 
 template <class Skipped> void Renderer::MultiviewPasses::uncount(size_t begin, const Skipped &skipped) {
@@ -430,7 +461,10 @@ void Renderer::MultiviewPasses::end_step() {
         m_r.m_stats.thinned_pass_share = m_share;
         m_thinned = true;
     } else {
-        arena().execute([&] { fold_pass(1.0); });
+        // The films' first pass is held for the second's fold (§5, "The first two passes"),
+        // unless a map made from it would draw the second's samples (a range from a later pass).
+        const bool first = m_r.m_native_done == 0.0 && !maps_after(m_pass);
+        arena().execute([&] { fold_pass(1.0, 1.0, first); });
         m_r.m_native_done += double(m_pass_samples) / double(m_pixels_total);
         update_maps();
     }
@@ -443,7 +477,7 @@ void Renderer::MultiviewPasses::update_maps() {
     // about as much as folding a pass), except that the last pass's map spends only what is
     // left of the sample target. The schedule depends on the pass index alone.
     const int done = m_pass + 1;
-    if (m_adaptive && done >= std::max(2, m_cfg.adaptive_warmup)) {
+    if (maps_after(m_pass)) {
         const double left = double(m_spp_target) - m_r.m_native_done;
         double per_pixel = m_cfg.adaptive_budget;
         const bool last = !m_unbounded && left < 2.0 * per_pixel;
@@ -504,7 +538,10 @@ void Renderer::MultiviewPasses::finish() {
     }
     m_state.clear(); // the threads' caches
     m_pass_film.reset();
-    arena().execute([&] { m_r.develop(); });
+    arena().execute([&] {
+        m_r.release_held(); // (no second pass came)
+        m_r.develop();
+    });
     for (size_t s = 0; s < m_r.m_views.size(); ++s) {
         m_r.m_results[s].mv = per_view[s];
         m_r.m_stats.mv += per_view[s];
@@ -512,7 +549,7 @@ void Renderer::MultiviewPasses::finish() {
 }
 
 void Renderer::render_multiview(tbb::task_arena &arena, const std::atomic<bool> &cancel, const ProgressFn &progress) {
-    MultiviewPasses schedule(*this, arena);
+    MultiviewPasses schedule(*this, arena, cancel);
     run_passes(schedule, cancel, progress);
     schedule.finish();
 }
@@ -610,18 +647,41 @@ std::vector<Renderer::Tile> Renderer::multiview_tiles(bool random_regions) const
     return tiles;
 }
 
-void Renderer::fold_pass(MvPassFilm &pass_film, double scale, double weight) {
-    // Each pixel's pass estimate into the accumulators, in blocks of pixels of one view.
+namespace {
+/// f(film, slot, begin, end) over every view's pixels in blocks, in parallel.
+template <class F> void film_blocks(std::vector<Film> &films, const F &f) {
     constexpr size_t Block = 4096;
     std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
-    for (size_t slot = 0; slot < m_views.size(); ++slot)
-        for (size_t p = 0; p < m_films[slot].pixels(); p += Block) blocks.emplace_back(slot, p);
+    for (size_t slot = 0; slot < films.size(); ++slot)
+        for (size_t p = 0; p < films[slot].pixels(); p += Block) blocks.emplace_back(slot, p);
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
         const auto [slot, begin] = blocks[b];
-        Film &mf = m_films[slot];
-        mf.fold(pass_film, pass_film.offset(int(slot)), begin, std::min(mf.pixels(), begin + Block), scale, weight);
+        f(films[slot], int(slot), begin, std::min(films[slot].pixels(), begin + Block));
     });
-    for (Film &mf : m_films) mf.short_weight += 1.0 - weight;
+}
+} // namespace
+
+void Renderer::fold_pass(MvPassFilm &pass_film, double scale, double weight) {
+    // Each pixel's pass estimate into the accumulators; a held first pass is added with it.
+    film_blocks(m_films, [&](Film &mf, int slot, size_t begin, size_t end) {
+        mf.fold(pass_film, pass_film.offset(slot), begin, end, scale, weight);
+    });
+    for (Film &mf : m_films) mf.short_weight += 1.0 - weight, mf.holding = false;
+}
+
+bool Renderer::hold_pass(MvPassFilm &pass_film) {
+    if (!m_films.front().control_variate) return false;
+    film_blocks(m_films, [&](Film &mf, int slot, size_t begin, size_t end) {
+        mf.hold(pass_film, pass_film.offset(slot), begin, end);
+    });
+    for (Film &mf : m_films) mf.holding = true;
+    return true;
+}
+
+void Renderer::release_held() {
+    if (m_films.empty() || !m_films.front().holding) return;
+    film_blocks(m_films, [&](Film &mf, int, size_t begin, size_t end) { mf.release(begin, end); });
+    for (Film &mf : m_films) mf.holding = false;
 }
 
 void Renderer::update_native_maps(int passes, double per_pixel) {

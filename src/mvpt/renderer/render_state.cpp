@@ -10,7 +10,7 @@ namespace mvpt {
 
 namespace {
 constexpr char Magic[8] = {'M', 'V', 'P', 'T', 'S', 'T', 'A', 'T'};
-constexpr uint32_t FormatVersion = 3;
+constexpr uint32_t FormatVersion = 4;
 constexpr uint64_t MaxHeader = uint64_t(1) << 24;
 
 /// A 64-bit checksum of a byte string, word by word, chained over blocks (corruption, not attacks).

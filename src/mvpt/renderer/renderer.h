@@ -197,6 +197,11 @@ private:
     /// Multi-view path tracing: one pass's sums (times `scale`) into every view's accumulators,
     /// as estimates of weight `weight` (below 1: a thinned pass, film.h).
     void fold_pass(MvPassFilm &pass_film, double scale = 1.0, double weight = 1.0);
+    /// Multi-view: the films' first pass (whole) held rather than folded (Film::hold), for the
+    /// balance estimator with its control variate; false (nothing done) otherwise.
+    bool hold_pass(MvPassFilm &pass_film);
+    /// Multi-view: a held first pass folded without a control variate (Film::release).
+    void release_held();
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
 

@@ -45,7 +45,7 @@ void Renderer::write_state(int next_pass, double elapsed, double last_pass, cons
     put_layout(out, m_multiview, m_views, m_scene);
     out.put(int32_t(next_pass)), out.put(elapsed), out.put(last_pass), out.put(m_stats.samples), out.put(counters);
     out.put(SampleKey{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x});
-    if (m_multiview) out.put(m_native_done);
+    if (m_multiview) out.put(m_native_done), out.put(int32_t(m_stats.splits)); // (the splits chosen, for a merge's statistics)
     for (size_t s = 0; s < m_views.size(); ++s) {
         if (m_multiview) {
             MvViewStats stats = m_mv_stats_before[s];
@@ -71,7 +71,7 @@ void Renderer::read_state(const std::string &path) {
     if (m_first_pass < 0 || !(m_elapsed_before >= 0.0) || !(m_last_pass_before >= 0.0))
         throw StateError("the state file '" + path + "' is corrupt");
     m_stats.passes = m_stats.first_pass = m_first_pass;
-    if (m_multiview) m_native_done = in.get<double>();
+    if (m_multiview) m_native_done = in.get<double>(), m_stats.splits = in.get<int32_t>();
     for (size_t s = 0; s < m_views.size(); ++s) {
         uint64_t dropped = 0;
         if (m_multiview) m_mv_stats_before[s] = in.get<MvViewStats>(), dropped = in.get<uint64_t>();
@@ -106,11 +106,13 @@ void Renderer::merge(const std::vector<std::string> &paths, bool develop_images)
         if (i == 0) {
             if (m_multiview) prepare_multiview_render(cfg);
             read_state(paths[0]);
+            release_held(); // (a state's first pass held: folded without its control variate)
             continue;
         }
         Renderer other(m_scene, m_opts);
         if (m_multiview) other.prepare_multiview_render(cfg);
         other.read_state(paths[i]);
+        other.release_held();
         add_state(other);
     }
     m_stats.seconds = m_elapsed_before;

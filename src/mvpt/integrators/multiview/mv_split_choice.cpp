@@ -92,4 +92,10 @@ int choose_splits(const SplitStatistics &s, int most) {
     return last;
 }
 
+int splits_fitting(const SplitStatistics &s, double c0, double unit, double left, double passes) {
+    int most = MaxChosenSplits;
+    while (most > 1 && passes * unit * (c0 + most * s.c1) > left) --most;
+    return most;
+}
+
 } // namespace mvpt

@@ -13,8 +13,8 @@
 //     <float name="adaptive_budget" value="1.25"/>           mean native samples per pixel and pass
 //     <float name="adaptive_eps" value="0.01"/>              eps of the relative error the maps even out
 //     <integer name="rig_cells" value="128"/>                 cells proven to see the rig unblocked (0: off)
-//     <integer name="splits" value="2"/>                      light samples and bounces per shared vertex (§7),
-//                                                             1-64, or <string ... value="auto"/>: chosen per render
+//     <string name="splits" value="auto"/>                    light samples and bounces per shared vertex (§7):
+//                                                             chosen per render, or <integer ...>: 1-64
 //   </integrator>
 #include "mvpath.h"
 
@@ -56,8 +56,8 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
         const std::string word = props.get_string("splits");
         if (word != "auto") props.fail("splits", "'splits' must be 'auto' or an integer in [1, 64], got '" + word + "'");
         cfg.splits = 0; // chosen per render
-    } else {
-        cfg.splits = int(props.get_int_in("splits", cfg.splits, 1, 64));
+    } else if (props.has("splits")) {
+        cfg.splits = int(props.get_int_in("splits", 1, 1, 64));
     }
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
 }

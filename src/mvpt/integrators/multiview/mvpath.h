@@ -59,8 +59,8 @@ struct MvConfig {
     /// Splits of the shared vertex (docs/multiview-path-tracing.md §7, "Splitting"): light
     /// samples and bounces per native sample, each shared by every sharing view and weighted
     /// 1/splits. The shifts, visibility and densities D of the first vertex are paid once.
-    /// 0 (`auto`): chosen per render from a pilot (mv_split_choice.h).
-    int splits = 2;
+    /// 0 (`auto`, the default): chosen per render from a pilot (mv_split_choice.h).
+    int splits = 0;
     /// Visibility cells (accel/rig_visibility.h) along the scene's longest side; 0 turns them
     /// off. Static scenes and cameras only.
     int rig_cells = 128;
