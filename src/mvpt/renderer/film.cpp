@@ -62,9 +62,7 @@ void pass_ratio(const double v[3], double w, double out[3]) {
 void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, double scale, double wt) {
     const bool weighted = estimator == MvEstimator::Weighted;
     for (size_t p = begin; p < end; ++p) {
-        const SplatEntry t = pass.take(offset + uint32_t(p));
-        received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));
-        native[p] += n(p);
+        const SplatEntry t = take_pass(pass, offset, p);
         if (holding) { // the first two passes, each with the other's ratio as beta
             MvPassEstimate first = take_held(p), second = mv_pass_estimate(t, estimator, nullptr, scale);
             double beta_first[3], beta_second[3];
@@ -86,6 +84,13 @@ void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, dou
     }
 }
 
+SplatEntry Film::take_pass(MvPassFilm &pass, uint32_t offset, size_t p) {
+    const SplatEntry t = pass.take(offset + uint32_t(p));
+    received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));
+    native[p] += n(p);
+    return t;
+}
+
 MvPassEstimate Film::take_held(size_t p) {
     MvPassEstimate est;
     for (int c = 0; c < 3; ++c) est.v[c] = sum[3 * p + c], sum[3 * p + c] = 0.0;
@@ -96,10 +101,7 @@ MvPassEstimate Film::take_held(size_t p) {
 
 void Film::hold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end) {
     for (size_t p = begin; p < end; ++p) {
-        const SplatEntry t = pass.take(offset + uint32_t(p));
-        received[p] = uint32_t(std::min<uint64_t>(uint64_t(received[p]) + t.count, UINT32_MAX));
-        native[p] += n(p);
-        const MvPassEstimate est = mv_pass_estimate(t, estimator, nullptr);
+        const MvPassEstimate est = mv_pass_estimate(take_pass(pass, offset, p), estimator, nullptr);
         for (int c = 0; c < 3; ++c) sum[3 * p + c] = est.v[c];
         w_sum[p] = float(est.w);
         if (!e_sum.empty()) e_sum[p] = float(est.e_mean);

@@ -116,6 +116,9 @@ struct Film {
     void merge(const Film &other);
 
 private:
+    /// Pixel p's sums of `pass` (from `offset`), read and cleared, its native samples and the
+    /// contributions it received counted.
+    SplatEntry take_pass(MvPassFilm &pass, uint32_t offset, size_t p);
     /// Pixel p's held pass, taken out of the accumulators that held it.
     MvPassEstimate take_held(size_t p);
     /// Adds pass estimate `est` of weight `wt` to pixel p: the estimate and what the estimators

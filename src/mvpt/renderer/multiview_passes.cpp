@@ -187,9 +187,9 @@ private:
     double m_share = 1.0;
     std::atomic<uint64_t> m_thin_taken{0};
     bool m_thinned = false; ///< a thinned pass ended the render
-    /// Splits chosen per render under a time budget: chosen again after the first pass from
-    /// the pilot's statistics and the seconds of a pass per unit of model cost its pace gave.
-    bool m_budget_splits = false;
+    /// Splits chosen per render under a time budget (m_pass_unit > 0): chosen again after the
+    /// first pass from the pilot's statistics and the seconds of a pass per unit of model cost
+    /// its pace gave.
     SplitStatistics m_pilot;
     double m_pass_unit = 0.0;
 };
@@ -301,7 +301,6 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
     for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
     m_pass_unit = pass_samples * seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
     m_pilot = st;
-    m_budget_splits = m_pass_unit > 0.0;
     return choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, budget, MinBudgetPasses));
 }
 
@@ -324,7 +323,7 @@ bool Renderer::MultiviewPasses::done(int pass) const {
 
 int Renderer::MultiviewPasses::step_end(int pass, double fit, double last_pass) {
     m_share = 1.0;
-    if (m_budget_splits && pass == m_r.m_first_pass + 1 && fit > 0.0 && std::isfinite(fit))
+    if (m_pass_unit > 0.0 && pass == m_r.m_first_pass + 1 && fit > 0.0 && std::isfinite(fit))
         fit = rechoose_splits(pass, fit, last_pass);
     const double forced = m_r.m_opts.thin_last_pass; // tests: the last pass of a range
     if (forced < 1.0 && m_range && pass + 1 == m_r.m_opts.pass_count) {
