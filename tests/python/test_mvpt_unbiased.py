@@ -104,10 +104,11 @@ def test_balance_is_unbiased(case, selection):
     assert res.passed, res.summary()
 
 
-@pytest.mark.parametrize("splits", [1, 4])
+@pytest.mark.parametrize("splits", [1, 3, 4])
 def test_balance_is_unbiased_for_any_splits(case, splits):
-    """The default splits the shared vertex in two (§7, "Splitting"); one split (the method
-    without splitting) and four must converge to path tracing as well."""
+    """Splits of the shared vertex (§7, "Splitting"), their emitter choices stratified: one
+    split (the method without splitting), three (not a multiple of thinlens_metal's two
+    emitters) and four must converge to path tracing as well."""
     name, ids, pt, mv_spp = case
     runs = _seeds(_mvpath(name, f'<integer name="splits" value="{splits}"/>'), mv_spp, "scene", 6000 + 100 * splits)
     assert runs[0].stats["splits"] == splits

@@ -410,16 +410,25 @@ void queue_shares(const MvScratch &sc, size_t ns, size_t first, MvPendingSamples
     }
 }
 
-/// Split b of a shared first vertex (§7, "Splitting"), from its own stream: one emitter sample
-/// and one bounce for every sharing view, queued in `pending` until its suffix and shadow ray
-/// are traced. Per sharing view i the radiance is
+/// The emitter choices of a shared vertex's splits (§7, "Splitting"): split b's number is (b + u) /
+/// count, u the number split 0 draws, so that B splits take each of n emitters about B / n times.
+struct EmitterStrata {
+    float u = 0.f;
+    int count = 1; ///< 1: each split draws its own
+    float at(int b) const { return std::min((float(b) + u) / float(count), OneMinusEpsilon); }
+};
+
+/// Split b of a shared first vertex (§7, "Splitting"), from its own stream but for the number
+/// that chooses its emitter (`strata`): one emitter sample and one bounce for every sharing view,
+/// queued in `pending` until its suffix and shadow ray are traced. Per sharing view i the radiance is
 ///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included);
 /// the first split's record also holds the views' entries and E.
 void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, int splits,
-                 int b, bool valid, const Spectrum &le_y, MvScratch &sc, MvPendingSamples &pending,
-                 RayCounters &counters) {
+                 int b, EmitterStrata strata, bool valid, const Spectrum &le_y, MvScratch &sc,
+                 MvPendingSamples &pending, RayCounters &counters) {
     s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
-    const float u_light_select = s.sampler.next_1d();
+    const float u_own = s.sampler.next_1d();
+    const float u_emitter = strata.count > 1 ? strata.at(b) : u_own;
     const Vec2f u_light = s.sampler.next_2d();
     const float u_lobe = s.sampler.next_1d();
     const Vec2f u_dir = s.sampler.next_2d();
@@ -434,7 +443,7 @@ void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const 
     rec.count = uint32_t(ns);
     rec.splits = b == 0 ? uint32_t(splits) : 0u;
     rec.shadow = -1;
-    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_light_select, u_light, f_nee, sc, pending, counters, &rec.shadow);
+    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_emitter, u_light, f_nee, sc, pending, counters, &rec.shadow);
     rec.nee = !rec.nee_weight.is_black();
     shared_bounce(ctx, s, bsdf, wi_s, ns, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
     if (b == 0) rec.e = le_y * (1.f / s.n);
@@ -464,9 +473,17 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     const Vec3f *wi_s = sharing_directions(sc, ns);
     const Sampler stream = s.sampler;
     const int splits = ctx.cfg.splits;
+    // The splits' emitter choices are stratified; the pilot's stay independent, since the
+    // spread of its splits estimates r only then.
+    EmitterStrata strata;
+    if (!pending.probe) {
+        Sampler first = stream;
+        first.set_dimension(DimCameraEnd);
+        strata = {first.next_1d(), splits};
+    }
     for (int b = 0; b < splits; ++b) {
         if (b > 0) s.sampler = stream.rekeyed(SplitKey + uint64_t(b));
-        share_split(ctx, s, bsdf, wi_s, ns, splits, b, valid, le_y, sc, pending, counters);
+        share_split(ctx, s, bsdf, wi_s, ns, splits, b, strata, valid, le_y, sc, pending, counters);
     }
     s.sampler = stream;
     s.st.sharing += ns;
