@@ -414,8 +414,11 @@ void queue_shares(const MvScratch &sc, size_t ns, size_t first, MvPendingSamples
 /// count, u the number split 0 draws, so that B splits take each of n emitters about B / n times.
 struct EmitterStrata {
     float u = 0.f;
-    int count = 1; ///< 1: each split draws its own
-    float at(int b) const { return std::min((float(b) + u) / float(count), OneMinusEpsilon); }
+    int count = 1; ///< 1: each split chooses by its own number
+    /// Split b's number, given the one it drew itself.
+    float at(int b, float own) const {
+        return count > 1 ? std::min((float(b) + u) / float(count), OneMinusEpsilon) : own;
+    }
 };
 
 /// Split b of a shared first vertex (§7, "Splitting"), from its own stream but for the number
@@ -427,8 +430,7 @@ void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const 
                  int b, EmitterStrata strata, bool valid, const Spectrum &le_y, MvScratch &sc,
                  MvPendingSamples &pending, RayCounters &counters) {
     s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
-    const float u_own = s.sampler.next_1d();
-    const float u_emitter = strata.count > 1 ? strata.at(b) : u_own;
+    const float u_emitter = strata.at(b, s.sampler.next_1d());
     const Vec2f u_light = s.sampler.next_2d();
     const float u_lobe = s.sampler.next_1d();
     const Vec2f u_dir = s.sampler.next_2d();
