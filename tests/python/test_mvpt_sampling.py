@@ -36,7 +36,15 @@ BSDFS = {
     "roughplastic-beckmann-all-normals": '<bsdf type="roughplastic"><float name="alpha" value="0.3"/>'
                                          '<boolean name="sample_visible" value="false"/></bsdf>',
     "plastic": '<bsdf type="plastic"/>',  # a delta coating over a diffuse base
+    # Both sides: the views below the surface see the back's BRDF (mirrored).
+    "twosided-roughconductor": '<bsdf type="twosided"><bsdf type="roughconductor">'
+                               '<float name="alpha" value="0.2"/></bsdf></bsdf>',
+    "twosided-phong-roughplastic": '<bsdf type="twosided"><bsdf type="phong"><float name="exponent" value="20"/></bsdf>'
+                                   '<bsdf type="roughplastic"><float name="alpha" value="0.3"/></bsdf></bsdf>',
 }
+# The BSDFs whose views run the lane code of eval and pdf (bit-identical values).
+SAME_LANES = {"roughconductor", "roughconductor-beckmann-all-normals", "roughplastic",
+              "roughplastic-beckmann-all-normals", "twosided-roughconductor"}
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]
 
 
@@ -84,8 +92,9 @@ def test_eval_pdf_matches_eval_and_pdf(bsdf):
 def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     """The shared next-event estimate and the bounce evaluate every sharing view's lobe at one
     direction with Bsdf::eval_pdf_views (one vector loop over blocks of 16 views); viewers
-    below the surface included. The microfacet BSDFs run the same lane code in both, so their
-    values are bit-identical; the others regroup their products (to within rounding)."""
+    below the surface included (for `twosided`, runs of views on either side). The microfacet
+    BSDFs run the same lane code in both, so their values are bit-identical; the others regroup
+    their products (to within rounding)."""
     pr = probe(BSDFS.get(bsdf, '<bsdf type="diffuse"/>'))
     rng = np.random.default_rng(5)
     wo = rng.normal(size=(400, 3))
@@ -97,7 +106,7 @@ def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     f, p = pr.eval_pdf_views(wis, wo)
     assert np.count_nonzero(p) > 0.3 * p.size  # not vacuous: most pairs lie above the surface
     for c, wi in enumerate(wis):
-        if bsdf.startswith("rough"):
+        if bsdf in SAME_LANES:
             np.testing.assert_array_equal(f[:, 3 * c:3 * c + 3], pr.eval(*wi, wo))
             np.testing.assert_array_equal(p[:, c], np.ravel(pr.pdf(*wi, wo)))
         else:

@@ -5,6 +5,8 @@
 #include "../bsdf.h"
 #include "bsdf_form.h"
 
+#include <algorithm>
+
 namespace mvpt {
 
 class TwoSidedBsdf final : public Bsdf {
@@ -42,6 +44,30 @@ public:
         if (wi.z > 0.f) return m_brdf[0]->pdf(ctx, si, wi, wo);
         if (wi.z < 0.f) return m_brdf[1]->pdf(ctx, si, flip(wi), flip(wo));
         return 0.f;
+    }
+
+    /// Each side's BRDF over a run of views on that side, so that its vector loop serves them (the
+    /// views of a shared vertex mostly see one side); a view in the shading plane gets zero.
+    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        constexpr size_t Chunk = 64;
+        Vec3f flipped[Chunk];
+        for (size_t c = 0; c < n;) {
+            const float side = wi[c].z;
+            size_t end = c + 1;
+            while (end < n && end - c < Chunk && (wi[end].z > 0.f) == (side > 0.f) && (wi[end].z < 0.f) == (side < 0.f))
+                ++end;
+            if (side > 0.f) {
+                m_brdf[0]->eval_pdf_views(ctx, si, wi + c, end - c, wo, f + c, pdf + c);
+            } else if (side < 0.f) {
+                for (size_t k = c; k < end; ++k) flipped[k - c] = flip(wi[k]);
+                m_brdf[1]->eval_pdf_views(ctx, si, flipped, end - c, flip(wo), f + c, pdf + c);
+            } else {
+                std::fill(f + c, f + end, Spectrum(0.f));
+                std::fill(pdf + c, pdf + end, 0.f);
+            }
+            c = end;
+        }
     }
 
     float roughness(const SurfaceInteraction &si) const override {
