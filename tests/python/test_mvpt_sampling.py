@@ -42,9 +42,22 @@ BSDFS = {
     "twosided-phong-roughplastic": '<bsdf type="twosided"><bsdf type="phong"><float name="exponent" value="20"/></bsdf>'
                                    '<bsdf type="roughplastic"><float name="alpha" value="0.3"/></bsdf></bsdf>',
 }
+# Wrappers that pass the views to their nested BSDFs (eval_pdf_views only: a mask's null
+# lobe is not part of the lobe mixture).
+WRAPPERS = {
+    "diffuse": '<bsdf type="diffuse"/>',
+    "mask-roughconductor": '<bsdf type="mask"><float name="opacity" value="0.7"/>'
+                           '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></bsdf>',
+    "blend-roughconductor-roughplastic": '<bsdf type="blendbsdf"><float name="weight" value="0.3"/>'
+                                         '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>'
+                                         '<bsdf type="roughplastic"><float name="alpha" value="0.3"/></bsdf></bsdf>',
+    "blend-phong-diffuse": '<bsdf type="blendbsdf"><float name="weight" value="0.6"/>'
+                           '<bsdf type="phong"><float name="exponent" value="20"/></bsdf><bsdf type="diffuse"/></bsdf>',
+}
 # The BSDFs whose views run the lane code of eval and pdf (bit-identical values).
 SAME_LANES = {"roughconductor", "roughconductor-beckmann-all-normals", "roughplastic",
-              "roughplastic-beckmann-all-normals", "twosided-roughconductor"}
+              "roughplastic-beckmann-all-normals", "twosided-roughconductor", "mask-roughconductor",
+              "blend-roughconductor-roughplastic"}
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]
 
 
@@ -87,15 +100,16 @@ def test_eval_pdf_matches_eval_and_pdf(bsdf):
         np.testing.assert_allclose(p, pr.pdf(*wi, wo), rtol=1e-5, atol=1e-7)
 
 
-@pytest.mark.parametrize("bsdf", sorted(BSDFS) + ["diffuse"])
-@pytest.mark.parametrize("views", [5, 37])
+@pytest.mark.parametrize("bsdf", sorted(BSDFS) + sorted(WRAPPERS))
+@pytest.mark.parametrize("views", [5, 37, 70])
 def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     """The shared next-event estimate and the bounce evaluate every sharing view's lobe at one
     direction with Bsdf::eval_pdf_views (one vector loop over blocks of 16 views); viewers
-    below the surface included (for `twosided`, runs of views on either side). The microfacet
+    below the surface included (for `twosided`, runs of views on either side; 70 views: the
+    wrappers' runs of 64). The microfacet
     BSDFs run the same lane code in both, so their values are bit-identical; the others regroup
     their products (to within rounding)."""
-    pr = probe(BSDFS.get(bsdf, '<bsdf type="diffuse"/>'))
+    pr = probe({**BSDFS, **WRAPPERS}[bsdf])
     rng = np.random.default_rng(5)
     wo = rng.normal(size=(400, 3))
     wo = np.ascontiguousarray(wo / np.linalg.norm(wo, axis=1, keepdims=True), dtype=np.float32)

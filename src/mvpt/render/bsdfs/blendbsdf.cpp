@@ -6,6 +6,8 @@
 #include "../bsdf.h"
 #include "../texture.h"
 
+#include <algorithm>
+
 namespace mvpt {
 
 class BlendBsdf final : public Bsdf {
@@ -47,6 +49,25 @@ public:
     float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
         float w = blend_weight(si);
         return m_bsdf[0]->pdf(ctx, si, wi, wo) * (1.f - w) + m_bsdf[1]->pdf(ctx, si, wi, wo) * w;
+    }
+
+    /// Both nested BSDFs' views (their vector loops), blended as eval and pdf blend them; in runs
+    /// of at most 64 views (the second's values live on the stack).
+    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        constexpr size_t Chunk = 64;
+        Spectrum f1[Chunk];
+        float pdf1[Chunk];
+        const float w = blend_weight(si);
+        for (size_t c = 0; c < n; c += Chunk) {
+            const size_t m = std::min(Chunk, n - c);
+            m_bsdf[0]->eval_pdf_views(ctx, si, wi + c, m, wo, f + c, pdf + c);
+            m_bsdf[1]->eval_pdf_views(ctx, si, wi + c, m, wo, f1, pdf1);
+            for (size_t k = 0; k < m; ++k) {
+                f[c + k] = f[c + k] * (1.f - w) + f1[k] * w;
+                pdf[c + k] = pdf[c + k] * (1.f - w) + pdf1[k] * w;
+            }
+        }
     }
 
     /// Roughness of the dominant nested BSDF at `si`.

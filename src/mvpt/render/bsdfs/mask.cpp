@@ -40,6 +40,14 @@ public:
         return m_nested->pdf(ctx, si, wi, wo) * eval_opacity(si);
     }
 
+    /// The nested BSDF's views (its vector loop), scaled by the opacity once evaluated.
+    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        m_nested->eval_pdf_views(ctx, si, wi, n, wo, f, pdf);
+        const float opacity = eval_opacity(si);
+        for (size_t c = 0; c < n; ++c) f[c] = f[c] * opacity, pdf[c] *= opacity;
+    }
+
     Spectrum null_transmission(const SurfaceInteraction &si) const override { return Spectrum(1.f - eval_opacity(si)); }
 
     float roughness(const SurfaceInteraction &si) const override { return m_nested->roughness(si); }
