@@ -54,10 +54,10 @@ WRAPPERS = {
     "blend-phong-diffuse": '<bsdf type="blendbsdf"><float name="weight" value="0.6"/>'
                            '<bsdf type="phong"><float name="exponent" value="20"/></bsdf><bsdf type="diffuse"/></bsdf>',
 }
-# The BSDFs whose views run the lane code of eval and pdf (bit-identical values).
+# The BSDFs whose views run the lane code, or the products, of eval and pdf (bit-identical values).
 SAME_LANES = {"roughconductor", "roughconductor-beckmann-all-normals", "roughplastic",
               "roughplastic-beckmann-all-normals", "twosided-roughconductor", "mask-roughconductor",
-              "blend-roughconductor-roughplastic"}
+              "blend-roughconductor-roughplastic", "plastic"}
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]
 
 
@@ -106,9 +106,9 @@ def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     """The shared next-event estimate and the bounce evaluate every sharing view's lobe at one
     direction with Bsdf::eval_pdf_views (one vector loop over blocks of 16 views); viewers
     below the surface included (for `twosided`, runs of views on either side; 70 views: the
-    wrappers' runs of 64). The microfacet
-    BSDFs run the same lane code in both, so their values are bit-identical; the others regroup
-    their products (to within rounding)."""
+    wrappers' runs of 64). The microfacet BSDFs run the same lane code in both, smooth plastic
+    the same products, so their values are bit-identical; the others regroup their products
+    (to within rounding)."""
     pr = probe({**BSDFS, **WRAPPERS}[bsdf])
     rng = np.random.default_rng(5)
     wo = rng.normal(size=(400, 3))

@@ -8,6 +8,8 @@
 #include "../ior.h"
 #include "../texture.h"
 
+#include <algorithm>
+
 namespace mvpt {
 
 class SmoothPlastic final : public Bsdf {
@@ -65,6 +67,25 @@ public:
         if (cos_theta_i <= 0.f || cos_theta_o <= 0.f) return 0.f;
         float f_i = fresnel_dielectric(cos_theta_i, m_eta).F;
         return warp::square_to_cosine_hemisphere_pdf(wo) * (1.f - specular_probability(f_i));
+    }
+
+    /// eval and pdf of the views wi[0..n) at one wo, the albedo (a texture) and wo's Fresnel
+    /// term evaluated once (the same products as eval and pdf).
+    void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        std::fill(f, f + n, Spectrum(0.f));
+        std::fill(pdf, pdf + n, 0.f);
+        const float cos_theta_o = Frame::cos_theta(wo);
+        if (cos_theta_o <= 0.f) return;
+        const Spectrum albedo = diffuse_albedo(si);
+        const float f_o = fresnel_dielectric(cos_theta_o, m_eta).F, cosine = warp::square_to_cosine_hemisphere_pdf(wo);
+        for (size_t c = 0; c < n; ++c) {
+            const float cos_theta_i = Frame::cos_theta(wi[c]);
+            if (cos_theta_i <= 0.f) continue;
+            const float f_i = fresnel_dielectric(cos_theta_i, m_eta).F;
+            f[c] = albedo * (cosine * m_inv_eta_2 * (1.f - f_i) * (1.f - f_o));
+            pdf[c] = cosine * (1.f - specular_probability(f_i));
+        }
     }
 
     float roughness(const SurfaceInteraction &) const override { return 1.f; }
