@@ -110,7 +110,7 @@ inline int floor_int(float v) {
 }
 } // namespace
 
-void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e) {
+MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e) {
     // Pixels i of the crop window whose centre i + 1/2 lies within the radius of x, per axis,
     // weighted by the tabulated density (the same operations as ReconstructionFilter::eval_1d).
     const SplatFootprint &f = m_film->footprint(slot);
@@ -151,8 +151,7 @@ void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const floa
                 h = TapThreshold;
             }
             SplatEntry &entry = at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j));
-            for (int c = 0; c < 3; ++c) entry.lw[c] += to_fixed(v[c] * h);
-            entry.w += to_fixed(v[3] * h);
+            add_fixed(entry.lw, simd::load<simd::f32x4>(v) * h); // (lw[3] and w are contiguous)
             if (e)
                 for (int c = 0; c < e_channels; ++c) entry.e[c] += to_fixed(e[c] * h);
             entry.count += (i == hx) & (j == hy);

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "../core/math.h"
+#include "../core/simd.h"
 #include "filter.h"
 
 #include <atomic>
@@ -30,6 +31,23 @@ inline constexpr double SplatMax = 0x1p32;
 
 /// A value rounded to the fixed-point grid (to nearest, in the default rounding mode).
 inline int64_t to_fixed(double x) { return std::llrint(x * SplatScale); }
+
+/// Adds to_fixed of the four values v (W*L in RGB, W; each below SplatMax in magnitude) to
+/// `sums` (an entry's lw[3], w). Where every |v| < 2^21 as one vector: x = v 2^30 + 1.5 2^52
+/// holds v 2^30 rounded to an integer (to nearest even) in its low bits, exactly llrint's
+/// result; other values take to_fixed per channel.
+[[gnu::always_inline]] inline void add_fixed(int64_t *sums, simd::f32x4 v) {
+    using namespace simd;
+    const f32x4 mag = bit_cast<f32x4>(bit_cast<i32x4>(v) & 0x7fffffff);
+    const i32x4 exact = mag < (f32x4{} + 0x1p21f);
+    if (exact[0] & exact[1] & exact[2] & exact[3]) {
+        const f64x4 magic = f64x4{} + 0x1.8p52;
+        const f64x4 x = __builtin_convertvector(v, f64x4) * (f64x4{} + SplatScale) + magic;
+        store(sums, load<i64x4>(sums) + (bit_cast<i64x4>(x) - bit_cast<i64x4>(magic)));
+    } else {
+        for (int c = 0; c < 4; ++c) sums[c] += to_fixed(v[c]);
+    }
+}
 
 /// The fixed-point sums of one view-pixel: W*L + E (E: the native-only radiance, added by the
 /// pixel's own native samples), W, E itself (its mean over the channels, or RGB: see

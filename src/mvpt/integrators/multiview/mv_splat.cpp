@@ -54,17 +54,14 @@ MVPT_MULTI_ISA void mv_sum_entries(const MvSplatTerms &t, const Spectrum *__rest
     }
 }
 
-// Per entry, the four values W*L (RGB) and W in the lanes of one vector, then x = v 2^30 + 1.5
-// 2^52, which holds v 2^30 rounded to an integer (to nearest even) in its low bits: exactly
-// to_fixed's llrint when |v| < 2^21. Other values that fit take to_fixed per channel.
+// Per entry, the four values W*L (RGB) and W in the lanes of one vector, added in fixed point
+// by add_fixed (one vector where they are below 2^21).
 MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvEntryRadiance *__restrict sum,
                                        const float *__restrict w, float l_scale, const int *__restrict slots,
                                        const uint32_t *__restrict pixels, const Vec2f *__restrict films,
                                        uint64_t sample, size_t begin, size_t end, uint64_t *__restrict dropped) {
     using namespace simd;
-    const f32x4 exact = f32x4{} + 0x1p21f, fits = f32x4{} + float(SplatMax);
-    const f64x4 scale = f64x4{} + SplatScale, magic = f64x4{} + 0x1.8p52;
-    const i64x4 magic_bits = bit_cast<i64x4>(magic);
+    const f32x4 fits = f32x4{} + float(SplatMax);
     auto all = [](i32x4 m) { return (m[0] & m[1] & m[2] & m[3]) != 0; };
     size_t lost = 0;
     // In a large cache, the entries of the next few views are loaded while this one's is summed.
@@ -85,13 +82,7 @@ MVPT_MULTI_ISA size_t mv_splat_entries(SplatCache &cache, const MvEntryRadiance 
             continue;
         }
         SplatEntry &p = cache.at(slots[i], pixels[i], films[i]);
-        if (all(mag < exact)) {
-            const f64x4 x = __builtin_convertvector(v, f64x4) * scale + magic;
-            store(&p, load<i64x4>(&p) + (bit_cast<i64x4>(x) - magic_bits));
-        } else {
-            for (int c = 0; c < 3; ++c) p.lw[c] += to_fixed(v[c]);
-            p.w += to_fixed(v[3]);
-        }
+        add_fixed(p.lw, v);
         ++p.count;
     }
     return lost;
