@@ -42,9 +42,9 @@ BSDFS = {
     "twosided-phong-roughplastic": '<bsdf type="twosided"><bsdf type="phong"><float name="exponent" value="20"/></bsdf>'
                                    '<bsdf type="roughplastic"><float name="alpha" value="0.3"/></bsdf></bsdf>',
 }
-# Wrappers that pass the views to their nested BSDFs (eval_pdf_views only: a mask's null
-# lobe is not part of the lobe mixture).
-WRAPPERS = {
+# BSDFs checked by the eval_pdf_views test alone: diffuse, and wrappers that pass the views to
+# their nested BSDFs (a mask's null lobe is not part of the lobe mixture).
+VIEWS_ONLY = {
     "diffuse": '<bsdf type="diffuse"/>',
     "mask-roughconductor": '<bsdf type="mask"><float name="opacity" value="0.7"/>'
                            '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></bsdf>',
@@ -100,7 +100,7 @@ def test_eval_pdf_matches_eval_and_pdf(bsdf):
         np.testing.assert_allclose(p, pr.pdf(*wi, wo), rtol=1e-5, atol=1e-7)
 
 
-@pytest.mark.parametrize("bsdf", sorted(BSDFS) + sorted(WRAPPERS))
+@pytest.mark.parametrize("bsdf", sorted(BSDFS) + sorted(VIEWS_ONLY))
 @pytest.mark.parametrize("views", [5, 37, 70])
 def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     """The shared next-event estimate and the bounce evaluate every sharing view's lobe at one
@@ -109,7 +109,7 @@ def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     wrappers' runs of 64). The microfacet BSDFs run the same lane code in both, smooth plastic
     the same products, so their values are bit-identical; the others regroup their products
     (to within rounding)."""
-    pr = probe({**BSDFS, **WRAPPERS}[bsdf])
+    pr = probe({**BSDFS, **VIEWS_ONLY}[bsdf])
     rng = np.random.default_rng(5)
     wo = rng.normal(size=(400, 3))
     wo = np.ascontiguousarray(wo / np.linalg.norm(wo, axis=1, keepdims=True), dtype=np.float32)
