@@ -19,6 +19,7 @@
 #include <atomic>
 #include <cmath>
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -58,6 +59,7 @@ struct alignas(64) SplatEntry {
     uint32_t key = UINT32_MAX; ///< view-pixel index; UINT32_MAX: empty
     uint32_t count = 0;
 };
+static_assert(offsetof(SplatEntry, w) == 3 * sizeof(int64_t), "add_fixed adds lw[3], w as one vector");
 
 /// Where a view's contributions land: its crop window (full-film pixels) and its pixel filter
 /// (design doc §5, "Pixel filters"). A contribution at film position x adds h(x - c_i) times

@@ -53,13 +53,12 @@ public:
         constexpr size_t Chunk = 64;
         Vec3f flipped[Chunk];
         for (size_t c = 0; c < n;) {
-            const float side = wi[c].z;
+            const int s = side(wi[c]);
             size_t end = c + 1;
-            while (end < n && end - c < Chunk && (wi[end].z > 0.f) == (side > 0.f) && (wi[end].z < 0.f) == (side < 0.f))
-                ++end;
-            if (side > 0.f) {
+            while (end < n && end - c < Chunk && side(wi[end]) == s) ++end;
+            if (s > 0) {
                 m_brdf[0]->eval_pdf_views(ctx, si, wi + c, end - c, wo, f + c, pdf + c);
-            } else if (side < 0.f) {
+            } else if (s < 0) {
                 for (size_t k = c; k < end; ++k) flipped[k - c] = flip(wi[k]);
                 m_brdf[1]->eval_pdf_views(ctx, si, flipped, end - c, flip(wo), f + c, pdf + c);
             } else {
@@ -79,6 +78,8 @@ public:
 
 private:
     static Vec3f flip(Vec3f v) { return {v.x, v.y, -v.z}; }
+    /// The side a direction is on: 1 front, -1 back, 0 in the shading plane.
+    static int side(Vec3f v) { return int(v.z > 0.f) - int(v.z < 0.f); }
     std::shared_ptr<Bsdf> m_brdf[2];
 };
 
