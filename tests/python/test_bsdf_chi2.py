@@ -50,6 +50,8 @@ CASES += [
                              '<bsdf type="conductor"/></bsdf>', ABOVE[:1]),
     ("mask", '<bsdf type="mask"><float name="opacity" value="0.6"/>' + _rough("roughconductor", "ggx", 0.4) + '</bsdf>',
      ABOVE[:2]),
+    ("normalmap", '<bsdf type="normalmap"><rgb name="normalmap" value="0.7, 0.4, 0.85"/>'
+                  + _rough("roughconductor", "ggx", 0.3) + '</bsdf>', [direction(30, 10), direction(75, 160)]),
 ]
 
 PARAMS = [(name, xml, wi) for name, xml, wis in CASES for wi in wis]

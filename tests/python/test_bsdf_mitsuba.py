@@ -68,6 +68,11 @@ SMOOTH = {  # BSDFs with a continuous part: eval/pdf compared
     "blendbsdf-delta": '<bsdf type="blendbsdf"><float name="weight" value="0.6"/>'
                        '<bsdf type="roughplastic"/><bsdf type="conductor"/></bsdf>',
     "mask": '<bsdf type="mask"><float name="opacity" value="0.7"/>' + _rough("roughconductor", "ggx", 0.4) + '</bsdf>',
+    # A tilted normal (constant: the probe's uv is fixed), around an isotropic and an anisotropic lobe.
+    "normalmap-roughplastic": '<bsdf type="normalmap"><rgb name="normalmap" value="0.7, 0.4, 0.85"/>'
+                              + _rough("roughplastic", "ggx", 0.2) + '</bsdf>',
+    "normalmap-roughconductor-aniso": '<bsdf type="normalmap"><rgb name="normalmap" value="0.35, 0.6, 0.8"/>'
+                                      + _rough("roughconductor", "beckmann", au=0.1, av=0.4) + '</bsdf>',
 }
 DELTA_ONLY = {  # sample() only
     "conductor-default": '<bsdf type="conductor"/>',
@@ -81,8 +86,10 @@ DELTA_ONLY = {  # sample() only
                         '<string name="ext_ior" value="water"/><rgb name="specular_transmittance" value="0.3, 0.6, 0.9"/></bsdf>',
     "thindielectric": '<bsdf type="thindielectric"><rgb name="specular_reflectance" value="0.8, 0.7, 0.6"/></bsdf>',
     "mask-dielectric": '<bsdf type="mask"><float name="opacity" value="0.3"/><bsdf type="dielectric"/></bsdf>',
+    "normalmap-dielectric": '<bsdf type="normalmap"><rgb name="normalmap" value="0.6, 0.45, 0.9"/>'
+                            '<bsdf type="dielectric"/></bsdf>',
 }
-TWO_SIDED_KINDS = ("roughdielectric", "dielectric", "thindielectric", "twosided", "mask")
+TWO_SIDED_KINDS = ("roughdielectric", "dielectric", "thindielectric", "twosided", "mask", "normalmap")
 
 
 def _mitsuba(xml):
@@ -94,6 +101,7 @@ def _si(wi):
     si.wi = mi.Vector3f(*[float(x) for x in wi])
     si.n = mi.Normal3f(0, 0, 1)
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    si.dp_du = mi.Vector3f(1, 0, 0)  # along the frame's s (normalmap's tangent)
     si.uv = mi.Point2f(0.5, 0.5)
     return si
 

@@ -76,6 +76,15 @@ CASES = {
                              r"unknown shape type 'rectangel' \(did you mean 'rectangle'\?\)"),
     "typo_transform_op": Case(_with_shape('<transform name="to_world"><rotat y="1" angle="3"/></transform>'), "<rotat ",
                               r"unknown transform operation <rotat> \(did you mean <rotate>\?\)"),
+    "normalmap_without_texture": Case(_with_shape('<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>'),
+                                      '<bsdf type="normalmap">', r"normalmap needs a 'normalmap' texture"),
+    "normalmap_two_bsdfs": Case(_with_shape('<bsdf type="normalmap"><bsdf type="diffuse"/>'
+                                            '<bsdf type="conductor"/></bsdf>'),
+                                '<bsdf type="conductor"/>', r"normalmap accepts one nested bsdf"),
+    "rawconstant_without_value": Case(_with_shape('<bsdf type="diffuse"><texture name="reflectance" type="rawconstant"/>'
+                                                  '</bsdf>'),
+                                      '<texture name="reflectance" type="rawconstant"/>',
+                                      r"rawconstant needs a <float> or <vector> 'value'"),
     "unused_child": Case(_with_shape('<film type="hdrfilm"/>'), '<film type="hdrfilm"/>',
                          r"shape 'cube' does not accept a nested film"),
     "duplicate_parameter": Case(scene(sensor(film_extra='\n            <integer name="width" value="8"/>')),

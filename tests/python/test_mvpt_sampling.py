@@ -53,11 +53,13 @@ VIEWS_ONLY = {
                                          '<bsdf type="roughplastic"><float name="alpha" value="0.3"/></bsdf></bsdf>',
     "blend-phong-diffuse": '<bsdf type="blendbsdf"><float name="weight" value="0.6"/>'
                            '<bsdf type="phong"><float name="exponent" value="20"/></bsdf><bsdf type="diffuse"/></bsdf>',
+    "normalmap-roughconductor": '<bsdf type="normalmap"><rgb name="normalmap" value="0.7, 0.4, 0.85"/>'
+                                '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></bsdf>',
 }
 # The BSDFs whose views run the lane code, or the products, of eval and pdf (bit-identical values).
 SAME_LANES = {"roughconductor", "roughconductor-beckmann-all-normals", "roughplastic",
               "roughplastic-beckmann-all-normals", "twosided-roughconductor", "mask-roughconductor",
-              "blend-roughconductor-roughplastic", "plastic"}
+              "blend-roughconductor-roughplastic", "plastic", "normalmap-roughconductor"}
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]
 
 
@@ -118,7 +120,9 @@ def test_eval_pdf_views_matches_eval_and_pdf(bsdf, views):
     extra /= np.linalg.norm(extra, axis=1, keepdims=True)
     wis = np.ascontiguousarray(VIEW_SETS["spread"] + [direction(120, 30)] + list(extra), dtype=np.float32)
     f, p = pr.eval_pdf_views(wis, wo)
-    assert np.count_nonzero(p) > 0.3 * p.size  # not vacuous: most pairs lie above the surface
+    # Not vacuous: a quarter of the pairs at least lie above the surface (above both frames' for
+    # the normal map, whose tilt also mirrors its normal for some of the views).
+    assert np.count_nonzero(p) > 0.25 * p.size
     for c, wi in enumerate(wis):
         if bsdf in SAME_LANES:
             np.testing.assert_array_equal(f[:, 3 * c:3 * c + 3], pr.eval(*wi, wo))

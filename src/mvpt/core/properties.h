@@ -51,6 +51,11 @@ public:
         auto it = m_values.find(name);
         return it != m_values.end() && std::holds_alternative<std::string>(it->second.value);
     }
+    /// True when parameter `name` was given as a <vector> or <point>.
+    bool is_vector(const std::string &name) const {
+        auto it = m_values.find(name);
+        return it != m_values.end() && std::holds_alternative<Vec3f>(it->second.value);
+    }
     /// Location of parameter `name`, or of the object itself when it is absent.
     const FileLoc &loc_of(const std::string &name) const;
 
