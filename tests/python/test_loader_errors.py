@@ -81,6 +81,11 @@ CASES = {
     "normalmap_two_bsdfs": Case(_with_shape('<bsdf type="normalmap"><bsdf type="diffuse"/>'
                                             '<bsdf type="conductor"/></bsdf>'),
                                 '<bsdf type="conductor"/>', r"normalmap accepts one nested bsdf"),
+    "bumpmap_without_texture": Case(_with_shape('<bsdf type="bumpmap"><bsdf type="diffuse"/></bsdf>'),
+                                    '<bsdf type="bumpmap">', r"bumpmap needs a nested texture \(the height field\)"),
+    "normalmap_without_bsdf": Case(_with_shape('<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">'
+                                               '<vector name="value" value="0.5, 0.5, 1"/></texture></bsdf>'),
+                                   '<bsdf type="normalmap">', r"normalmap needs a nested bsdf"),
     "rawconstant_without_value": Case(_with_shape('<bsdf type="diffuse"><texture name="reflectance" type="rawconstant"/>'
                                                   '</bsdf>'),
                                       '<texture name="reflectance" type="rawconstant"/>',

@@ -194,8 +194,9 @@ REAL = {  # shared scene, its defines, rig spacing (scene units), PT / MVPT spp 
     "m06-living-room/scene.xml": ({}, 0.05, 16, 8),
     # Principled, rough metal and plastic, textures, mirrored panel lights ('path': mvpt has no media).
     "bitterli-staircase2/scene.xml": ({"integrator": "path"}, 0.05, 16, 8),
-    # The material-preview object, normal-mapped rough plastic under an environment map.
+    # The material-preview object, normal- and bump-mapped rough plastic under an environment map.
     "m3data-testsuite/docs/scenes/bsdf_normalmap_with.xml": ({}, 0.05, 16, 8),
+    "m3data-testsuite/docs/scenes/bsdf_bumpmap_with.xml": ({}, 0.05, 16, 8),
 }
 
 

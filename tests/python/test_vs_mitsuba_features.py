@@ -55,6 +55,16 @@ def envmap_exr(tmp_path: Path) -> Path:
     return p
 
 
+def height_exr(tmp_path: Path) -> Path:
+    """A smooth height field for bump maps: a product of sines over the unit square."""
+    h, w = 48, 64
+    v, u = np.meshgrid((np.arange(h) + 0.5) / h, (np.arange(w) + 0.5) / w, indexing="ij")
+    img = 0.5 + 0.5 * np.sin(2 * np.pi * 3 * u) * np.sin(2 * np.pi * 2 * v)
+    p = tmp_path / "height.exr"
+    mc._mitsuba().Bitmap(np.repeat(img[..., None], 3, axis=2).astype(np.float32)).write(str(p))
+    return p
+
+
 SCENES = sorted(FEATURES.glob("*.xml"))
 
 
@@ -63,6 +73,8 @@ def test_feature_vs_mitsuba(scene, tmp_path):
     defines = {}
     if "envmap" in scene.stem:
         defines["envmap_file"] = str(envmap_exr(tmp_path))
+    if "bumpmap" in scene.stem:
+        defines["height_file"] = str(height_exr(tmp_path))
     spp = SPP_HEAVY.get(scene.stem, SPP)
     res = mc.run_or_skip(mc.compare_scene, plugin_types(scene), str(scene), defines, spp=spp, seeds=SEEDS)
     print(res.summary())

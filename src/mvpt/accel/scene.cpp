@@ -110,6 +110,7 @@ void Scene::fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint
     }
     const Shape *shape = m_geom_to_shape[geom];
     si.shape = shape;
+    si.instance = nullptr;
     si.prim = prim;
     shape->fill_interaction(ray, t, prim, b, si);
 }

@@ -6,6 +6,7 @@
 namespace mvpt {
 
 class Shape;
+class Instance;
 
 /// Relative offset for leaving a surface (Mitsuba's RayEpsilon scale).
 inline constexpr float RayEpsilon = 89.f * 0x1p-24f;
@@ -23,6 +24,9 @@ struct SurfaceInteraction {
     Vec3f wi;
     float time = 0.f;
     const Shape *shape = nullptr;
+    /// The instance whose shape was hit (nullptr: none), whose transform takes `shape`'s space
+    /// to the world (surface_uv_partials).
+    const Instance *instance = nullptr;
     /// Primitive index inside the shape (triangle index for meshes).
     uint32_t prim = 0;
 

@@ -58,6 +58,13 @@ public:
     /// sub-scene. Sets `si.shape` to the shape actually hit.
     virtual void fill_instance_interaction(const Ray &ray, float t, unsigned inner_geom, uint32_t prim, Vec2f b,
                                            SurfaceInteraction &si) const;
+    /// The partial derivatives dp/du and dp/dv of the surface's parametrisation (Mitsuba's) at
+    /// the point `p` of primitive `prim`, in the shape's space (the world, unless instanced);
+    /// zero where the shape has none. What bump maps perturb (surface_uv_partials).
+    virtual std::pair<Vec3f, Vec3f> uv_partials(uint32_t prim, Point3f p) const {
+        (void)prim, (void)p;
+        return {};
+    }
     /// Keyframe time range of an animated shape; false when it does not move.
     virtual bool time_range(float &begin, float &end) const { (void)begin; (void)end; return false; }
     /// True for a `shapegroup`, which is rendered only through instances.
@@ -86,6 +93,10 @@ public:
     bool sample_uv = true;
     std::string id;
 };
+
+/// dp/du and dp/dv at the hit `si` in world space (Shape::uv_partials, moved by the instance
+/// that was hit, if any).
+std::pair<Vec3f, Vec3f> surface_uv_partials(const SurfaceInteraction &si);
 
 /// Convert an area density at `p` (normal `n`) to solid angle seen from `ref`.
 inline float area_to_solid_angle(float pdf_a, Point3f ref, Point3f p, Normal3f n) {

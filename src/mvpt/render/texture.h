@@ -12,6 +12,11 @@ public:
     virtual Color3f eval(Vec2f uv) const = 0;
     /// Scalar value (roughness, weights): the mean of the channels.
     virtual float eval_1(Vec2f uv) const { return eval(uv).mean(); }
+    /// The gradient of eval_1 in uv (bump maps); zero where it is piecewise constant.
+    virtual Vec2f eval_1_grad(Vec2f uv) const {
+        (void)uv;
+        return {0.f, 0.f};
+    }
     /// Average over the texture domain (used for light power and previews).
     virtual Color3f mean() const = 0;
     virtual bool is_constant() const { return false; }

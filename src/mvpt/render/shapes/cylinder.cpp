@@ -64,6 +64,12 @@ public:
         set_surface(float(x), float(y), float(z), si.p, si.n, si.uv, &si.sh_frame);
     }
 
+    /// dp/du = 2 pi (-y, x, 0), dp/dv = (0, 0, 1) at the local point (x, y, z).
+    std::pair<Vec3f, Vec3f> uv_partials(uint32_t, Point3f p) const override {
+        const Point3f local = m_to_object.point(p);
+        return {m_to_world.vector(Vec3f(-local.y, local.x, 0.f) * (2.f * Pi)), m_to_world.vector({0.f, 0.f, 1.f})};
+    }
+
     float area() const override { return 1.f / m_inv_area; }
     BoundingBox bounds() const override {
         Vec3f x1 = m_to_world.vector({1.f, 0.f, 0.f}), x2 = m_to_world.vector({0.f, 1.f, 0.f});

@@ -44,6 +44,15 @@ public:
         si.n = m_normal;
     }
 
+    /// dp/du = (cos phi, sin phi, 0), dp/dv = 2 pi r (-sin phi, cos phi, 0) at the local point
+    /// r (cos phi, sin phi, 0) (u = r, v = phi / 2 pi).
+    std::pair<Vec3f, Vec3f> uv_partials(uint32_t, Point3f p) const override {
+        const Point3f local = m_to_object.point(p);
+        const float r = std::sqrt(local.x * local.x + local.y * local.y);
+        const float c = r > 0.f ? local.x / r : 1.f, s = r > 0.f ? local.y / r : 0.f;
+        return {m_to_world.vector({c, s, 0.f}), m_to_world.vector(Vec3f(-s, c, 0.f) * (2.f * Pi * r))};
+    }
+
     float area() const override { return 1.f / m_inv_area; }
     BoundingBox bounds() const override {
         BoundingBox b;

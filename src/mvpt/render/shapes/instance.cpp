@@ -164,6 +164,7 @@ void Instance::fill_instance_interaction(const Ray &ray, float t, unsigned inner
     local.d = to_local.vector(ray.d);
     const Shape *inner = m_group->member(inner_geom);
     si.shape = inner;
+    si.instance = this;
     si.prim = prim;
     inner->fill_interaction(local, t, prim, b, si);
 
@@ -174,6 +175,14 @@ void Instance::fill_instance_interaction(const Ray &ray, float t, unsigned inner
     s = s - ns * dot(ns, s);
     float l = norm(s);
     si.sh_frame = l > 1e-12f ? Frame(s / l, cross(ns, s / l), ns) : Frame(ns);
+}
+
+std::pair<Vec3f, Vec3f> surface_uv_partials(const SurfaceInteraction &si) {
+    if (!si.shape) return {};
+    if (!si.instance) return si.shape->uv_partials(si.prim, si.p);
+    const Transform to_world = si.instance->transform_at(si.time);
+    const auto [du, dv] = si.shape->uv_partials(si.prim, to_world.inverse().point(si.p));
+    return {to_world.vector(du), to_world.vector(dv)};
 }
 
 BoundingBox Instance::bounds() const {

@@ -183,6 +183,17 @@ Frame TriangleMesh::shading_frame(uint32_t i0, uint32_t i1, uint32_t i2, Normal3
     return Frame(ns);
 }
 
+std::pair<Vec3f, Vec3f> TriangleMesh::uv_partials(uint32_t prim, Point3f) const {
+    const uint32_t *idx = &m_data.indices[3 * size_t(prim)];
+    const Point3f &p0 = m_data.positions[idx[0]];
+    const Vec3f e1 = m_data.positions[idx[1]] - p0, e2 = m_data.positions[idx[2]] - p0;
+    if (m_data.uvs.empty()) return {e1, e2}; // barycentric: u = b1, v = b2
+    // The change from barycentric to texture coordinates (zero where the uvs are degenerate).
+    const Vec2f uv0 = m_data.uvs[idx[0]], duv0 = m_data.uvs[idx[1]] - uv0, duv1 = m_data.uvs[idx[2]] - uv0;
+    const float det = duv0.x * duv1.y - duv0.y * duv1.x, inv = det != 0.f ? 1.f / det : 0.f;
+    return {(e1 * duv1.y - e2 * duv0.y) * inv, (e2 * duv0.x - e1 * duv1.x) * inv};
+}
+
 ShapeSample TriangleMesh::sample_area(Vec2f u) const {
     ShapeSample s;
     sample_point(u, s);

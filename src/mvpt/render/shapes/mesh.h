@@ -23,6 +23,8 @@ public:
     ShapeSample sample_area(Vec2f u) const override;
     /// Area sampling converted to solid angle, as Shape's default, without the extra call and copy.
     std::pair<ShapeSample, float> sample_solid_angle(Point3f ref, Vec2f u) const override;
+    /// Constant over a triangle: from its edges and uvs (barycentric without uvs).
+    std::pair<Vec3f, Vec3f> uv_partials(uint32_t prim, Point3f p) const override;
 
     const MeshData &data() const { return m_data; }
     /// True, with the parallelogram and its area density, when sample_area maps u to

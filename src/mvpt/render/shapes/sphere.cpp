@@ -203,6 +203,15 @@ private:
         return true;
     }
 
+    /// dp/du = 2 pi (-y, x, 0), dp/dv = pi (z cos phi, z sin phi, -r) at the local point (x, y, z),
+    /// r = |(x, y)|; at the poles dp/dv = pi (1, 0, 0).
+    std::pair<Vec3f, Vec3f> uv_partials(uint32_t, Point3f p) const override {
+        const Point3f local = m_to_object.point(p);
+        const float r = std::sqrt(local.x * local.x + local.y * local.y);
+        const Vec3f dv = r > 0.f ? Vec3f(local.z * local.x / r, local.z * local.y / r, -r) : Vec3f(1.f, 0.f, 0.f);
+        return {m_to_world.vector({-local.y, local.x, 0.f}) * (2.f * Pi), m_to_world.vector(dv) * Pi};
+    }
+
     Vec2f uv_of(Point3f p) const {
         Point3f local = m_to_object.point(p);
         float theta = safe_acos(local.z), phi = std::atan2(local.y, local.x);

@@ -63,6 +63,23 @@ public:
     }
 
     float eval_1(Vec2f uv) const override { return eval(uv).luminance(); }
+    /// The gradient of the bilinear interpolation of the luminance, by the chain rule through
+    /// the uv transform (Mitsuba's eval_1_grad; zero for the nearest lookup).
+    Vec2f eval_1_grad(Vec2f uv_in) const override {
+        if (!m_bilinear) return {0.f, 0.f};
+        Vec2f uv = m_to_uv(uv_in);
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {0.f, 0.f};
+        auto to_int = [](float v) { return int(std::clamp(v, -1e9f, 1e9f)); };
+        const float w = float(m_image.width), h = float(m_image.height);
+        float x = uv.x * w - 0.5f, y = uv.y * h - 0.5f;
+        float fx = std::floor(x), fy = std::floor(y), tx = x - fx, ty = y - fy;
+        int x0 = to_int(fx), y0 = to_int(fy);
+        const float f00 = texel(x0, y0).luminance(), f10 = texel(x0 + 1, y0).luminance(),
+                    f01 = texel(x0, y0 + 1).luminance(), f11 = texel(x0 + 1, y0 + 1).luminance();
+        // d/dx and d/dy in pixels, then x = (a u + b v + c) w - 1/2, y = (d u + e v + f) h - 1/2.
+        const float dx = (1.f - ty) * (f10 - f00) + ty * (f11 - f01), dy = (1.f - tx) * (f01 - f00) + tx * (f11 - f10);
+        return {m_to_uv.a * w * dx + m_to_uv.d * h * dy, m_to_uv.b * w * dx + m_to_uv.e * h * dy};
+    }
     Color3f mean() const override { return m_mean; }
 
 private:
