@@ -53,13 +53,19 @@ VIEWS_ONLY = {
                                          '<bsdf type="roughplastic"><float name="alpha" value="0.3"/></bsdf></bsdf>',
     "blend-phong-diffuse": '<bsdf type="blendbsdf"><float name="weight" value="0.6"/>'
                            '<bsdf type="phong"><float name="exponent" value="20"/></bsdf><bsdf type="diffuse"/></bsdf>',
+    "principled": '<bsdf type="principled"><rgb name="base_color" value="0.7, 0.4, 0.2"/><float name="roughness" value="0.4"/>'
+                  '<float name="metallic" value="0.3"/><float name="clearcoat" value="0.5"/><float name="sheen" value="0.4"/>'
+                  '<float name="anisotropic" value="0.3"/></bsdf>',
+    "principled-spec-trans": '<bsdf type="principled"><float name="spec_trans" value="0.6"/>'
+                             '<float name="roughness" value="0.3"/></bsdf>',
     "normalmap-roughconductor": '<bsdf type="normalmap"><rgb name="normalmap" value="0.7, 0.4, 0.85"/>'
                                 '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></bsdf>',
 }
 # The BSDFs whose views run the lane code, or the products, of eval and pdf (bit-identical values).
 SAME_LANES = {"roughconductor", "roughconductor-beckmann-all-normals", "roughplastic",
               "roughplastic-beckmann-all-normals", "twosided-roughconductor", "mask-roughconductor",
-              "blend-roughconductor-roughplastic", "plastic", "normalmap-roughconductor"}
+              "blend-roughconductor-roughplastic", "plastic", "normalmap-roughconductor",
+              "principled", "principled-spec-trans"}
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]
 
 

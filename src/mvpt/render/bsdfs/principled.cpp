@@ -61,7 +61,8 @@ public:
         BsdfSample bs;
         float cos_theta_i = Frame::cos_theta(wi);
         if (cos_theta_i == 0.f) return {bs, {}};
-        Weights w = weights(si.uv);
+        const Params q = params(si.uv);
+        const Weights &w = q.w;
         bool front_side = cos_theta_i > 0.f;
         // From inside only the specular lobes exist; without transmission nothing.
         if (!front_side && !(w.bsdf > 0.f)) return {bs, {}};
@@ -77,7 +78,7 @@ public:
             bs.sampled_type = BsdfDiffuseReflection;
             if (cos_theta_i * Frame::cos_theta(bs.wo) <= 0.f) return {bs, {}};
         } else if (m_clearcoat.enabled && u1 < p.diffuse + p.clearcoat) {
-            Gtr1 cc_distr(clearcoat_alpha(si.uv));
+            Gtr1 cc_distr(q.cc_alpha);
             Vec3f m_cc = cc_distr.sample(u2);
             bs.wo = reflect(wi, m_cc);
             bs.sampled_type = BsdfGlossyReflection;
@@ -99,97 +100,37 @@ public:
                 return {bs, {}};
         }
 
-        bs.pdf = pdf(ctx, si, wi, bs.wo);
+        Color3f value;
+        lobes(q, ctx, wi, bs.wo, &value, &bs.pdf);
         if (!(bs.pdf > 0.f)) return {bs, {}};
-        return {bs, eval(ctx, si, wi, bs.wo) / bs.pdf};
+        return {bs, value / bs.pdf};
     }
 
     Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi);
-        if (cos_theta_i == 0.f) return {};
-        Weights w = weights(si.uv);
-        float flatness = m_flatness.eval_1(si.uv), sheen = m_sheen.eval_1(si.uv);
-        Color3f base_color = m_base_color->eval(si.uv);
-
-        float cos_theta_o = Frame::cos_theta(wo);
-        bool reflect = cos_theta_i * cos_theta_o > 0.f, refract = cos_theta_i * cos_theta_o < 0.f;
-        bool front_side = cos_theta_i > 0.f;
-        float eta_path = front_side ? m_eta : 1.f / m_eta, inv_eta_path = front_side ? 1.f / m_eta : m_eta;
-
-        auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
-        MicrofacetDistribution spec_distr(MicrofacetType::GGX, ax, ay);
-        Vec3f wh = half_vector(wi, wo, reflect, eta_path);
-        float F = fresnel_dielectric(dot(wi, wh), m_eta).F;
-        bool compat_reflect = mac_mic_compatible(wh, wi, wo, cos_theta_i, true);
-        bool compat_refract = mac_mic_compatible(wh, wi, wo, cos_theta_i, false);
-
-        bool spec_reflect_active = reflect && compat_reflect && F > 0.f;
-        bool clearcoat_active = m_clearcoat.enabled && w.clearcoat > 0.f && reflect && compat_reflect && front_side;
-        bool spec_trans_active = m_spec_trans.enabled && w.bsdf > 0.f && refract && compat_refract && F < 1.f;
-        bool diffuse_active = w.brdf > 0.f && reflect && front_side;
-        bool sheen_active = m_sheen.enabled && sheen > 0.f && reflect && 1.f - w.metallic > 0.f && front_side;
-
-        float D = spec_distr.eval(wh), G = spec_distr.G(wi, wo, wh);
-        Color3f value(0.f);
-
-        // Main specular reflection [Walter et al. 2007, eq. 20] with the principled Fresnel blend.
-        if (spec_reflect_active) {
-            float lum = m_spec_tint.enabled ? luminance(base_color) : 1.f;
-            float spec_tint = m_spec_tint.eval_1(si.uv);
-            Color3f F_p = principled_fresnel(F, w.metallic, spec_tint, base_color, lum, dot(wi, wh), front_side,
-                                             w.bsdf, m_eta, m_metallic.enabled, m_spec_tint.enabled);
-            value += F_p * (D * G / (4.f * std::abs(cos_theta_i)));
-        }
-
-        // Main specular transmission [Walter et al. 2007, eq. 21], tinted by sqrt(base_color).
-        if (spec_trans_active) {
-            float scale = ctx.mode == TransportMode::Radiance ? inv_eta_path * inv_eta_path : 1.f;
-            float dot_i = dot(wi, wh), dot_o = dot(wo, wh), denom = dot_i + eta_path * dot_o;
-            float t = std::abs(scale * (1.f - F) * D * G * eta_path * eta_path * dot_i * dot_o /
-                               (cos_theta_i * denom * denom));
-            value += csqrt(base_color) * (w.bsdf * t);
-        }
-
-        if (clearcoat_active) value += clearcoat_value(si, w, wi, wo, wh);
-        if (diffuse_active) add_diffuse(value, si, w, base_color, flatness, sheen_active ? sheen : 0.f, wi, wo, wh);
+        Color3f value;
+        lobes(params(si.uv), ctx, wi, wo, &value, nullptr);
         return value;
     }
 
-    float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi);
-        if (cos_theta_i == 0.f) return 0.f;
-        Weights w = weights(si.uv);
-        bool front_side = cos_theta_i > 0.f;
-        float eta_path = front_side ? m_eta : 1.f / m_eta;
-        float cos_theta_o = Frame::cos_theta(wo);
-        bool reflect = cos_theta_i * cos_theta_o > 0.f, refract = cos_theta_i * cos_theta_o < 0.f;
+    float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        float p;
+        lobes(params(si.uv), ctx, wi, wo, nullptr, &p);
+        return p;
+    }
 
-        Vec3f wh = half_vector(wi, wo, reflect, eta_path);
-        auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
-        MicrofacetDistribution spec_distr(MicrofacetType::GGX, ax, ay);
-        float F = fresnel_dielectric(dot(wi, wh), m_eta).F;
-        LobeProbs p = lobe_probs(front_side, F, w);
+    std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
+                                        Vec3f wo) const override {
+        std::pair<Spectrum, float> out;
+        lobes(params(si.uv), ctx, wi, wo, &out.first, &out.second);
+        return out;
+    }
 
-        // |d wh / d wo| for reflection [Walter et al. 2007, eq. 14] and refraction (eq. 17).
-        float dot_i = dot(wi, wh), dot_o = dot(wo, wh);
-        float dwh_dwo;
-        if (m_spec_trans.enabled && !reflect) {
-            float denom = dot_i + eta_path * dot_o;
-            dwh_dwo = std::abs(eta_path * eta_path * dot_o / (denom * denom));
-        } else {
-            dwh_dwo = std::abs(1.f / (4.f * dot_o));
-        }
-
-        Vec3f wi_up = front_side ? wi : -wi;
-        float result = 0.f;
-        bool reflect_compat = reflect && mac_mic_compatible(wh, wi, wo, cos_theta_i, true);
-        if (reflect_compat) result += p.spec_reflect * spec_distr.pdf(wi_up, wh) * dwh_dwo;
-        if (reflect) result += p.diffuse * InvPi * cos_theta_o;
-        if (m_spec_trans.enabled && refract && mac_mic_compatible(wh, wi, wo, cos_theta_i, false))
-            result += p.spec_trans * spec_distr.pdf(wi_up, wh) * dwh_dwo;
-        if (m_clearcoat.enabled && reflect_compat)
-            result += p.clearcoat * Gtr1(clearcoat_alpha(si.uv)).pdf(wh) * dwh_dwo;
-        return result;
+    /// The textures once for all the views, then each view's lobes (value and density sharing
+    /// the half vector, the Fresnel term and the distribution).
+    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        const Params q = params(si.uv);
+        for (size_t c = 0; c < n; ++c) lobes(q, ctx, wi[c], wo, &f[c], &pdf[c]);
     }
 
     /// Selection-probability-weighted mean of the lobes' GGX alphas at normal
@@ -211,25 +152,124 @@ private:
         float bsdf; ///< weight of the transmissive part: (1 - metallic) spec_trans
     };
 
+    /// The textures' values at a hit: what the lobes read.
+    struct Params {
+        Weights w;
+        Color3f base_color;
+        float flatness, sheen, sheen_tint, spec_tint, cc_alpha;
+    };
+    Params params(Vec2f uv) const {
+        Params q;
+        q.w = weights(uv);
+        q.base_color = m_base_color->eval(uv);
+        q.flatness = m_flatness.eval_1(uv), q.sheen = m_sheen.eval_1(uv);
+        q.sheen_tint = m_sheen_tint.eval_1(uv), q.spec_tint = m_spec_tint.eval_1(uv);
+        q.cc_alpha = m_clearcoat.enabled ? clearcoat_alpha(uv) : 1.f;
+        return q;
+    }
+
+    /// The value f |cos wo| (into *value) and the density of `sample` (into *pdf) of (wi, wo),
+    /// either may be null; they share the half vector, the Fresnel term and the distribution.
+    void lobes(const Params &q, const BsdfContext &ctx, Vec3f wi, Vec3f wo, Color3f *value, float *pdf) const {
+        if (value) *value = Color3f(0.f);
+        if (pdf) *pdf = 0.f;
+        float cos_theta_i = Frame::cos_theta(wi);
+        if (cos_theta_i == 0.f) return;
+        const Weights &w = q.w;
+        float cos_theta_o = Frame::cos_theta(wo);
+        bool reflect = cos_theta_i * cos_theta_o > 0.f, refract = cos_theta_i * cos_theta_o < 0.f;
+        bool front_side = cos_theta_i > 0.f;
+        float eta_path = front_side ? m_eta : 1.f / m_eta, inv_eta_path = front_side ? 1.f / m_eta : m_eta;
+
+        auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
+        MicrofacetDistribution spec_distr(MicrofacetType::GGX, ax, ay);
+        Vec3f wh = half_vector(wi, wo, reflect, eta_path);
+        float F = fresnel_dielectric(dot(wi, wh), m_eta).F;
+        bool compat_reflect = mac_mic_compatible(wh, wi, wo, cos_theta_i, true);
+        bool compat_refract = mac_mic_compatible(wh, wi, wo, cos_theta_i, false);
+        if (value) *value = lobe_values(q, ctx, wi, wo, wh, spec_distr, F, compat_reflect, compat_refract, eta_path,
+                                         inv_eta_path);
+        if (!pdf) return;
+
+        // |d wh / d wo| for reflection [Walter et al. 2007, eq. 14] and refraction (eq. 17).
+        LobeProbs p = lobe_probs(front_side, F, w);
+        float dot_i = dot(wi, wh), dot_o = dot(wo, wh);
+        float dwh_dwo;
+        if (m_spec_trans.enabled && !reflect) {
+            float denom = dot_i + eta_path * dot_o;
+            dwh_dwo = std::abs(eta_path * eta_path * dot_o / (denom * denom));
+        } else {
+            dwh_dwo = std::abs(1.f / (4.f * dot_o));
+        }
+        Vec3f wi_up = front_side ? wi : -wi;
+        float result = 0.f;
+        bool reflect_compat = reflect && compat_reflect;
+        if (reflect_compat) result += p.spec_reflect * spec_distr.pdf(wi_up, wh) * dwh_dwo;
+        if (reflect) result += p.diffuse * InvPi * cos_theta_o;
+        if (m_spec_trans.enabled && refract && compat_refract)
+            result += p.spec_trans * spec_distr.pdf(wi_up, wh) * dwh_dwo;
+        if (m_clearcoat.enabled && reflect_compat) result += p.clearcoat * Gtr1(q.cc_alpha).pdf(wh) * dwh_dwo;
+        *pdf = result;
+    }
+
+    /// The lobes' values at (wi, wo) with half vector wh and Fresnel term F.
+    Color3f lobe_values(const Params &q, const BsdfContext &ctx, Vec3f wi, Vec3f wo, Vec3f wh,
+                        const MicrofacetDistribution &spec_distr, float F, bool compat_reflect, bool compat_refract,
+                        float eta_path, float inv_eta_path) const {
+        const Weights &w = q.w;
+        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+        bool reflect = cos_theta_i * cos_theta_o > 0.f, refract = cos_theta_i * cos_theta_o < 0.f;
+        bool front_side = cos_theta_i > 0.f;
+        bool spec_reflect_active = reflect && compat_reflect && F > 0.f;
+        bool clearcoat_active = m_clearcoat.enabled && w.clearcoat > 0.f && reflect && compat_reflect && front_side;
+        bool spec_trans_active = m_spec_trans.enabled && w.bsdf > 0.f && refract && compat_refract && F < 1.f;
+        bool diffuse_active = w.brdf > 0.f && reflect && front_side;
+        bool sheen_active = m_sheen.enabled && q.sheen > 0.f && reflect && 1.f - w.metallic > 0.f && front_side;
+
+        float D = spec_distr.eval(wh), G = spec_distr.G(wi, wo, wh);
+        Color3f value(0.f);
+
+        // Main specular reflection [Walter et al. 2007, eq. 20] with the principled Fresnel blend.
+        if (spec_reflect_active) {
+            float lum = m_spec_tint.enabled ? luminance(q.base_color) : 1.f;
+            Color3f F_p = principled_fresnel(F, w.metallic, q.spec_tint, q.base_color, lum, dot(wi, wh), front_side,
+                                             w.bsdf, m_eta, m_metallic.enabled, m_spec_tint.enabled);
+            value += F_p * (D * G / (4.f * std::abs(cos_theta_i)));
+        }
+
+        // Main specular transmission [Walter et al. 2007, eq. 21], tinted by sqrt(base_color).
+        if (spec_trans_active) {
+            float scale = ctx.mode == TransportMode::Radiance ? inv_eta_path * inv_eta_path : 1.f;
+            float dot_i = dot(wi, wh), dot_o = dot(wo, wh), denom = dot_i + eta_path * dot_o;
+            float t = std::abs(scale * (1.f - F) * D * G * eta_path * eta_path * dot_i * dot_o /
+                               (cos_theta_i * denom * denom));
+            value += csqrt(q.base_color) * (w.bsdf * t);
+        }
+
+        if (clearcoat_active) value += clearcoat_value(q, wi, wo, wh);
+        if (diffuse_active) add_diffuse(value, q, sheen_active ? q.sheen : 0.f, wi, wo, wh);
+        return value;
+    }
+
     /// Clearcoat: GTR1 distribution, Schlick Fresnel with R0 = 0.04, fixed GGX alpha 0.25 masking.
     /// (Mitsuba's form: F D G |cos_o| without the 1 / (4 cos_i cos_o) microfacet factor.)
-    Color3f clearcoat_value(const SurfaceInteraction &si, const Weights &w, Vec3f wi, Vec3f wo, Vec3f wh) const {
+    Color3f clearcoat_value(const Params &q, Vec3f wi, Vec3f wo, Vec3f wh) const {
         float Fcc = schlick_fresnel(0.04f, dot(wi, wh), m_eta);
-        float Dcc = Gtr1(clearcoat_alpha(si.uv)).eval(wh);
+        float Dcc = Gtr1(q.cc_alpha).eval(wh);
         float Gcc = smith_ggx1(wi, wh, 0.25f) * smith_ggx1(wo, wh, 0.25f);
-        return Color3f(w.clearcoat * 0.25f * Fcc * Dcc * Gcc * std::abs(Frame::cos_theta(wo)));
+        return Color3f(q.w.clearcoat * 0.25f * Fcc * Dcc * Gcc * std::abs(Frame::cos_theta(wo)));
     }
 
     /// Diffuse with retro-reflection, fake subsurface and sheen [Burley 2015, §5.3], added to
     /// `value` (sheen 0: none).
-    void add_diffuse(Color3f &value, const SurfaceInteraction &si, const Weights &w, Color3f base_color, float flatness,
-                     float sheen, Vec3f wi, Vec3f wo, Vec3f wh) const {
+    void add_diffuse(Color3f &value, const Params &q, float sheen, Vec3f wi, Vec3f wo, Vec3f wh) const {
+        const Weights &w = q.w;
         float abs_cos_o = std::abs(Frame::cos_theta(wo)), cos_theta_d = dot(wh, wo);
-        float f = disney_diffuse(std::abs(Frame::cos_theta(wi)), abs_cos_o, cos_theta_d, w.roughness, flatness,
+        float f = disney_diffuse(std::abs(Frame::cos_theta(wi)), abs_cos_o, cos_theta_d, w.roughness, q.flatness,
                                  m_flatness.enabled);
-        value += base_color * (w.brdf * abs_cos_o * InvPi * f);
+        value += q.base_color * (w.brdf * abs_cos_o * InvPi * f);
         if (sheen > 0.f) {
-            Color3f c_sheen = sheen_color(base_color, m_sheen_tint.eval_1(si.uv), m_sheen_tint.enabled);
+            Color3f c_sheen = sheen_color(q.base_color, q.sheen_tint, m_sheen_tint.enabled);
             value += c_sheen * (sheen * (1.f - w.metallic) * schlick_weight(std::abs(cos_theta_d)) * abs_cos_o);
         }
     }
