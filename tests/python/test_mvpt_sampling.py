@@ -58,6 +58,10 @@ VIEWS_ONLY = {
                   '<float name="anisotropic" value="0.3"/></bsdf>',
     "principled-spec-trans": '<bsdf type="principled"><float name="spec_trans" value="0.6"/>'
                              '<float name="roughness" value="0.3"/></bsdf>',
+    "roughdielectric": '<bsdf type="roughdielectric"><float name="alpha" value="0.2"/></bsdf>',
+    "roughdielectric-beckmann-all-normals": '<bsdf type="roughdielectric"><string name="distribution" value="beckmann"/>'
+                                            '<float name="alpha" value="0.3"/>'
+                                            '<boolean name="sample_visible" value="false"/></bsdf>',
     "normalmap-roughconductor": '<bsdf type="normalmap"><rgb name="normalmap" value="0.7, 0.4, 0.85"/>'
                                 '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></bsdf>',
 }
@@ -65,7 +69,7 @@ VIEWS_ONLY = {
 SAME_LANES = {"roughconductor", "roughconductor-beckmann-all-normals", "roughplastic",
               "roughplastic-beckmann-all-normals", "twosided-roughconductor", "mask-roughconductor",
               "blend-roughconductor-roughplastic", "plastic", "normalmap-roughconductor",
-              "principled", "principled-spec-trans"}
+              "principled", "principled-spec-trans", "roughdielectric", "roughdielectric-beckmann-all-normals"}
 PARAMS = [(b, v) for b in BSDFS for v in VIEW_SETS]
 
 

@@ -64,58 +64,93 @@ public:
             // (Mitsuba's G-based shortcut would assume the unwidened one). Shadowed samples,
             // and those that left on the wrong side for their lobe, have no weight.
             if (distr.G(wi, bs.wo, m) == 0.f) return {bs, {}};
-            float p = pdf(ctx, si, wi, bs.wo);
+            Spectrum value;
+            float p;
+            lobes(at(si), ctx, wi, bs.wo, &value, &p);
             if (!(p > 0.f)) return {bs, {}};
-            return {bs, eval(ctx, si, wi, bs.wo) / p};
+            return {bs, value / p};
         }
         return {bs, weight};
     }
 
     Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i == 0.f) return {};
-        bool is_reflection = cos_theta_i * cos_theta_o > 0.f;
-        float eta = cos_theta_i > 0.f ? m_eta : m_inv_eta, inv_eta = cos_theta_i > 0.f ? m_inv_eta : m_eta;
-        // Generalised half-vector, oriented towards the macro-surface normal [Walter et al. 2007, eq. 16].
-        Vec3f m = normalize(wi + wo * (is_reflection ? 1.f : eta));
-        m = m * std::copysign(1.f, Frame::cos_theta(m));
-        MicrofacetDistribution distr = m_distr.at(si);
-        float D = distr.eval(m), F = fresnel_dielectric(dot(wi, m), m_eta).F, G = distr.G(wi, wo, m);
-        if (is_reflection) {
-            Spectrum r(F * D * G / (4.f * std::abs(cos_theta_i)));
-            if (m_specular_reflectance) r *= m_specular_reflectance->eval(si.uv);
-            return r;
-        }
-        // [Walter et al. 2007, eq. 21], with the radiance scale 1/eta^2.
-        float scale = ctx.mode == TransportMode::Radiance ? inv_eta * inv_eta : 1.f;
-        float dot_i = dot(wi, m), dot_o = dot(wo, m);
-        Spectrum t(std::abs(scale * (1.f - F) * D * G * eta * eta * dot_i * dot_o /
-                            (cos_theta_i * sqr(dot_i + eta * dot_o))));
-        if (m_specular_transmittance) t *= m_specular_transmittance->eval(si.uv);
-        return t;
+        Spectrum value;
+        lobes(at(si), ctx, wi, wo, &value, nullptr);
+        return value;
     }
 
-    float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
-        if (cos_theta_i == 0.f) return 0.f;
-        bool is_reflection = cos_theta_i * cos_theta_o > 0.f;
-        float eta = cos_theta_i > 0.f ? m_eta : m_inv_eta;
-        Vec3f m = normalize(wi + wo * (is_reflection ? 1.f : eta));
-        m = m * std::copysign(1.f, Frame::cos_theta(m));
-        // Micro- and macro-surface must agree on the sides (as smith_g1 enforces in eval).
-        if (!(dot(wi, m) * cos_theta_i > 0.f && dot(wo, m) * cos_theta_o > 0.f)) return 0.f;
-        float dwh_dwo = is_reflection ? 1.f / (4.f * dot(wo, m))
-                                      : eta * eta * dot(wo, m) / sqr(dot(wi, m) + eta * dot(wo, m));
-        MicrofacetDistribution sample_distr = sampling_distribution(m_distr.at(si), cos_theta_i);
-        float prob = sample_distr.pdf(std::copysign(1.f, cos_theta_i) * wi, m);
-        float F = fresnel_dielectric(dot(wi, m), m_eta).F;
-        prob *= is_reflection ? F : 1.f - F;
-        return prob * std::abs(dwh_dwo);
+    float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
+        float p;
+        lobes(at(si), ctx, wi, wo, nullptr, &p);
+        return p;
+    }
+
+    std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
+                                        Vec3f wo) const override {
+        std::pair<Spectrum, float> out;
+        lobes(at(si), ctx, wi, wo, &out.first, &out.second);
+        return out;
+    }
+
+    /// The textures once for all the views, then each view's value and density together.
+    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
+                        Spectrum *f, float *pdf) const override {
+        const Params q = at(si);
+        for (size_t c = 0; c < n; ++c) lobes(q, ctx, wi[c], wo, &f[c], &pdf[c]);
     }
 
     float roughness(const SurfaceInteraction &si) const override { return m_distr.mean_alpha(si); }
 
 private:
+    /// The textures' values at a hit.
+    struct Params {
+        MicrofacetDistribution distr;
+        Spectrum reflectance{1.f}, transmittance{1.f};
+    };
+    Params at(const SurfaceInteraction &si) const {
+        Params q{m_distr.at(si)};
+        if (m_specular_reflectance) q.reflectance = m_specular_reflectance->eval(si.uv);
+        if (m_specular_transmittance) q.transmittance = m_specular_transmittance->eval(si.uv);
+        return q;
+    }
+
+    /// f |cos wo| (into *value) and the density of `sample` (into *pdf) of (wi, wo), either may
+    /// be null; they share the generalised half vector m [Walter et al. 2007, eq. 16] and F.
+    void lobes(const Params &q, const BsdfContext &ctx, Vec3f wi, Vec3f wo, Spectrum *value, float *pdf) const {
+        if (value) *value = Spectrum();
+        if (pdf) *pdf = 0.f;
+        float cos_theta_i = Frame::cos_theta(wi), cos_theta_o = Frame::cos_theta(wo);
+        if (cos_theta_i == 0.f) return;
+        bool is_reflection = cos_theta_i * cos_theta_o > 0.f;
+        float eta = cos_theta_i > 0.f ? m_eta : m_inv_eta, inv_eta = cos_theta_i > 0.f ? m_inv_eta : m_eta;
+        // Generalised half-vector, oriented towards the macro-surface normal.
+        Vec3f m = normalize(wi + wo * (is_reflection ? 1.f : eta));
+        m = m * std::copysign(1.f, Frame::cos_theta(m));
+        float F = fresnel_dielectric(dot(wi, m), m_eta).F;
+        if (value) {
+            float D = q.distr.eval(m), G = q.distr.G(wi, wo, m);
+            if (is_reflection) {
+                *value = Spectrum(F * D * G / (4.f * std::abs(cos_theta_i)));
+                if (m_specular_reflectance) *value *= q.reflectance;
+            } else {
+                // [Walter et al. 2007, eq. 21], with the radiance scale 1/eta^2.
+                float scale = ctx.mode == TransportMode::Radiance ? inv_eta * inv_eta : 1.f;
+                float dot_i = dot(wi, m), dot_o = dot(wo, m);
+                *value = Spectrum(std::abs(scale * (1.f - F) * D * G * eta * eta * dot_i * dot_o /
+                                           (cos_theta_i * sqr(dot_i + eta * dot_o))));
+                if (m_specular_transmittance) *value *= q.transmittance;
+            }
+        }
+        // Micro- and macro-surface must agree on the sides (as smith_g1 enforces in the value).
+        if (!pdf || !(dot(wi, m) * cos_theta_i > 0.f && dot(wo, m) * cos_theta_o > 0.f)) return;
+        float dwh_dwo = is_reflection ? 1.f / (4.f * dot(wo, m))
+                                      : eta * eta * dot(wo, m) / sqr(dot(wi, m) + eta * dot(wo, m));
+        MicrofacetDistribution sample_distr = sampling_distribution(q.distr, cos_theta_i);
+        float prob = sample_distr.pdf(std::copysign(1.f, cos_theta_i) * wi, m);
+        prob *= is_reflection ? F : 1.f - F;
+        *pdf = prob * std::abs(dwh_dwo);
+    }
+
     /// Without visible-normal sampling, sample a slightly wider lobe [Walter et al. 2007, §5.3].
     static MicrofacetDistribution sampling_distribution(MicrofacetDistribution d, float cos_theta_i) {
         if (!d.sample_visible()) d.scale_alpha(1.2f - 0.2f * std::sqrt(std::abs(cos_theta_i)));
