@@ -172,7 +172,9 @@ def test_time_budget_thins_the_last_pass(many_views, whole_pass):
     r = mvpt.render(many_views, time=budget, method="mvpt", seed=3)
     assert 0.85 * budget <= r.stats["seconds"] <= budget + 0.5, (r.stats["seconds"], budget)
     q, passes = r.stats["thinned_pass_share"], r.stats["passes"]
-    assert not r.stats["cancelled"] and passes >= 2 and (q == 0.0 or 0.1 <= q < 0.9), r.stats
+    # A thinned share lies in [MinThinShare, 1): where it falls depends on how long this
+    # machine's passes take under its load at the time, which the budget was measured without.
+    assert not r.stats["cancelled"] and passes >= 2 and (q == 0.0 or 0.1 <= q < 1.0), r.stats
     # Every pixel took one native sample in each whole pass; in a thinned one, some did.
     whole = passes - (q > 0.0)
     counts = np.stack(list(r.sample_count.values()))
