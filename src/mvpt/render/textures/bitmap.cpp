@@ -51,15 +51,11 @@ public:
     Color3f eval(Vec2f uv_in) const override {
         Vec2f uv = m_to_uv(uv_in);
         if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {};
-        // Bounded before the int conversion (far-out uvs only lose precision).
-        auto to_int = [](float v) { return int(std::clamp(v, -1e9f, 1e9f)); };
         const int w = m_image.width, h = m_image.height;
         if (!m_bilinear) return texel(to_int(std::floor(uv.x * float(w))), to_int(std::floor(uv.y * float(h))));
-        float x = uv.x * float(w) - 0.5f, y = uv.y * float(h) - 0.5f;
-        float fx = std::floor(x), fy = std::floor(y), tx = x - fx, ty = y - fy;
-        int x0 = to_int(fx), y0 = to_int(fy);
-        return (texel(x0, y0) * (1.f - tx) + texel(x0 + 1, y0) * tx) * (1.f - ty) +
-               (texel(x0, y0 + 1) * (1.f - tx) + texel(x0 + 1, y0 + 1) * tx) * ty;
+        const Cell c = cell(uv);
+        return (texel(c.x0, c.y0) * (1.f - c.tx) + texel(c.x0 + 1, c.y0) * c.tx) * (1.f - c.ty) +
+               (texel(c.x0, c.y0 + 1) * (1.f - c.tx) + texel(c.x0 + 1, c.y0 + 1) * c.tx) * c.ty;
     }
 
     float eval_1(Vec2f uv) const override { return eval(uv).luminance(); }
@@ -69,20 +65,31 @@ public:
         if (!m_bilinear) return {0.f, 0.f};
         Vec2f uv = m_to_uv(uv_in);
         if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return {0.f, 0.f};
-        auto to_int = [](float v) { return int(std::clamp(v, -1e9f, 1e9f)); };
-        const float w = float(m_image.width), h = float(m_image.height);
-        float x = uv.x * w - 0.5f, y = uv.y * h - 0.5f;
-        float fx = std::floor(x), fy = std::floor(y), tx = x - fx, ty = y - fy;
-        int x0 = to_int(fx), y0 = to_int(fy);
-        const float f00 = texel(x0, y0).luminance(), f10 = texel(x0 + 1, y0).luminance(),
-                    f01 = texel(x0, y0 + 1).luminance(), f11 = texel(x0 + 1, y0 + 1).luminance();
+        const Cell c = cell(uv);
+        const float f00 = texel(c.x0, c.y0).luminance(), f10 = texel(c.x0 + 1, c.y0).luminance(),
+                    f01 = texel(c.x0, c.y0 + 1).luminance(), f11 = texel(c.x0 + 1, c.y0 + 1).luminance();
         // d/dx and d/dy in pixels, then x = (a u + b v + c) w - 1/2, y = (d u + e v + f) h - 1/2.
-        const float dx = (1.f - ty) * (f10 - f00) + ty * (f11 - f01), dy = (1.f - tx) * (f01 - f00) + tx * (f11 - f10);
+        const float dx = (1.f - c.ty) * (f10 - f00) + c.ty * (f11 - f01),
+                    dy = (1.f - c.tx) * (f01 - f00) + c.tx * (f11 - f10);
+        const float w = float(m_image.width), h = float(m_image.height);
         return {m_to_uv.a * w * dx + m_to_uv.d * h * dy, m_to_uv.b * w * dx + m_to_uv.e * h * dy};
     }
     Color3f mean() const override { return m_mean; }
 
 private:
+    /// Bounded before the int conversion (far-out uvs only lose precision).
+    static int to_int(float v) { return int(std::clamp(v, -1e9f, 1e9f)); }
+    /// The bilinear lookup's texels at (transformed) uv: (x0, y0) to (x0 + 1, y0 + 1), and the
+    /// weights tx, ty of the second column and row.
+    struct Cell {
+        int x0, y0;
+        float tx, ty;
+    };
+    Cell cell(Vec2f uv) const {
+        float x = uv.x * float(m_image.width) - 0.5f, y = uv.y * float(m_image.height) - 0.5f;
+        float fx = std::floor(x), fy = std::floor(y);
+        return {to_int(fx), to_int(fy), x - fx, y - fy};
+    }
     int wrap(int i, int n) const {
         switch (m_wrap) {
             case Wrap::Clamp: return std::clamp(i, 0, n - 1);
