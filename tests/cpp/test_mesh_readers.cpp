@@ -107,6 +107,81 @@ TEST(PlyReader, AsciiWithAliasesSkippedPropertiesAndQuads) {
     EXPECT_FLOAT_EQ(m.normals[1].z, 1.f);
     EXPECT_FLOAT_EQ(m.uvs[2].x, 1.f);
     EXPECT_FLOAT_EQ(m.uvs[3].y, 1.f);
+    EXPECT_TRUE(m.attributes.empty()); // 'confidence' and 'flags' have no channel suffix
+}
+
+/// The attribute `name` of `m` (a test failure and an empty one when it is missing).
+const MeshAttribute &attribute(const MeshData &m, const std::string &name) {
+    static const MeshAttribute none;
+    for (const MeshAttribute &a : m.attributes)
+        if (a.name == name) return a;
+    ADD_FAILURE() << "no attribute " << name;
+    return none;
+}
+
+TEST(PlyReader, MeshAttributesByMitsubasNamingScheme) {
+    // Vertex: an 8-bit colour with alpha, a 1-channel weight, a 2-channel run (not an
+    // attribute), a 1..3 run; faces (a quad and a triangle): a float colour, a scalar, an _r _g _b run.
+    const char *ply = R"(ply
+format ascii 1.0
+element vertex 5
+property float x
+property float y
+property float z
+property uchar red
+property uchar green
+property uchar blue
+property uchar alpha
+property float weight_0
+property float dir_x
+property float dir_y
+property float n_1
+property float n_2
+property float n_3
+element face 2
+property list uchar int vertex_indices
+property float r
+property float g
+property float b
+property float w_0
+property float tint_r
+property float tint_g
+property float tint_b
+end_header
+0 0 0 255 0 51 255 0.5 1 2 1 2 3
+1 0 0 0 255 0 255 1.5 1 2 4 5 6
+1 1 0 0 0 255 255 2.5 1 2 7 8 9
+0 1 0 255 255 255 255 3.5 1 2 1 1 1
+2 2 0 0 0 0 0 4.5 1 2 0 0 0
+4 0 1 2 3 0.1 0.2 0.3 7 0.4 0.5 0.6
+3 1 4 2 0.7 0.8 0.9 8 1.0 1.1 1.2
+)";
+    const MeshData m = read_ply(temp_file("attributes.ply", ply), {});
+    ASSERT_EQ(m.triangle_count(), 3u);
+    std::vector<std::string> names;
+    for (const MeshAttribute &a : m.attributes) names.push_back(a.name);
+    EXPECT_EQ(names, (std::vector<std::string>{"vertex_color", "vertex_weight", "vertex_n", "face_color", "face_w",
+                                               "face_tint_color"}));
+    const MeshAttribute &vc = attribute(m, "vertex_color");
+    EXPECT_EQ(vc.dim, 3);
+    ASSERT_EQ(vc.values.size(), 15u); // alpha not read
+    EXPECT_FLOAT_EQ(vc.values[0], 1.f);
+    EXPECT_FLOAT_EQ(vc.values[2], 0.2f); // 51 / 255
+    EXPECT_FLOAT_EQ(vc.values[4], 1.f);
+    const MeshAttribute &w = attribute(m, "vertex_weight");
+    EXPECT_EQ(w.dim, 1);
+    EXPECT_EQ(w.values, (std::vector<float>{0.5f, 1.5f, 2.5f, 3.5f, 4.5f}));
+    const MeshAttribute &n = attribute(m, "vertex_n");
+    EXPECT_EQ(n.dim, 3);
+    EXPECT_FLOAT_EQ(n.values[3 * 2 + 1], 8.f);
+    // Face attributes: one entry per triangle, the quad's twice.
+    const MeshAttribute &fc = attribute(m, "face_color");
+    EXPECT_FALSE(vc.per_face());
+    EXPECT_TRUE(fc.per_face());
+    EXPECT_EQ(fc.values, (std::vector<float>{0.1f, 0.2f, 0.3f, 0.1f, 0.2f, 0.3f, 0.7f, 0.8f, 0.9f}));
+    EXPECT_EQ(attribute(m, "face_w").values, (std::vector<float>{7.f, 7.f, 8.f}));
+    EXPECT_EQ(attribute(m, "face_tint_color").values,
+              (std::vector<float>{0.4f, 0.5f, 0.6f, 0.4f, 0.5f, 0.6f, 1.0f, 1.1f, 1.2f}));
 }
 
 TEST(PlyReader, BinaryBothEndiannesses) {
@@ -120,6 +195,7 @@ TEST(PlyReader, BinaryBothEndiannesses) {
         EXPECT_FLOAT_EQ(m.uvs[2].x, 0.5f);
         EXPECT_FLOAT_EQ(m.uvs[1].y, 0.5f);
         EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 2, 1, 0}));
+        EXPECT_TRUE(m.attributes.empty());
     }
 }
 

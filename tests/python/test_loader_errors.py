@@ -39,6 +39,12 @@ def _with_shape(inner: str) -> str:
 
 
 GOOD_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+MESH_ATTRIBUTE_BSDF = ('<bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute">'
+                       '<string name="name" value="vertex_color"/></texture></bsdf>')
+COLOR_PLY = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
+             "property list uchar int vertex_indices\nend_header\n"
+             "0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 0 1 2\n")
 
 CASES = {
     # --- XML syntax -------------------------------------------------------------------
@@ -83,6 +89,22 @@ CASES = {
                                 '<bsdf type="conductor"/>', r"normalmap accepts one nested bsdf"),
     "bumpmap_without_texture": Case(_with_shape('<bsdf type="bumpmap"><bsdf type="diffuse"/></bsdf>'),
                                     '<bsdf type="bumpmap">', r"bumpmap needs a nested texture \(the height field\)"),
+    "mesh_attribute_on_a_cube": Case(_with_shape(MESH_ATTRIBUTE_BSDF), '<shape type="cube">\n        <bsdf',
+                                     r"material reads the mesh attribute 'vertex_color', which the shape does not "
+                                     r"have \(it has no attributes: they come from PLY files\)"),
+    "mesh_attribute_missing_from_ply": Case(
+        scene(body='    <shape type="ply">\n        <string name="filename" value="m.ply"/>\n        '
+                   + MESH_ATTRIBUTE_BSDF.replace("vertex_color", "face_color") + '\n    </shape>\n'),
+        '<shape type="ply">', r"mesh attribute 'face_color', which the shape does not have \(it has: vertex_color\)",
+        files={"m.ply": COLOR_PLY}),
+    "mesh_attribute_name": Case(_with_shape(MESH_ATTRIBUTE_BSDF.replace("vertex_color", "color")),
+                                '<string name="name" value="color"',
+                                r"mesh_attribute 'name' must start with 'vertex_' or 'face_', got 'color'"),
+    "mesh_attribute_as_radiance": Case(
+        _with_shape('<emitter type="area"><texture name="radiance" type="mesh_attribute">'
+                    '<string name="name" value="vertex_color"/></texture></emitter>'),
+        '<texture name="radiance"', r"parameter 'radiance' of the emitter 'area' is looked up by uv: a mesh_attribute "
+                                    r"texture can only be a BSDF's parameter"),
     "normalmap_without_bsdf": Case(_with_shape('<bsdf type="normalmap"><texture name="normalmap" type="rawconstant">'
                                                '<vector name="value" value="0.5, 0.5, 1"/></texture></bsdf>'),
                                    '<bsdf type="normalmap">', r"normalmap needs a nested bsdf"),

@@ -197,6 +197,9 @@ REAL = {  # shared scene, its defines, rig spacing (scene units), PT / MVPT spp 
     # The material-preview object, normal- and bump-mapped rough plastic under an environment map.
     "m3data-testsuite/docs/scenes/bsdf_normalmap_with.xml": ({}, 0.05, 16, 8),
     "m3data-testsuite/docs/scenes/bsdf_bumpmap_with.xml": ({}, 0.05, 16, 8),
+    # A sphere coloured by a vertex attribute (mesh_attribute), interpolated at each view's hits.
+    "m3data-testsuite/tests/scenes/mesh_attributes/test_mesh_attributes_3_vertex_direct.xml":
+        ({"integrator": "path"}, 0.1, 16, 8),
 }
 
 

@@ -15,14 +15,14 @@ any other error fails. Wavelength-sampled <spectrum> values are converted to RGB
 Mitsuba's RGB variants do (src/mvpt/core/spectrum_rgb.h).
 
 Out of scope, not listed below (reason):
-  m3data-testsuite/tests/scenes: mesh_attributes/*_direct (mesh_attribute textures);
-    orthographic_sensor (orthographic sensor); projector/* (projector emitter);
+  m3data-testsuite/tests/scenes: orthographic_sensor (orthographic sensor); projector/* (projector emitter);
     various_emitters/*_ptracer (ptracer integrator).
   m3data-testsuite/docs/scenes: bsdf_polarizer_*, bsdf_pplastic*, *_stokes*,
     integrator_stokes_cbox (polarisation / stokes); emitter_projector_* (projector);
     integrator_aov (aov);
     sensor_orthographic* (orthographic); shape_bsplinecurve_*, shape_linearcurve_*
-    (curves); shape_sdfgrid* (sdf); texture_mesh_attribute_* (mesh_attribute textures);
+    (curves); shape_sdfgrid* (sdf); texture_mesh_attribute_* (their mesh,
+    common/meshes/bunny_attribute_color.ply, is not among the shared files);
     variants_cbox_* (variant demo; spectral).
   m06-living-room (Mitsuba 0.6 format) has a test of its own at the end.
 """
@@ -99,6 +99,9 @@ CASES = [
         ("texturedprincipled2", {"checkerboard", "envmap", "point", "principled"}),
         ("texturedprincipledthin", {"checkerboard", "envmap", "point", "principledthin"}),
     ]],
+    *[case(TS + f"mesh_attributes/test_mesh_attributes_{n}_direct.xml",
+           {"direct", "directional", "ply", "mesh_attribute"}, refs=True, max_res=None)
+      for n in ["1_face", "3_face", "3_vertex"]],
     # The references of these two disagree with Mitsuba 3.9.1 itself under the suite's rule
     # (pixels passing: instancing 95.98 %, infinite_mirrors 99.41-99.74 %; measured with
     # mitsuba_compare.reference_criterion): live comparison only.

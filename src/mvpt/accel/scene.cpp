@@ -103,6 +103,7 @@ bool Scene::intersect(const Ray &ray, SurfaceInteraction &si) const {
 void Scene::fill_hit(const Ray &ray, float t, unsigned geom, unsigned inst, uint32_t prim, Vec2f b,
                      SurfaceInteraction &si) const {
     si.time = ray.time;
+    si.prim_uv = b;
     if (inst != RTC_INVALID_GEOMETRY_ID) {
         // Instances resolve the inner geometry and move the hit to world space.
         m_geom_to_shape[inst]->fill_instance_interaction(ray, t, geom, prim, b, si);

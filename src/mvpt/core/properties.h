@@ -21,6 +21,9 @@ namespace mvpt {
 class Object {
 public:
     virtual ~Object() = default;
+    /// The mesh attributes that this object and the objects inside it read (mesh_attribute
+    /// textures): every shape that uses it must have them (the loader checks).
+    std::vector<std::string> mesh_attributes;
 };
 
 /// One child object of a scene-file element, with the name it was given (may be empty).

@@ -11,6 +11,19 @@
 
 namespace mvpt {
 
+/// A named value per vertex or per triangle (Mitsuba's mesh attributes: "vertex_color",
+/// "face_weight"), read by mesh_attribute textures.
+struct MeshAttribute {
+    /// "vertex_..." (interpolated over a triangle) or "face_..." (constant over it).
+    std::string name;
+    /// Channels per entry: 1 or 3.
+    int dim = 1;
+    /// dim values per vertex or per triangle.
+    std::vector<float> values;
+
+    bool per_face() const { return name.starts_with("face_"); }
+};
+
 struct MeshData {
     std::vector<Point3f> positions;
     /// Per-vertex shading normals (empty, or one per position).
@@ -19,6 +32,8 @@ struct MeshData {
     std::vector<Vec2f> uvs;
     /// Three vertex indices per triangle.
     std::vector<uint32_t> indices;
+    /// Per-vertex and per-triangle attributes (PLY files only).
+    std::vector<MeshAttribute> attributes;
 
     size_t triangle_count() const { return indices.size() / 3; }
 };

@@ -1,8 +1,9 @@
 // Stanford PLY meshes: ASCII, binary_little_endian and binary_big_endian.
-// Reads positions, normals, uvs and polygon faces (fan-triangulated); every
-// other element and property is skipped. All counts are checked against the
+// Reads positions, normals, uvs, polygon faces (fan-triangulated) and the vertices' and
+// faces' mesh attributes (ply_attributes.h); every other element and property is skipped. All counts are checked against the
 // bytes that remain, so a truncated or corrupt file fails cleanly.
 #include "mesh_data.h"
+#include "ply_attributes.h"
 
 #include <bit>
 #include <cctype>
@@ -203,7 +204,60 @@ template <typename Fail> PlyHeader read_header(const std::string &data, size_t &
     return h;
 }
 
-/// The vertex element: positions, and normals and uvs where it has all their properties.
+/// The largest value of an integer type (0 for floating-point types).
+double integer_max(PlyType t) {
+    switch (t) {
+        case PlyType::Int8: return 127.0;
+        case PlyType::UInt8: return 255.0;
+        case PlyType::Int16: return 32767.0;
+        case PlyType::UInt16: return 65535.0;
+        case PlyType::Int32: return 2147483647.0;
+        case PlyType::UInt32: return 4294967295.0;
+        default: return 0.0;
+    }
+}
+
+/// The element's mesh attributes (ply_attributes.h) among its scalar properties that are not
+/// `reserved`: their layouts, and for each attribute channel the property that holds it.
+struct ElementAttributes {
+    std::vector<PlyAttributeLayout> layouts;
+    /// Per property of the element: its index among the candidate fields, or -1.
+    std::vector<int> field_of;
+};
+
+ElementAttributes element_attributes(const PlyElement &el, const std::vector<int> &reserved, const std::string &prefix) {
+    ElementAttributes ea;
+    std::vector<PlyField> fields;
+    ea.field_of.assign(el.props.size(), -1);
+    for (size_t i = 0; i < el.props.size(); ++i)
+        if (!el.props[i].is_list && reserved[i] < 0) {
+            ea.field_of[i] = int(fields.size());
+            fields.push_back({el.props[i].name, integer_max(el.props[i].type)});
+        }
+    ea.layouts = ply_attribute_layout(fields, prefix);
+    return ea;
+}
+
+/// Appends one entry of each attribute from the candidate fields' values `row`, `copies` times.
+void append_attributes(const ElementAttributes &ea, const std::vector<double> &row, size_t copies, MeshData &mesh,
+                       size_t first) {
+    for (size_t a = 0; a < ea.layouts.size(); ++a) {
+        const PlyAttributeLayout &l = ea.layouts[a];
+        std::vector<float> &v = mesh.attributes[first + a].values;
+        for (size_t k = 0; k < copies; ++k)
+            for (size_t c = 0; c < l.fields.size(); ++c) v.push_back(float(row[l.fields[c]]) * l.scale[c]);
+    }
+}
+
+/// Adds an empty attribute to `mesh` per layout of `ea`; returns the index of the first.
+size_t add_attributes(const ElementAttributes &ea, MeshData &mesh) {
+    const size_t first = mesh.attributes.size();
+    for (const PlyAttributeLayout &l : ea.layouts) mesh.attributes.push_back({l.name, int(l.fields.size()), {}});
+    return first;
+}
+
+/// The vertex element: positions, normals and uvs where it has all their properties, and
+/// its mesh attributes.
 void read_vertices(PlyBody &body, const PlyElement &el, MeshData &mesh) {
     // Property slots: 0-2 position, 3-5 normal, 6-7 uv.
     std::vector<int> slot(el.props.size(), -1);
@@ -220,6 +274,9 @@ void read_vertices(PlyBody &body, const PlyElement &el, MeshData &mesh) {
         if (s >= 0) has[s] = true;
     if (!has[0] || !has[1] || !has[2]) body.fail("the vertex element lacks x, y or z");
     const bool normals = has[3] && has[4] && has[5], uvs = has[6] && has[7];
+    const ElementAttributes ea = element_attributes(el, slot, "vertex_");
+    const size_t first = add_attributes(ea, mesh);
+    std::vector<double> row(el.props.size());
     mesh.positions.resize(size_t(el.count));
     if (normals) mesh.normals.resize(size_t(el.count));
     if (uvs) mesh.uvs.resize(size_t(el.count));
@@ -233,6 +290,8 @@ void read_vertices(PlyBody &body, const PlyElement &el, MeshData &mesh) {
                 body.skip(p.type, uint64_t(n), p.name.c_str());
             } else if (slot[i] >= 0) {
                 val[slot[i]] = float(body.read(p.type, p.name.c_str()));
+            } else if (ea.field_of[i] >= 0) {
+                row[size_t(ea.field_of[i])] = body.read(p.type, p.name.c_str());
             } else {
                 body.skip(p.type, 1, p.name.c_str());
             }
@@ -240,10 +299,12 @@ void read_vertices(PlyBody &body, const PlyElement &el, MeshData &mesh) {
         mesh.positions[v] = {val[0], val[1], val[2]};
         if (normals) mesh.normals[v] = {val[3], val[4], val[5]};
         if (uvs) mesh.uvs[v] = {val[6], val[7]};
+        append_attributes(ea, row, 1, mesh, first);
     }
 }
 
-/// The face element's vertex index lists, fan-triangulated (convex polygons).
+/// The face element's vertex index lists, fan-triangulated (convex polygons), and its mesh
+/// attributes, one entry per triangle.
 void read_faces(PlyBody &body, const PlyElement &el, MeshData &mesh) {
     int index_prop = -1;
     for (size_t i = 0; i < el.props.size(); ++i)
@@ -251,11 +312,19 @@ void read_faces(PlyBody &body, const PlyElement &el, MeshData &mesh) {
             index_prop = int(i);
     if (index_prop < 0) body.fail("the face element has no 'vertex_indices' list");
     if (!is_integer(el.props[size_t(index_prop)].type)) body.fail("face vertex indices must be integers");
+    const ElementAttributes ea = element_attributes(el, std::vector<int>(el.props.size(), -1), "face_");
+    const size_t first = add_attributes(ea, mesh);
+    std::vector<double> row(el.props.size());
     std::vector<uint32_t> poly;
     for (size_t f = 0; f < el.count; ++f) {
+        size_t triangles = 0;
         for (size_t i = 0; i < el.props.size(); ++i) {
             const PlyProperty &p = el.props[i];
-            if (!p.is_list) { body.skip(p.type, 1, p.name.c_str()); continue; }
+            if (!p.is_list) {
+                if (ea.field_of[i] >= 0) row[size_t(ea.field_of[i])] = body.read(p.type, p.name.c_str());
+                else body.skip(p.type, 1, p.name.c_str());
+                continue;
+            }
             double n = body.read(p.count_type, "a list length");
             if (n < 0) body.fail("negative list length in element 'face'");
             if (int(i) != index_prop) { body.skip(p.type, uint64_t(n), p.name.c_str()); continue; }
@@ -268,7 +337,9 @@ void read_faces(PlyBody &body, const PlyElement &el, MeshData &mesh) {
                 idx = uint32_t(d);
             }
             for (size_t k = 2; k < poly.size(); ++k) mesh.indices.insert(mesh.indices.end(), {poly[0], poly[k - 1], poly[k]});
+            triangles = poly.size() >= 3 ? poly.size() - 2 : 0;
         }
+        append_attributes(ea, row, triangles, mesh, first);
     }
 }
 

@@ -5,6 +5,7 @@
 #include "../core/plugin.h"
 #include "rig.h"
 #include "../core/suggest.h"
+#include "../render/shape.h"
 
 #include <pugixml.hpp>
 
@@ -415,8 +416,30 @@ public:
         }
         std::shared_ptr<Object> obj = (*f)(props, context_for(node));
         props.check_all_queried();
+        collect_mesh_attributes(node, props, *obj);
         m_cache[&node] = obj;
         return obj;
+    }
+
+    /// The mesh attributes read by the materials and textures inside `node` become those of
+    /// `obj`; a shape must have every one (a mesh_attribute texture reads the shape it hits).
+    static void collect_mesh_attributes(const XmlNode &node, const Properties &props, Object &obj) {
+        for (const ChildObject &c : props.children())
+            if (c.kind == "bsdf" || c.kind == "texture")
+                for (const std::string &name : c.object->mesh_attributes)
+                    if (std::find(obj.mesh_attributes.begin(), obj.mesh_attributes.end(), name) == obj.mesh_attributes.end())
+                        obj.mesh_attributes.push_back(name);
+        if (node.tag != "shape" || obj.mesh_attributes.empty()) return;
+        const std::vector<std::string> has = static_cast<const Shape &>(obj).attribute_names();
+        for (const std::string &name : obj.mesh_attributes)
+            if (std::find(has.begin(), has.end(), name) == has.end()) {
+                std::string list;
+                for (const std::string &h : has) list += (list.empty() ? "" : ", ") + h;
+                throw SceneError(node.loc, "this shape's material reads the mesh attribute '" + name +
+                                               "', which the shape does not have (" +
+                                               (has.empty() ? std::string("it has no attributes: they come from PLY files")
+                                                            : "it has: " + list) + ")");
+            }
     }
 
     bool referenced(const std::string &id) const { return m_referenced.count(id) != 0; }

@@ -29,6 +29,9 @@ struct SurfaceInteraction {
     const Instance *instance = nullptr;
     /// Primitive index inside the shape (triangle index for meshes).
     uint32_t prim = 0;
+    /// The hit's coordinates on its primitive as the ray tracer reports them (a triangle's
+    /// barycentrics b1, b2), for what is interpolated over it (mesh attributes).
+    Vec2f prim_uv;
 
     bool is_valid() const { return shape != nullptr; }
     Vec3f to_local(Vec3f v) const { return sh_frame.to_local(v); }

@@ -13,6 +13,7 @@
 #include <vector>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace mvpt {
@@ -64,6 +65,14 @@ public:
     virtual std::pair<Vec3f, Vec3f> uv_partials(uint32_t prim, Point3f p) const {
         (void)prim, (void)p;
         return {};
+    }
+    /// The names of the shape's mesh attributes ("vertex_color", ...); none but on meshes.
+    virtual std::vector<std::string> attribute_names() const { return {}; }
+    /// Attribute `name` at the hit `si` on this shape (1 channel: the same in all three);
+    /// zero where the shape has no such attribute (the loader refuses such scenes).
+    virtual Color3f eval_attribute(const std::string &name, const SurfaceInteraction &si) const {
+        (void)name, (void)si;
+        return Color3f(0.f);
     }
     /// Keyframe time range of an animated shape; false when it does not move.
     virtual bool time_range(float &begin, float &end) const { (void)begin; (void)end; return false; }

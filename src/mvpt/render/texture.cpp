@@ -12,4 +12,12 @@ std::shared_ptr<Texture> get_texture(const Properties &props, const std::string 
     return std::make_shared<ConstantTexture>(v);
 }
 
+std::shared_ptr<Texture> get_uv_texture(const Properties &props, const std::string &name, Color3f def, SpectrumUse use) {
+    std::shared_ptr<Texture> t = get_texture(props, name, def, use);
+    if (t->reads_mesh())
+        props.fail(name, "parameter '" + name + "' of the " + props.kind() + " '" + props.type() +
+                             "' is looked up by uv: a mesh_attribute texture can only be a BSDF's parameter");
+    return t;
+}
+
 } // namespace mvpt

@@ -1,13 +1,23 @@
-// Textures: spatially varying colours and scalars looked up by surface uv.
+// Textures: spatially varying colours and scalars looked up by surface uv, or read from the
+// mesh that was hit (mesh attributes).
 #pragma once
 
 #include "../core/math.h"
 #include "../core/properties.h"
+#include "interaction.h"
 
 namespace mvpt {
 
 class Texture : public Object {
 public:
+    /// RGB value at a surface point: at its uv, or read from its mesh (reads_mesh()).
+    Color3f eval(const SurfaceInteraction &si) const { return m_reads_mesh ? eval_mesh(si) : eval(si.uv); }
+    /// Scalar value at a surface point (as eval_1(uv) for uv textures, the channels' mean).
+    float eval_1(const SurfaceInteraction &si) const { return m_reads_mesh ? eval_mesh(si).mean() : eval_1(si.uv); }
+    /// Whether the value comes from the hit mesh's attributes rather than from uv: such a
+    /// texture is only evaluated at surface hits (BSDF parameters), see get_uv_texture.
+    bool reads_mesh() const { return m_reads_mesh; }
+
     /// RGB value at texture coordinates `uv`.
     virtual Color3f eval(Vec2f uv) const = 0;
     /// Scalar value (roughness, weights): the mean of the channels.
@@ -20,6 +30,11 @@ public:
     /// Average over the texture domain (used for light power and previews).
     virtual Color3f mean() const = 0;
     virtual bool is_constant() const { return false; }
+
+protected:
+    /// The value at a surface hit of a texture that reads the mesh (m_reads_mesh).
+    virtual Color3f eval_mesh(const SurfaceInteraction &si) const { return eval(si.uv); }
+    bool m_reads_mesh = false;
 };
 
 class ConstantTexture final : public Texture {
@@ -42,5 +57,9 @@ inline std::shared_ptr<Texture> get_texture(const Properties &props, const std::
                                             SpectrumUse use = SpectrumUse::Reflectance) {
     return get_texture(props, name, Color3f(def), use);
 }
+/// get_texture for a parameter that is looked up by uv alone (an emitter's radiance, a bump
+/// map's height, a texture's inputs): a texture that reads the mesh is refused.
+std::shared_ptr<Texture> get_uv_texture(const Properties &props, const std::string &name, Color3f def,
+                                        SpectrumUse use = SpectrumUse::Reflectance);
 
 } // namespace mvpt

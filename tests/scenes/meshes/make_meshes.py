@@ -2,7 +2,11 @@
 
 icosphere.obj / icosphere.ply / icosphere.serialized: a unit icosphere (2 subdivisions,
 320 triangles) with per-vertex normals and spherical uv, in three file formats, so the
-obj/ply/serialized readers are compared on the same geometry. The serialized file follows
+obj/ply/serialized readers are compared on the same geometry.
+
+icosphere_attributes.ply: the same sphere with mesh attributes (Mitsuba's PLY naming):
+vertex_color (color_0..2, a colour that varies sharply with the position), face_tint_color (tint_r, tint_g, tint_b)
+and face_w (w_0, a scalar in [0, 1]), for the mesh_attribute texture. The serialized file follows
 Mitsuba's format (version 4): u16 0x041C, u16 version, zlib stream of flags, name,
 vertex/triangle counts, float32 positions, normals, uvs, u32 indices; then a u64 offset
 table and u32 mesh count at the end."""
@@ -61,6 +65,26 @@ def write_ply(path, p, n, uv, f):
             o.write(struct.pack("<Biii", 3, int(a), int(b), int(c)))
 
 
+def write_attribute_ply(path, p, n, uv, f):
+    # Colours that change sharply from vertex to vertex, so that interpolation errors show.
+    color = (0.5 + 0.45 * np.sin(np.array([23.0, 29.0, 31.0]) * p + np.array([0.0, 2.0, 4.0]))).astype(np.float32)
+    centre = p[f].mean(1)
+    tint = np.stack([0.5 + 0.4 * np.sin(7 * centre[:, 0]), 0.5 + 0.4 * np.sin(5 * centre[:, 1] + 1),
+                     0.5 + 0.4 * np.sin(3 * centre[:, 2] + 2)], 1).astype(np.float32)
+    w = (0.5 + 0.5 * np.sin(9 * centre[:, 0] + 4 * centre[:, 2])).astype(np.float32)
+    head = ("ply\nformat binary_little_endian 1.0\ncomment unit icosphere with attributes (make_meshes.py)\n"
+            f"element vertex {len(p)}\nproperty float x\nproperty float y\nproperty float z\n"
+            "property float nx\nproperty float ny\nproperty float nz\nproperty float u\nproperty float v\n"
+            "property float color_0\nproperty float color_1\nproperty float color_2\n"
+            f"element face {len(f)}\nproperty list uchar int vertex_indices\n"
+            "property float tint_r\nproperty float tint_g\nproperty float tint_b\nproperty float w_0\nend_header\n")
+    with open(path, "wb") as o:
+        o.write(head.encode())
+        o.write(np.concatenate([p, n, uv, color], 1).astype("<f4").tobytes())
+        for (a, b, c), t, x in zip(f, tint, w):
+            o.write(struct.pack("<Biii4f", 3, int(a), int(b), int(c), *t, x))
+
+
 def write_serialized(path, p, n, uv, f):
     has_normals, has_uv, single = 0x0001, 0x0002, 0x1000
     body = struct.pack("<I", has_normals | has_uv | single) + b"icosphere\0"
@@ -78,3 +102,4 @@ if __name__ == "__main__":
     write_obj(here / "icosphere.obj", *mesh)
     write_ply(here / "icosphere.ply", *mesh)
     write_serialized(here / "icosphere.serialized", *mesh)
+    write_attribute_ply(here / "icosphere_attributes.ply", *mesh)

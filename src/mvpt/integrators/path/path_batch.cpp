@@ -54,10 +54,10 @@ inline void put_vertex(float *col, size_t st, const SurfaceInteraction &si, cons
     col[B0 * st] = beta.r, col[(B0 + 1) * st] = beta.g, col[(B0 + 2) * st] = beta.b;
 }
 
-/// The reflectance of a Lambertian vertex: its texture at the hit's uv (as DiffuseBsdf
+/// The reflectance of a Lambertian vertex: its texture at the hit (as DiffuseBsdf
 /// evaluates it), or the constant.
 inline Color3f lambert_reflectance(const LambertInfo &lam, const SurfaceInteraction &si) {
-    return lam.texture ? lam.texture->eval(si.uv) : lam.reflectance;
+    return lam.texture ? lam.texture->eval(si) : lam.reflectance;
 }
 
 /// Lanes per call of a Lambertian vector kernel: its columns (about 40 × 64 floats) stay in L1.

@@ -76,7 +76,7 @@ public:
     }
 
 private:
-    float blend_weight(const SurfaceInteraction &si) const { return std::clamp(m_weight->eval_1(si.uv), 0.f, 1.f); }
+    float blend_weight(const SurfaceInteraction &si) const { return std::clamp(m_weight->eval_1(si), 0.f, 1.f); }
 
     std::shared_ptr<Bsdf> m_bsdf[2];
     std::shared_ptr<Texture> m_weight;

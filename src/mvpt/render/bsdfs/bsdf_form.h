@@ -20,7 +20,7 @@ struct LambertInfo {
     Color3f reflectance;
     /// Reflects on both sides (twosided: the back side mirrors directions through the surface).
     bool two_sided = false;
-    /// A varying reflectance: this texture at the hit's uv (then `reflectance` is unused).
+    /// A varying reflectance: this texture at the hit (then `reflectance` is unused).
     const Texture *texture = nullptr;
 };
 

@@ -17,6 +17,9 @@ public:
         if (textures.empty()) throw SceneError(props.loc(), "bumpmap needs a nested texture (the height field)");
         if (textures.size() > 1) throw SceneError(textures[1]->loc, "bumpmap accepts one nested texture");
         m_height = std::static_pointer_cast<Texture>(textures[0]->object);
+        if (m_height->reads_mesh())
+            throw SceneError(textures[0]->loc, "bumpmap differentiates its height field in uv: a mesh_attribute "
+                                               "texture cannot be one");
         m_scale = props.get_float("scale", 1.f);
     }
 

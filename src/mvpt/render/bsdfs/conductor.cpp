@@ -24,8 +24,8 @@ public:
         bs.wo = Vec3f(-wi.x, -wi.y, wi.z);
         bs.pdf = 1.f;
         bs.sampled_type = BsdfDeltaReflection;
-        Spectrum F = fresnel_conductor(cos_theta_i, m_ior.eta->eval(si.uv), m_ior.k->eval(si.uv));
-        return {bs, m_specular_reflectance->eval(si.uv) * F};
+        Spectrum F = fresnel_conductor(cos_theta_i, m_ior.eta->eval(si), m_ior.k->eval(si));
+        return {bs, m_specular_reflectance->eval(si) * F};
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &, Vec3f, Vec3f) const override { return {}; }

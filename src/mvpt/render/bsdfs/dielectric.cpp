@@ -29,13 +29,13 @@ public:
             bs.wo = Vec3f(-wi.x, -wi.y, wi.z);
             bs.pdf = fr.F;
             bs.sampled_type = BsdfDeltaReflection;
-            if (m_specular_reflectance) weight = m_specular_reflectance->eval(si.uv);
+            if (m_specular_reflectance) weight = m_specular_reflectance->eval(si);
         } else {
             bs.wo = refract(wi, fr.cos_theta_t, fr.eta_ti);
             bs.pdf = 1.f - fr.F;
             bs.eta = fr.eta_it;
             bs.sampled_type = BsdfDeltaTransmission;
-            if (m_specular_transmittance) weight = m_specular_transmittance->eval(si.uv);
+            if (m_specular_transmittance) weight = m_specular_transmittance->eval(si);
             // Radiance is scaled by the solid-angle compression across the interface [Veach 1997, §5.2].
             if (ctx.mode == TransportMode::Radiance) weight *= fr.eta_ti * fr.eta_ti;
         }

@@ -26,13 +26,13 @@ public:
         bs.pdf = warp::square_to_cosine_hemisphere_pdf(bs.wo);
         bs.sampled_type = BsdfDiffuseReflection;
         if (bs.pdf <= 0.f) return result;
-        result.second = reflectance(si.uv);
+        result.second = reflectance(si);
         return result;
     }
 
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
         if (Frame::cos_theta(wi) <= 0.f || Frame::cos_theta(wo) <= 0.f) return {};
-        return reflectance(si.uv) * (InvPi * Frame::cos_theta(wo));
+        return reflectance(si) * (InvPi * Frame::cos_theta(wo));
     }
 
     float pdf(const BsdfContext &, const SurfaceInteraction &, Vec3f wi, Vec3f wo) const override {
@@ -43,7 +43,7 @@ public:
     void eval_pdf_views(const BsdfContext &, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
                         Spectrum *f, float *pdf) const override {
         float cos_o = Frame::cos_theta(wo);
-        Spectrum fo = cos_o > 0.f ? m_reflectance->eval(si.uv) * (InvPi * cos_o) : Spectrum(0.f);
+        Spectrum fo = cos_o > 0.f ? m_reflectance->eval(si) * (InvPi * cos_o) : Spectrum(0.f);
         float po = warp::square_to_cosine_hemisphere_pdf(wo);
         for (size_t c = 0; c < n; ++c) {
             bool front = Frame::cos_theta(wi[c]) > 0.f;
@@ -56,8 +56,8 @@ public:
     LambertInfo form() const { return {m_constant_value, false, m_constant ? nullptr : m_reflectance.get()}; }
 
 private:
-    /// The reflectance texture at `uv`, without a virtual call when it is constant.
-    Color3f reflectance(Vec2f uv) const { return m_constant ? m_constant_value : m_reflectance->eval(uv); }
+    /// The reflectance texture at `si`, without a virtual call when it is constant.
+    Color3f reflectance(const SurfaceInteraction &si) const { return m_constant ? m_constant_value : m_reflectance->eval(si); }
 
     std::shared_ptr<Texture> m_reflectance;
     bool m_constant = false;

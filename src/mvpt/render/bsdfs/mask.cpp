@@ -53,7 +53,7 @@ public:
     float roughness(const SurfaceInteraction &si) const override { return m_nested->roughness(si); }
 
 private:
-    float eval_opacity(const SurfaceInteraction &si) const { return std::clamp(m_opacity->eval_1(si.uv), 0.f, 1.f); }
+    float eval_opacity(const SurfaceInteraction &si) const { return std::clamp(m_opacity->eval_1(si), 0.f, 1.f); }
 
     std::shared_ptr<Texture> m_opacity;
     std::shared_ptr<Bsdf> m_nested;

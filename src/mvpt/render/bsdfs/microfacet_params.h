@@ -21,11 +21,11 @@ struct MicrofacetParams {
     /// Anisotropic when alpha_u and alpha_v are distinct textures (Mitsuba's criterion).
     bool anisotropic() const { return alpha_u != alpha_v; }
     MicrofacetDistribution at(const SurfaceInteraction &si) const {
-        return MicrofacetDistribution(type, alpha_u->eval_1(si.uv), alpha_v->eval_1(si.uv), sample_visible);
+        return MicrofacetDistribution(type, alpha_u->eval_1(si), alpha_v->eval_1(si), sample_visible);
     }
     /// Mean of the two roughnesses at `si` (the value reported by Bsdf::roughness).
     float mean_alpha(const SurfaceInteraction &si) const {
-        return 0.5f * (alpha_u->eval_1(si.uv) + alpha_v->eval_1(si.uv));
+        return 0.5f * (alpha_u->eval_1(si) + alpha_v->eval_1(si));
     }
 };
 

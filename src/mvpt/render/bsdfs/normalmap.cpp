@@ -16,7 +16,7 @@ public:
 
 private:
     Perturbation perturbation(const SurfaceInteraction &si) const override {
-        const Color3f c = m_normalmap->eval(si.uv);
+        const Color3f c = m_normalmap->eval(si);
         return {{2.f * c.r - 1.f, 2.f * c.g - 1.f, 2.f * c.b - 1.f}, {1.f, 0.f, 0.f}};
     }
 

@@ -68,8 +68,8 @@ public:
             SurfaceInteraction si;
             m_const_exponent = exponent_at(si);
             m_const_p_spec = specular_probability_at(si);
-            m_const_kd = m_diffuse_reflectance->eval(si.uv);
-            m_const_ks = m_specular_reflectance->eval(si.uv);
+            m_const_kd = m_diffuse_reflectance->eval(si);
+            m_const_ks = m_specular_reflectance->eval(si);
             // Small integer exponents (the usual choice) take a few multiplications instead of pow.
             if (m_const_exponent == std::floor(m_const_exponent) && m_const_exponent <= 64.f)
                 m_int_exponent = int(m_const_exponent);
@@ -156,16 +156,16 @@ private:
             if (k & 1) r *= c;
         return r;
     }
-    Spectrum diffuse(const SurfaceInteraction &si) const { return m_constant ? m_const_kd : m_diffuse_reflectance->eval(si.uv); }
-    Spectrum specular(const SurfaceInteraction &si) const { return m_constant ? m_const_ks : m_specular_reflectance->eval(si.uv); }
+    Spectrum diffuse(const SurfaceInteraction &si) const { return m_constant ? m_const_kd : m_diffuse_reflectance->eval(si); }
+    Spectrum specular(const SurfaceInteraction &si) const { return m_constant ? m_const_ks : m_specular_reflectance->eval(si); }
     float exponent(const SurfaceInteraction &si) const { return m_constant ? m_const_exponent : exponent_at(si); }
     float specular_probability(const SurfaceInteraction &si) const {
         return m_constant ? m_const_p_spec : specular_probability_at(si);
     }
-    float exponent_at(const SurfaceInteraction &si) const { return std::max(m_exponent->eval_1(si.uv), 0.f); }
+    float exponent_at(const SurfaceInteraction &si) const { return std::max(m_exponent->eval_1(si), 0.f); }
     /// Lobe choice in proportion to the mean (over channels) specular and diffuse reflectances at `si`.
     float specular_probability_at(const SurfaceInteraction &si) const {
-        float ks = m_specular_reflectance->eval(si.uv).mean(), kd = m_diffuse_reflectance->eval(si.uv).mean();
+        float ks = m_specular_reflectance->eval(si).mean(), kd = m_diffuse_reflectance->eval(si).mean();
         return ks + kd > 0.f ? ks / (ks + kd) : 0.5f;
     }
 

@@ -43,7 +43,7 @@ public:
             bs.pdf = prob_specular;
             bs.sampled_type = BsdfDeltaReflection;
             Spectrum value(f_i / bs.pdf);
-            if (m_specular_reflectance) value *= m_specular_reflectance->eval(si.uv);
+            if (m_specular_reflectance) value *= m_specular_reflectance->eval(si);
             return {bs, value};
         }
         float prob_diffuse = 1.f - prob_specular;
@@ -97,7 +97,7 @@ private:
     }
     /// Base reflectance after the internal coating bounces: rho / (1 - F_dr,int [rho]).
     Spectrum diffuse_albedo(const SurfaceInteraction &si) const {
-        Spectrum diff = m_diffuse_reflectance->eval(si.uv);
+        Spectrum diff = m_diffuse_reflectance->eval(si);
         Spectrum denom = m_nonlinear ? Spectrum(1.f) - diff * m_fdr_int : Spectrum(1.f - m_fdr_int);
         return diff / denom;
     }

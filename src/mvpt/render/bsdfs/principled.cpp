@@ -61,7 +61,7 @@ public:
         BsdfSample bs;
         float cos_theta_i = Frame::cos_theta(wi);
         if (cos_theta_i == 0.f) return {bs, {}};
-        const Params q = params(si.uv);
+        const Params q = params(si);
         const Weights &w = q.w;
         bool front_side = cos_theta_i > 0.f;
         // From inside only the specular lobes exist; without transmission nothing.
@@ -108,20 +108,20 @@ public:
 
     Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
         Color3f value;
-        lobes(params(si.uv), ctx, wi, wo, &value, nullptr);
+        lobes(params(si), ctx, wi, wo, &value, nullptr);
         return value;
     }
 
     float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
         float p;
-        lobes(params(si.uv), ctx, wi, wo, nullptr, &p);
+        lobes(params(si), ctx, wi, wo, nullptr, &p);
         return p;
     }
 
     std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
                                         Vec3f wo) const override {
         std::pair<Spectrum, float> out;
-        lobes(params(si.uv), ctx, wi, wo, &out.first, &out.second);
+        lobes(params(si), ctx, wi, wo, &out.first, &out.second);
         return out;
     }
 
@@ -129,18 +129,18 @@ public:
     /// the half vector, the Fresnel term and the distribution).
     void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
                         Spectrum *f, float *pdf) const override {
-        const Params q = params(si.uv);
+        const Params q = params(si);
         for (size_t c = 0; c < n; ++c) lobes(q, ctx, wi[c], wo, &f[c], &pdf[c]);
     }
 
     /// Selection-probability-weighted mean of the lobes' GGX alphas at normal
     /// incidence (diffuse counts as alpha 1; GTR1's alpha is used as is).
     float roughness(const SurfaceInteraction &si) const override {
-        Weights w = weights(si.uv);
+        Weights w = weights(si);
         auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
         float F0 = fresnel_dielectric(1.f, m_eta).F;
         LobeProbs p = lobe_probs(true, F0, w);
-        float cc_alpha = m_clearcoat.enabled ? clearcoat_alpha(si.uv) : 1.f;
+        float cc_alpha = m_clearcoat.enabled ? clearcoat_alpha(si) : 1.f;
         return p.diffuse + p.clearcoat * cc_alpha + (p.spec_reflect + p.spec_trans) * std::sqrt(ax * ay);
     }
 
@@ -158,13 +158,13 @@ private:
         Color3f base_color;
         float flatness, sheen, sheen_tint, spec_tint, cc_alpha;
     };
-    Params params(Vec2f uv) const {
+    Params params(const SurfaceInteraction &si) const {
         Params q;
-        q.w = weights(uv);
-        q.base_color = m_base_color->eval(uv);
-        q.flatness = m_flatness.eval_1(uv), q.sheen = m_sheen.eval_1(uv);
-        q.sheen_tint = m_sheen_tint.eval_1(uv), q.spec_tint = m_spec_tint.eval_1(uv);
-        q.cc_alpha = m_clearcoat.enabled ? clearcoat_alpha(uv) : 1.f;
+        q.w = weights(si);
+        q.base_color = m_base_color->eval(si);
+        q.flatness = m_flatness.eval_1(si), q.sheen = m_sheen.eval_1(si);
+        q.sheen_tint = m_sheen_tint.eval_1(si), q.spec_tint = m_spec_tint.eval_1(si);
+        q.cc_alpha = m_clearcoat.enabled ? clearcoat_alpha(si) : 1.f;
         return q;
     }
 
@@ -274,13 +274,13 @@ private:
         }
     }
 
-    Weights weights(Vec2f uv) const {
+    Weights weights(const SurfaceInteraction &si) const {
         Weights w;
-        w.anisotropic = m_anisotropic.eval_1(uv);
-        w.roughness = m_roughness->eval_1(uv);
-        w.spec_trans = m_spec_trans.eval_1(uv);
-        w.metallic = m_metallic.eval_1(uv);
-        w.clearcoat = m_clearcoat.eval_1(uv);
+        w.anisotropic = m_anisotropic.eval_1(si);
+        w.roughness = m_roughness->eval_1(si);
+        w.spec_trans = m_spec_trans.eval_1(si);
+        w.metallic = m_metallic.eval_1(si);
+        w.clearcoat = m_clearcoat.eval_1(si);
         w.brdf = (1.f - w.metallic) * (1.f - w.spec_trans);
         w.bsdf = (1.f - w.metallic) * w.spec_trans;
         return w;
@@ -314,7 +314,7 @@ private:
     }
 
     /// Clearcoat GTR1 alpha, mapped from clearcoat_gloss to [0.1, 0.001].
-    float clearcoat_alpha(Vec2f uv) const { return lerp(m_clearcoat_gloss->eval_1(uv), 0.1f, 0.001f); }
+    float clearcoat_alpha(const SurfaceInteraction &si) const { return lerp(m_clearcoat_gloss->eval_1(si), 0.1f, 0.001f); }
 
     /// Generalised half vector (reflection or refraction), oriented to +z.
     static Vec3f half_vector(Vec3f wi, Vec3f wo, bool reflect, float eta_path) {

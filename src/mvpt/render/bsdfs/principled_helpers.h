@@ -35,7 +35,7 @@ struct LobeParam {
         : enabled(lobe_enabled(props, name)) {
         tex = get_texture(props, name, def);
     }
-    float eval_1(Vec2f uv) const { return enabled ? tex->eval_1(uv) : 0.f; }
+    float eval_1(const SurfaceInteraction &si) const { return enabled ? tex->eval_1(si) : 0.f; }
 };
 
 /// Rec. 709 luminance of a linear RGB colour.

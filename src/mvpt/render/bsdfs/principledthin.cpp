@@ -49,7 +49,7 @@ public:
         BsdfSample bs;
         float cos_theta_i = Frame::cos_theta(wi_in);
         if (cos_theta_i == 0.f) return {bs, {}};
-        Weights w = weights(si.uv);
+        Weights w = weights(si);
         // Work on the front side; the result is mirrored back at the end.
         Vec3f wi = cos_theta_i > 0.f ? wi_in : -wi_in;
         LobeProbs p = lobe_probs(w);
@@ -87,9 +87,9 @@ public:
     Spectrum eval(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi_in, Vec3f wo_in) const override {
         float cos_theta_i = Frame::cos_theta(wi_in);
         if (cos_theta_i == 0.f) return {};
-        Weights w = weights(si.uv);
-        float flatness = m_flatness.eval_1(si.uv);
-        Color3f base_color = m_base_color->eval(si.uv);
+        Weights w = weights(si);
+        float flatness = m_flatness.eval_1(si);
+        Color3f base_color = m_base_color->eval(si);
 
         // Mirror to the front side (the sheet is symmetric).
         Vec3f wi = cos_theta_i > 0.f ? wi_in : -wi_in, wo = cos_theta_i > 0.f ? wo_in : -wo_in;
@@ -111,7 +111,7 @@ public:
                 auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
                 MicrofacetDistribution distr(MicrofacetType::GGX, ax, ay);
                 float lum = m_spec_tint.enabled ? luminance(base_color) : 1.f;
-                Color3f F_thin = thin_fresnel(F, m_spec_tint.eval_1(si.uv), base_color, lum, dot(wi, wh), w.eta,
+                Color3f F_thin = thin_fresnel(F, m_spec_tint.eval_1(si), base_color, lum, dot(wi, wh), w.eta,
                                               m_spec_tint.enabled);
                 value += F_thin * (w.spec_trans * distr.eval(wh) * distr.G(wi, wo, wh) / (4.f * cos_theta_i));
             }
@@ -129,9 +129,9 @@ public:
                                      m_flatness.enabled);
             float weight = (1.f - w.spec_trans) * (1.f - w.diff_trans);
             value += base_color * (weight * cos_theta_o * InvPi * f);
-            float sheen = m_sheen.eval_1(si.uv);
+            float sheen = m_sheen.eval_1(si);
             if (m_sheen.enabled && sheen > 0.f) {
-                Color3f c_sheen = sheen_color(base_color, m_sheen_tint.eval_1(si.uv), m_sheen_tint.enabled);
+                Color3f c_sheen = sheen_color(base_color, m_sheen_tint.eval_1(si), m_sheen_tint.enabled);
                 value += c_sheen * (sheen * weight * schlick_weight(std::abs(cos_theta_d)) * std::abs(cos_theta_o));
             }
         }
@@ -144,7 +144,7 @@ public:
     float pdf(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi_in, Vec3f wo_in) const override {
         float cos_theta_i = Frame::cos_theta(wi_in);
         if (cos_theta_i == 0.f) return 0.f;
-        Weights w = weights(si.uv);
+        Weights w = weights(si);
         Vec3f wi = cos_theta_i > 0.f ? wi_in : -wi_in, wo = cos_theta_i > 0.f ? wo_in : -wo_in;
         float cos_theta_o = Frame::cos_theta(wo);
         bool reflect = cos_theta_o > 0.f, refract = cos_theta_o < 0.f;
@@ -172,7 +172,7 @@ public:
 
     /// Selection-probability-weighted mean of the lobes' GGX alphas (diffuse: 1).
     float roughness(const SurfaceInteraction &si) const override {
-        Weights w = weights(si.uv);
+        Weights w = weights(si);
         LobeProbs p = lobe_probs(w);
         auto [ax, ay] = dist_params(w.anisotropic, w.roughness, m_anisotropic.enabled);
         auto [sx, sy] = dist_params(w.anisotropic, scaled_roughness(w), m_anisotropic.enabled);
@@ -185,13 +185,13 @@ private:
         float anisotropic, roughness, spec_trans, eta;
         float diff_trans; ///< the diff_trans parameter halved: its range is [0, 2]
     };
-    Weights weights(Vec2f uv) const {
+    Weights weights(const SurfaceInteraction &si) const {
         Weights w;
-        w.anisotropic = m_anisotropic.eval_1(uv);
-        w.roughness = m_roughness->eval_1(uv);
-        w.spec_trans = m_spec_trans.eval_1(uv);
-        w.eta = m_eta->eval_1(uv);
-        w.diff_trans = m_diff_trans.eval_1(uv) / 2.f;
+        w.anisotropic = m_anisotropic.eval_1(si);
+        w.roughness = m_roughness->eval_1(si);
+        w.spec_trans = m_spec_trans.eval_1(si);
+        w.eta = m_eta->eval_1(si);
+        w.diff_trans = m_diff_trans.eval_1(si) / 2.f;
         return w;
     }
 

@@ -115,8 +115,8 @@ private:
         l.alpha_u = distr.alpha_u(), l.alpha_v = distr.alpha_v();
         l.sample_visible = distr.sample_visible();
         if (with_colours) {
-            l.eta = m_ior.eta->eval(si.uv), l.k = m_ior.k->eval(si.uv);
-            if (m_specular_reflectance) l.specular = m_specular_reflectance->eval(si.uv);
+            l.eta = m_ior.eta->eval(si), l.k = m_ior.k->eval(si);
+            if (m_specular_reflectance) l.specular = m_specular_reflectance->eval(si);
         }
         return l;
     }

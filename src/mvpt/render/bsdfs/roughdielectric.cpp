@@ -44,7 +44,7 @@ public:
             bs.wo = reflect(wi, m);
             bs.pdf = pdf_m * fr.F;
             bs.sampled_type = BsdfGlossyReflection;
-            if (m_specular_reflectance) weight *= m_specular_reflectance->eval(si.uv);
+            if (m_specular_reflectance) weight *= m_specular_reflectance->eval(si);
             dwh_dwo = 1.f / (4.f * dot(bs.wo, m)); // [Walter et al. 2007, eq. 14]
         } else {
             bs.wo = refract(wi, m, fr.cos_theta_t, fr.eta_ti);
@@ -52,7 +52,7 @@ public:
             bs.eta = fr.eta_it;
             bs.sampled_type = BsdfGlossyTransmission;
             if (ctx.mode == TransportMode::Radiance) weight *= fr.eta_ti * fr.eta_ti;
-            if (m_specular_transmittance) weight *= m_specular_transmittance->eval(si.uv);
+            if (m_specular_transmittance) weight *= m_specular_transmittance->eval(si);
             // [Walter et al. 2007, eq. 17]
             dwh_dwo = bs.eta * bs.eta * dot(bs.wo, m) / sqr(dot(wi, m) + bs.eta * dot(bs.wo, m));
         }
@@ -109,8 +109,8 @@ private:
     };
     Params at(const SurfaceInteraction &si) const {
         Params q{m_distr.at(si)};
-        if (m_specular_reflectance) q.reflectance = m_specular_reflectance->eval(si.uv);
-        if (m_specular_transmittance) q.transmittance = m_specular_transmittance->eval(si.uv);
+        if (m_specular_reflectance) q.reflectance = m_specular_reflectance->eval(si);
+        if (m_specular_transmittance) q.transmittance = m_specular_transmittance->eval(si);
         return q;
     }
 

@@ -256,11 +256,11 @@ private:
     /// The lobe's parameters at a hit.
     RoughPlasticLocal at(const SurfaceInteraction &si) const {
         RoughPlasticLocal l = constants();
-        const Spectrum diffuse = m_diffuse_reflectance->eval(si.uv);
+        const Spectrum diffuse = m_diffuse_reflectance->eval(si);
         const Spectrum denom = m_nonlinear ? Spectrum(1.f) - diffuse * m_coating->internal_reflectance
                                            : Spectrum(1.f - m_coating->internal_reflectance);
         l.diffuse_scaled = diffuse / denom;
-        if (m_specular_reflectance) l.specular = m_specular_reflectance->eval(si.uv);
+        if (m_specular_reflectance) l.specular = m_specular_reflectance->eval(si);
         return l;
     }
 

@@ -31,12 +31,12 @@ public:
             bs.wo = Vec3f(-wi.x, -wi.y, wi.z);
             bs.pdf = r;
             bs.sampled_type = BsdfDeltaReflection;
-            if (m_specular_reflectance) weight = m_specular_reflectance->eval(si.uv);
+            if (m_specular_reflectance) weight = m_specular_reflectance->eval(si);
         } else {
             bs.wo = -wi;
             bs.pdf = 1.f - r;
             bs.sampled_type = BsdfNull;
-            if (m_specular_transmittance) weight = m_specular_transmittance->eval(si.uv);
+            if (m_specular_transmittance) weight = m_specular_transmittance->eval(si);
         }
         return {bs, weight};
     }

@@ -13,7 +13,7 @@ namespace mvpt {
 class AreaLight final : public Light {
 public:
     explicit AreaLight(const Properties &props) {
-        m_radiance = get_texture(props, "radiance", Color3f(1.f), SpectrumUse::Emission);
+        m_radiance = get_uv_texture(props, "radiance", Color3f(1.f), SpectrumUse::Emission);
         if (m_radiance->is_constant()) {
             Color3f c = m_radiance->mean();
             if (!c.is_finite() || c.r < 0 || c.g < 0 || c.b < 0)

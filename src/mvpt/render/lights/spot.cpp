@@ -16,7 +16,7 @@ public:
         if (!m_intensity.is_finite() || m_intensity.r < 0 || m_intensity.g < 0 || m_intensity.b < 0)
             props.fail("intensity", "'intensity' must be finite and non-negative");
         if (props.has_texture("texture")) {
-            m_texture = get_texture(props, "texture", Color3f(1.f));
+            m_texture = get_uv_texture(props, "texture", Color3f(1.f));
             if (m_texture->is_constant()) props.fail("texture", "'texture' must be spatially varying (e.g. a bitmap)");
         }
         float cutoff_deg = props.get_float("cutoff_angle", 20.f);

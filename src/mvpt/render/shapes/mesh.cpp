@@ -31,6 +31,12 @@ void TriangleMesh::check_and_transform(const Properties &props, const Transform 
         if (i >= nv) props.fail("", what + ": a face refers to vertex " + std::to_string(i) + " but there are only " + std::to_string(nv));
     if (!m_data.normals.empty() && m_data.normals.size() != nv) props.fail("", what + ": normal count differs from vertex count");
     if (!m_data.uvs.empty() && m_data.uvs.size() != nv) props.fail("", what + ": uv count differs from vertex count");
+    for (const MeshAttribute &a : m_data.attributes) {
+        const size_t entries = a.per_face() ? m_data.triangle_count() : nv;
+        if (a.values.size() != entries * size_t(a.dim))
+            props.fail("", what + ": attribute '" + a.name + "' has " + std::to_string(a.values.size()) + " values, not " +
+                               std::to_string(entries * size_t(a.dim)));
+    }
 
     for (auto &p : m_data.positions) {
         if (!all_finite(p)) props.fail("", what + ": a vertex position is not finite");
@@ -192,6 +198,27 @@ std::pair<Vec3f, Vec3f> TriangleMesh::uv_partials(uint32_t prim, Point3f) const 
     const Vec2f uv0 = m_data.uvs[idx[0]], duv0 = m_data.uvs[idx[1]] - uv0, duv1 = m_data.uvs[idx[2]] - uv0;
     const float det = duv0.x * duv1.y - duv0.y * duv1.x, inv = det != 0.f ? 1.f / det : 0.f;
     return {(e1 * duv1.y - e2 * duv0.y) * inv, (e2 * duv0.x - e1 * duv1.x) * inv};
+}
+
+std::vector<std::string> TriangleMesh::attribute_names() const {
+    std::vector<std::string> names;
+    for (const MeshAttribute &a : m_data.attributes) names.push_back(a.name);
+    return names;
+}
+
+Color3f TriangleMesh::eval_attribute(const std::string &name, const SurfaceInteraction &si) const {
+    for (const MeshAttribute &a : m_data.attributes) {
+        if (a.name != name) continue;
+        const auto entry = [&](size_t i) {
+            const float *v = &a.values[i * size_t(a.dim)];
+            return a.dim == 3 ? Color3f(v[0], v[1], v[2]) : Color3f(v[0]);
+        };
+        if (a.per_face()) return entry(si.prim);
+        const uint32_t *idx = &m_data.indices[3 * size_t(si.prim)];
+        const Vec2f b = si.prim_uv;
+        return entry(idx[0]) * (1.f - b.x - b.y) + entry(idx[1]) * b.x + entry(idx[2]) * b.y;
+    }
+    return Color3f(0.f);
 }
 
 ShapeSample TriangleMesh::sample_area(Vec2f u) const {

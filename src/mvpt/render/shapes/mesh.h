@@ -26,6 +26,10 @@ public:
     /// Constant over a triangle: from its edges and uvs (barycentric without uvs).
     std::pair<Vec3f, Vec3f> uv_partials(uint32_t prim, Point3f p) const override;
 
+    std::vector<std::string> attribute_names() const override;
+    /// Interpolated over the triangle with the hit's barycentrics (vertex_), or the triangle's (face_).
+    Color3f eval_attribute(const std::string &name, const SurfaceInteraction &si) const override;
+
     const MeshData &data() const { return m_data; }
     /// True, with the parallelogram and its area density, when sample_area maps u to
     /// origin + u.x e1 + u.y e2 with the constant normal n (see m_is_parallelogram).

@@ -11,8 +11,8 @@ namespace mvpt {
 class Checkerboard final : public Texture {
 public:
     explicit Checkerboard(const Properties &props) {
-        m_color0 = get_texture(props, "color0", 0.4f);
-        m_color1 = get_texture(props, "color1", 0.2f);
+        m_color0 = get_uv_texture(props, "color0", Color3f(0.4f));
+        m_color1 = get_uv_texture(props, "color1", Color3f(0.2f));
         m_to_uv = UvTransform(props.get_transform("to_uv"));
     }
 
