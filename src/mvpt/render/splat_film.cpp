@@ -161,7 +161,7 @@ MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sam
 
 void SplatCache::replace(SplatEntry &e, uint32_t key) {
     if (e.key != UINT32_MAX) {
-        m_film->add(e);
+        retire(e);
         ++m_displaced;
     } else {
         m_used.push_back(uint32_t(&e - m_entries.data()));
@@ -170,10 +170,25 @@ void SplatCache::replace(SplatEntry &e, uint32_t key) {
     e.key = key;
 }
 
+void SplatCache::retire(const SplatEntry &e) {
+    SplatEntry &slot = m_victims[m_victim_count % VictimDepth];
+    if (m_victim_count >= VictimDepth) m_film->add(slot); // retired VictimDepth entries ago
+    slot = e;
+    m_film->prefetch(e.key);
+    ++m_victim_count;
+}
+
 void SplatCache::flush() {
-    for (uint32_t i : m_used) {
-        m_film->add(m_entries[i]);
-        m_entries[i] = SplatEntry{};
+    for (size_t i = 0; i < std::min(m_victim_count, VictimDepth); ++i) m_film->add(m_victims[i]);
+    m_victim_count = 0;
+    // The entries' sums prefetched VictimDepth entries ahead of their adds.
+    const size_t n = m_used.size();
+    for (size_t i = 0; i < std::min(n, VictimDepth); ++i) m_film->prefetch(m_entries[m_used[i]].key);
+    for (size_t i = 0; i < n; ++i) {
+        if (i + VictimDepth < n) m_film->prefetch(m_entries[m_used[i + VictimDepth]].key);
+        SplatEntry &e = m_entries[m_used[i]];
+        m_film->add(e);
+        e = SplatEntry{};
     }
     m_used.clear();
 }
@@ -181,6 +196,7 @@ void SplatCache::flush() {
 void SplatCache::discard() {
     for (uint32_t i : m_used) m_entries[i] = SplatEntry{};
     m_used.clear();
+    m_victim_count = 0;
 }
 
 } // namespace mvpt

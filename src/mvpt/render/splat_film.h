@@ -16,9 +16,9 @@
 #include "../core/simd.h"
 #include "filter.h"
 
+#include <array>
 #include <atomic>
 #include <cmath>
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -115,6 +115,12 @@ public:
 
     /// Adds the sums of a cache entry (any thread, concurrently).
     void add(const SplatEntry &e);
+    /// Starts loading, for writing, the sums of view-pixel `key` (before add).
+    [[gnu::always_inline]] void prefetch(uint32_t key) const {
+        __builtin_prefetch(&m_shared[key], 1);
+        __builtin_prefetch(&m_e[size_t(m_e_channels) * key], 1);
+        __builtin_prefetch(&m_count[key], 1);
+    }
     /// The sums of view-pixel `key`, read and cleared (one thread per view-pixel, no other adds).
     SplatEntry take(uint32_t key);
     /// Bytes per view-pixel (for memory estimates).
@@ -246,8 +252,15 @@ private:
         return (m_base[size_t(slot)] + torus) & m_mask;
     }
     void replace(SplatEntry &e, uint32_t key);
+    /// Hands a displaced entry to the film: its sums' lines are prefetched now and added
+    /// VictimDepth displacements later, so that the misses of several overlap (an atomic add
+    /// to a line not in cache otherwise waits for it alone).
+    void retire(const SplatEntry &e);
+    static constexpr size_t VictimDepth = 8;
 
     MvPassFilm *m_film;
+    std::array<SplatEntry, VictimDepth> m_victims; ///< displaced entries not yet added (a ring)
+    size_t m_victim_count = 0;                     ///< entries retired since the last flush
     std::vector<uint32_t> m_used; ///< the entries that hold a view-pixel (flush visits only them)
     bool m_e_rgb;
     std::vector<uint32_t> m_offset; ///< the film's offset of each view
