@@ -1,6 +1,6 @@
 """`python -m mvpt ...` runs the command line (same as the `mvpt` entry point)."""
 import sys
 
-from .cli import main
+from .cli import command
 
-sys.exit(main())
+sys.exit(command())

@@ -245,7 +245,16 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
     displays.add_display_options(p)
 
 
-def main(argv=None) -> int:
+def command() -> int:
+    """The `mvpt` program (`mvpt`, `python -m mvpt`): main() with its signal handlers kept
+    until the process exits, so that a Ctrl-C pressed again while it returns (the outputs
+    written) is answered, not a kill by the restored default or a KeyboardInterrupt."""
+    return main(keep_handlers=True)
+
+
+def main(argv=None, keep_handlers: bool = False) -> int:
+    """The command line as a function: its signal handlers are restored when it returns (unless
+    `keep_handlers`: the process ends with it)."""
     parser = _Parser(prog="mvpt", description="Render many views of one scene (Mitsuba 3 XML).")
     parser.add_argument("--version", action="version", version=f"mvpt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -288,9 +297,9 @@ def main(argv=None) -> int:
     finally:
         # A signal from here on (the work is done) must not raise into the restoring loop.
         cli_common.finishing = True
-        for s, handler in previous.items():
+        for s, handler in ({} if keep_handlers else previous).items():
             signal.signal(s, handler if handler is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(command())

@@ -211,6 +211,27 @@ def test_second_ctrl_c_keeps_the_finished_passes(tmp_path):
     assert all((out / f"slow_v{i}.exr").exists() for i in range(4))
 
 
+def test_the_program_answers_a_signal_until_it_exits(tmp_path, monkeypatch, capsys):
+    """The `mvpt` program keeps its handlers after the render: a second Ctrl-C that comes once
+    the outputs are written (a render stopped within a tenth of a second) is answered, where the
+    restored default would kill the process (exit -2, not 130) or raise a KeyboardInterrupt."""
+    from mvpt import cli, cli_common
+    path = tmp_path / "s.xml"
+    path.write_text(scene(views(1, res=8, spp=1)))
+    monkeypatch.setattr(sys, "argv", ["mvpt", "render", str(path), "-q", "-o", str(tmp_path / "out")])
+    stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    previous = {s: signal.getsignal(s) for s in stops}
+    try:
+        assert cli.command() == 0
+        assert all(signal.getsignal(s) is cli_common.on_signal for s in stops)
+        os.kill(os.getpid(), signal.SIGINT)  # answered by the handler: no KeyboardInterrupt
+        assert "SIGINT: finishing what was started" in capsys.readouterr().err
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        cli_common.reset_stop()
+
+
 def test_a_signal_after_the_work_is_done_raises_nothing():
     """A signal that comes while the command restores its handlers (the render and its outputs
     are complete) must not raise into that code: it printed a traceback once (a SIGTERM 30 ms
