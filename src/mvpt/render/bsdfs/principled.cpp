@@ -9,13 +9,14 @@
 #include "../bsdf.h"
 #include "../fresnel.h"
 #include "../microfacet.h"
+#include "joint_lobes.h"
 #include "principled_helpers.h"
 
 namespace mvpt {
 
 using namespace principled;
 
-class PrincipledBsdf final : public Bsdf {
+class PrincipledBsdf final : public JointLobesBsdf<PrincipledBsdf> {
 public:
     explicit PrincipledBsdf(const Properties &props) {
         m_base_color = get_texture(props, "base_color", 0.5f);
@@ -106,33 +107,6 @@ public:
         return {bs, value / bs.pdf};
     }
 
-    Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        Color3f value;
-        lobes(params(si), ctx, wi, wo, &value, nullptr);
-        return value;
-    }
-
-    float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float p;
-        lobes(params(si), ctx, wi, wo, nullptr, &p);
-        return p;
-    }
-
-    std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
-                                        Vec3f wo) const override {
-        std::pair<Spectrum, float> out;
-        lobes(params(si), ctx, wi, wo, &out.first, &out.second);
-        return out;
-    }
-
-    /// The textures once for all the views, then each view's lobes (value and density sharing
-    /// the half vector, the Fresnel term and the distribution).
-    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
-                        Spectrum *f, float *pdf) const override {
-        const Params q = params(si);
-        for (size_t c = 0; c < n; ++c) lobes(q, ctx, wi[c], wo, &f[c], &pdf[c]);
-    }
-
     /// Selection-probability-weighted mean of the lobes' GGX alphas at normal
     /// incidence (diffuse counts as alpha 1; GTR1's alpha is used as is).
     float roughness(const SurfaceInteraction &si) const override {
@@ -145,6 +119,7 @@ public:
     }
 
 private:
+    friend class JointLobesBsdf<PrincipledBsdf>;
     /// Lobe weights needed by sample, eval and pdf.
     struct Weights {
         float anisotropic, roughness, spec_trans, metallic, clearcoat;

@@ -6,11 +6,12 @@
 #include "../fresnel.h"
 #include "../ior.h"
 #include "../texture.h"
+#include "joint_lobes.h"
 #include "microfacet_params.h"
 
 namespace mvpt {
 
-class RoughDielectric final : public Bsdf {
+class RoughDielectric final : public JointLobesBsdf<RoughDielectric> {
 public:
     explicit RoughDielectric(const Properties &props) {
         if (props.has_texture("specular_reflectance"))
@@ -66,48 +67,23 @@ public:
             if (distr.G(wi, bs.wo, m) == 0.f) return {bs, {}};
             Spectrum value;
             float p;
-            lobes(at(si), ctx, wi, bs.wo, &value, &p);
+            lobes(params(si), ctx, wi, bs.wo, &value, &p);
             if (!(p > 0.f)) return {bs, {}};
             return {bs, value / p};
         }
         return {bs, weight};
     }
 
-    Spectrum eval(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        Spectrum value;
-        lobes(at(si), ctx, wi, wo, &value, nullptr);
-        return value;
-    }
-
-    float pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, Vec3f wo) const override {
-        float p;
-        lobes(at(si), ctx, wi, wo, nullptr, &p);
-        return p;
-    }
-
-    std::pair<Spectrum, float> eval_pdf(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi,
-                                        Vec3f wo) const override {
-        std::pair<Spectrum, float> out;
-        lobes(at(si), ctx, wi, wo, &out.first, &out.second);
-        return out;
-    }
-
-    /// The textures once for all the views, then each view's value and density together.
-    void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo,
-                        Spectrum *f, float *pdf) const override {
-        const Params q = at(si);
-        for (size_t c = 0; c < n; ++c) lobes(q, ctx, wi[c], wo, &f[c], &pdf[c]);
-    }
-
     float roughness(const SurfaceInteraction &si) const override { return m_distr.mean_alpha(si); }
 
 private:
+    friend class JointLobesBsdf<RoughDielectric>;
     /// The textures' values at a hit.
     struct Params {
         MicrofacetDistribution distr;
         Spectrum reflectance{1.f}, transmittance{1.f};
     };
-    Params at(const SurfaceInteraction &si) const {
+    Params params(const SurfaceInteraction &si) const {
         Params q{m_distr.at(si)};
         if (m_specular_reflectance) q.reflectance = m_specular_reflectance->eval(si);
         if (m_specular_transmittance) q.transmittance = m_specular_transmittance->eval(si);
