@@ -246,10 +246,14 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
 
 
 def command() -> int:
-    """The `mvpt` program (`mvpt`, `python -m mvpt`): main() with its signal handlers kept
-    until the process exits, so that a Ctrl-C pressed again while it returns (the outputs
-    written) is answered, not a kill by the restored default or a KeyboardInterrupt."""
-    return main(keep_handlers=True)
+    """The `mvpt` program (`mvpt`, `python -m mvpt`): main() with its signal handlers kept, and
+    Ctrl-C ignored once it has returned (its outputs written; people press Ctrl-C twice):
+    Python's shutdown restores the default handler, which would kill the process with its
+    work done and its exit status lost."""
+    code = main(keep_handlers=True)
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return code
 
 
 def main(argv=None, keep_handlers: bool = False) -> int:
