@@ -17,6 +17,7 @@ using namespace mvpt;
 
 namespace {
 
+// Box filters: a view's sample window is its crop window (no filter margin).
 const char *SceneXml = R"(<scene version="3.0.0">
   <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
     <bsdf type="diffuse"/></shape>
@@ -26,19 +27,19 @@ const char *SceneXml = R"(<scene version="3.0.0">
     <bsdf type="diffuse"/></shape>
   <sensor type="perspective" id="a"><float name="fov" value="45"/>
     <transform name="to_world"><lookat origin="0, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/><rfilter type="box"/></film></sensor>
   <sensor type="perspective" id="b"><float name="fov" value="30"/><float name="near_clip" value="2.5"/>
     <transform name="to_world"><lookat origin="0.4, 1.0, 3.2" target="0, 0.3, 0" up="0, 1, 0"/></transform>
     <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/>
       <integer name="crop_offset_x" value="4"/><integer name="crop_offset_y" value="6"/>
-      <integer name="crop_width" value="12"/><integer name="crop_height" value="10"/></film></sensor>
+      <integer name="crop_width" value="12"/><integer name="crop_height" value="10"/><rfilter type="box"/></film></sensor>
   <sensor type="thinlens" id="c"><float name="fov" value="50"/><float name="aperture_radius" value="0.08"/>
     <float name="focus_distance" value="3"/>
     <transform name="to_world"><lookat origin="-0.5, 1.1, 2.8" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/><rfilter type="box"/></film></sensor>
   <sensor type="perspective" id="below"><float name="fov" value="60"/>
     <transform name="to_world"><lookat origin="0, -1, 1" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film></sensor>
 </scene>)";
 
 bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }

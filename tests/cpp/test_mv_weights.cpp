@@ -19,6 +19,7 @@ using namespace mvpt;
 
 namespace {
 
+// Box filters: a view's sample window is its crop window (no filter margin).
 const char *SceneXml = R"(<scene version="3.0.0">
   <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
     <bsdf type="phong"><float name="exponent" value="12"/></bsdf></shape>
@@ -28,32 +29,32 @@ const char *SceneXml = R"(<scene version="3.0.0">
     <bsdf type="diffuse"/></shape>
   <sensor type="perspective" id="a"><float name="fov" value="45"/>
     <transform name="to_world"><lookat origin="0, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/><rfilter type="box"/></film></sensor>
   <sensor type="perspective" id="b"><float name="fov" value="30"/>
     <transform name="to_world"><lookat origin="0.4, 1.0, 3.2" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film></sensor>
   <sensor type="thinlens" id="c"><float name="fov" value="50"/><float name="aperture_radius" value="0.08"/>
     <float name="focus_distance" value="3"/>
     <transform name="to_world"><lookat origin="-0.5, 1.1, 2.8" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/><rfilter type="box"/></film></sensor>
   <sensor type="thinlens" id="d"><float name="fov" value="40"/><float name="aperture_radius" value="0.2"/>
     <float name="focus_distance" value="2.5"/>
     <transform name="to_world"><lookat origin="0.8, 1.5, 2.6" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="36"/><integer name="height" value="20"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="36"/><integer name="height" value="20"/><rfilter type="box"/></film></sensor>
   <sensor type="perspective" id="moving"><float name="fov" value="45"/>
     <float name="shutter_open" value="0"/><float name="shutter_close" value="1"/>
     <animation name="to_world">
       <transform time="0"><lookat origin="-0.2, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
       <transform time="1"><lookat origin="0.3, 1.3, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
     </animation>
-    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/><rfilter type="box"/></film></sensor>
   <sensor type="perspective" id="moving2"><float name="fov" value="35"/>
     <float name="shutter_open" value="0.5"/><float name="shutter_close" value="1.5"/>
     <animation name="to_world">
       <transform time="0.5"><lookat origin="0.6, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
       <transform time="1.5"><lookat origin="0.2, 1.0, 3.3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
     </animation>
-    <film type="hdrfilm"><integer name="width" value="28"/><integer name="height" value="28"/></film></sensor>
+    <film type="hdrfilm"><integer name="width" value="28"/><integer name="height" value="28"/><rfilter type="box"/></film></sensor>
 </scene>)";
 
 struct Fixture {

@@ -174,16 +174,18 @@ std::shared_ptr<ReconstructionFilter> make_filter(const std::string &type) {
 
 TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
     // A contribution at film position x adds h(x - c_i) v to every pixel i of the crop window
-    // whose centre c_i is within the radius (h: the density path tracing samples offsets from),
-    // and counts in the pixel that holds x; pixels outside the crop window get nothing. Taps
-    // below SplatCache::TapThreshold are kept with probability h / threshold and then add
-    // threshold v: over many native samples each such tap is kept that often, and every
-    // contribution keeps floor or ceil of the sum of h / threshold of its small taps.
+    // whose centre c_i is within the radius (h: the normalised filter, negative in places for
+    // mitchell and lanczos), and counts in the pixel that holds x; pixels outside the crop
+    // window get nothing. Taps with |h| below SplatCache::TapThreshold are kept with probability
+    // |h| / threshold and then add ±threshold v (h's sign): over many native samples each such
+    // tap is kept that often, and every contribution keeps floor or ceil of the sum of
+    // |h| / threshold of its small taps.
     constexpr float Tau = SplatCache::TapThreshold;
     constexpr int Samples = 4000;
-    for (const char *type : {"tent", "gaussian"}) {
+    for (const char *type : {"tent", "gaussian", "mitchell", "lanczos"}) {
         auto filter = make_filter(type);
         const float r = filter->radius();
+        bool negative_taps = false;
         // A 10 x 8 crop window at (20, 30) of the full film.
         MvPassFilm film({SplatFootprint::of(20, 30, 10, 8, *filter, Sampler::dimension_key(5))}, false);
         SplatCache cache(film, 8); // small: entries are displaced while the footprint is added
@@ -194,7 +196,8 @@ TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
             for (int p = 0; p < 80; ++p) {
                 const float dx = x.x - (float(20 + p % 10) + 0.5f), dy = x.y - (float(30 + p / 10) + 0.5f);
                 h[size_t(p)] = std::abs(dx) < r && std::abs(dy) < r ? filter->eval_1d(dx) * filter->eval_1d(dy) : 0.f;
-                if (h[size_t(p)] < Tau) small_sum += h[size_t(p)] / Tau;
+                if (std::abs(h[size_t(p)]) < Tau) small_sum += std::abs(h[size_t(p)]) / Tau;
+                negative_taps |= h[size_t(p)] < 0.f;
             }
             for (uint64_t sample = 0; sample < Samples; ++sample) {
                 ASSERT_TRUE(cache.add(0, 0, x, mix_bits(sample), Spectrum(2.f, 1.f, 0.5f), 0.25f, Spectrum(0.f, 3.f, 0.f)));
@@ -208,14 +211,14 @@ TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
                     const bool holds = px == int(std::floor(x.x)) && py == int(std::floor(x.y));
                     ASSERT_EQ(e.count, holds ? 1u : 0u) << type;
                     counted += e.count;
-                    if (hp >= Tau) {
+                    if (std::abs(hp) >= Tau) {
                         ASSERT_EQ(e.w, to_fixed(0.25f * hp)) << type << " pixel " << px << "," << py;
                         ASSERT_EQ(e.lw[1], to_fixed(4.f * hp)) << type; // W*L + E
                         ASSERT_EQ(e.e[0], to_fixed(1.f * hp)) << type;  // E's mean
                     } else if (e.w != 0) {
-                        ASSERT_GT(hp, 0.f) << type;
-                        ASSERT_EQ(e.w, to_fixed(0.25f * Tau)) << type;
-                        ASSERT_EQ(e.lw[1], to_fixed(4.f * Tau)) << type;
+                        ASSERT_NE(hp, 0.f) << type;
+                        ASSERT_EQ(e.w, to_fixed(0.25f * std::copysign(Tau, hp))) << type;
+                        ASSERT_EQ(e.lw[1], to_fixed(4.f * std::copysign(Tau, hp))) << type;
                         ++kept[size_t(p)], ++kept_small;
                     }
                 }
@@ -223,43 +226,83 @@ TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
                 ASSERT_TRUE(kept_small == int(std::floor(small_sum)) || kept_small == int(std::ceil(small_sum)))
                     << type << " kept " << kept_small << " of sum " << small_sum;
             }
-            // Each small tap is kept with probability h / threshold (binomial, 5 standard deviations).
+            // Each small tap is kept with probability |h| / threshold (binomial, 5 standard deviations).
             for (int p = 0; p < 80; ++p)
-                if (h[size_t(p)] < Tau) {
-                    const double q = h[size_t(p)] / Tau;
+                if (std::abs(h[size_t(p)]) < Tau) {
+                    const double q = std::abs(h[size_t(p)]) / Tau;
                     EXPECT_NEAR(kept[size_t(p)] / double(Samples), q, 5.0 * std::sqrt(q * (1.0 - q) / Samples) + 1e-9)
                         << type << " pixel " << p;
                 }
             if (x.x < 20.f) EXPECT_GT(*std::max_element(h.begin(), h.end()), 0.f) << type; // the margin reaches the window
         }
+        EXPECT_EQ(negative_taps, filter->has_negative_lobes()) << type;
     }
 }
 
-TEST(SplatFilm, FilterDensityIsWhatPathTracingSamples) {
-    // eval_1d is the density of sample()'s offsets: a histogram of many samples matches it.
-    for (const char *type : {"box", "tent", "gaussian"}) {
+TEST(SplatFilm, FilterSamplesAreDistributedAndWeightedByTheFilter) {
+    // sample() draws offsets with density |h| / ∫|h| per axis (h = eval_1d) and weights them by
+    // h / p: a histogram of the offsets matches that density, and the weighted histogram
+    // matches h itself (the other axis's weights average to ∫h = 1).
+    for (const char *type : {"box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"}) {
         auto filter = make_filter(type);
-        const float r = filter->radius();
+        const float r = filter->radius(), abs_integral = filter->abs_integral_1d();
         constexpr int Bins = 40, N = 400000;
-        std::vector<double> hist(Bins, 0.0);
+        std::vector<double> hist(Bins, 0.0), weighted(Bins, 0.0);
         std::mt19937 rng(3);
         std::uniform_real_distribution<float> u(0.f, 1.f);
         for (int i = 0; i < N; ++i) {
-            float d = filter->sample(Vec2f(u(rng), u(rng))).x;
-            int b = std::min(Bins - 1, int((d + r) / (2.f * r) * Bins));
+            float weight = 0.f;
+            const Vec2f d = filter->sample(Vec2f(u(rng), u(rng)), weight);
+            const float sign = filter->eval_1d(d.x) * filter->eval_1d(d.y) < 0.f ? -1.f : 1.f;
+            ASSERT_EQ(weight, sign * abs_integral * abs_integral) << type << " offset " << d.x << "," << d.y;
+            const int b = std::min(Bins - 1, int((d.x + r) / (2.f * r) * Bins));
             hist[size_t(b)] += 1.0;
+            weighted[size_t(b)] += weight;
         }
         double peak = 0.0;
         for (int b = 0; b < Bins; ++b) {
-            // The density's mean over the bin, by a fine midpoint rule.
-            double mean = 0.0;
-            for (int k = 0; k < 100; ++k) mean += filter->eval_1d(-r + (float(b) + (k + 0.5f) / 100.f) * 2.f * r / Bins) / 100.0;
-            const double expected = mean * 2.0 * r / Bins * N;
+            // h's mean over the bin, by a fine midpoint rule, and |h|'s.
+            double mean = 0.0, abs_mean = 0.0;
+            for (int k = 0; k < 100; ++k) {
+                const float h = filter->eval_1d(-r + (float(b) + (k + 0.5f) / 100.f) * 2.f * r / Bins);
+                mean += h / 100.0, abs_mean += std::abs(h) / 100.0;
+            }
+            const double width = 2.0 * r / Bins, expected = abs_mean / abs_integral * width * N;
             EXPECT_NEAR(hist[size_t(b)], expected, 5.0 * std::sqrt(expected) + 1.0) << type << " bin " << b;
-            peak = std::max(peak, mean);
+            // Each weight is ±abs_integral^2: the weighted count's deviation is that times the count's.
+            const double spread = abs_integral * abs_integral * (5.0 * std::sqrt(expected) + 1.0);
+            EXPECT_NEAR(weighted[size_t(b)], mean * width * N, spread) << type << " bin " << b;
+            peak = std::max(peak, abs_mean);
         }
         EXPECT_LE(peak, filter->peak_1d() * 1.0001) << type;
     }
+}
+
+TEST(SplatFilm, SignedFiltersFollowMitsubasDefinitions) {
+    // Mitchell-Netravali (B = C = 1/3) integrates to 1: h(0) = 8/9, h(1) = 1/18, h(1.5) =
+    // -5/144; Catmull-Rom (B = 0, C = 1/2): h(0) = 1, h(1.5) = -1/16; Lanczos of 3 lobes is
+    // sinc(x) sinc(x / 3) over its integral. A table holds each bin's midpoint value: read
+    // half a bin (1/256 or 3/1024 px) off, within that times the slope.
+    auto at = [](const ReconstructionFilter &f, float d) { return f.eval_1d(d); };
+    auto mitchell = make_filter("mitchell"), catmullrom = make_filter("catmullrom"), lanczos = make_filter("lanczos");
+    EXPECT_NEAR(at(*mitchell, 0.f), 8.f / 9.f, 1e-3f);
+    EXPECT_NEAR(at(*mitchell, 1.f), 1.f / 18.f, 1e-3f);
+    EXPECT_NEAR(at(*mitchell, 1.5f), -5.f / 144.f, 1e-3f);
+    EXPECT_NEAR(at(*catmullrom, 0.f), 1.f, 1e-3f);
+    EXPECT_NEAR(at(*catmullrom, 1.5f), -1.f / 16.f, 1e-3f);
+    EXPECT_FLOAT_EQ(mitchell->radius(), 2.f);
+    EXPECT_FLOAT_EQ(lanczos->radius(), 3.f);
+    auto sinc3 = [](double x) {
+        const double a = 3.14159265358979 * std::abs(x);
+        return a < 1e-9 ? 1.0 : std::sin(a) * std::sin(a / 3.0) / (a * a / 3.0);
+    };
+    double integral = 0.0;
+    constexpr int Steps = 300000;
+    for (int k = 0; k < Steps; ++k) integral += sinc3(-3.0 + (k + 0.5) * 6.0 / Steps) * 6.0 / Steps;
+    for (float d : {0.f, 0.5f, 1.25f, 1.5f, 2.5f}) EXPECT_NEAR(at(*lanczos, d), sinc3(d) / integral, 2e-3) << d;
+    EXPECT_LT(at(*lanczos, 1.5f), 0.f);
+    for (auto *f : {mitchell.get(), catmullrom.get(), lanczos.get()}) EXPECT_TRUE(f->has_negative_lobes());
+    for (const char *type : {"box", "tent", "gaussian"}) EXPECT_FALSE(make_filter(type)->has_negative_lobes()) << type;
 }
 
 TEST(SplatFilm, ManyViewsShareARegionWithoutDisplacing) {

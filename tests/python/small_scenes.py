@@ -6,7 +6,11 @@ import textwrap
 
 def sensor(id: str = "cam", res: int | str = 16, spp: int | str = 4, sampler: str = "independent",
            origin: str = "0, 1, 4", fov: str = "40", extra: str = "", film_extra: str = "", seed: int = 0) -> str:
-    """One perspective sensor looking at the origin; `extra` and `film_extra` are spliced in."""
+    """One perspective sensor looking at the origin; `extra` and `film_extra` are spliced in.
+    The film has a box filter unless `film_extra` names one (mvpt's default, like Mitsuba's,
+    is a gaussian)."""
+    if "<rfilter" not in film_extra:
+        film_extra += '<rfilter type="box"/>'
     return (f'    <sensor type="perspective" id="{id}">\n'
             f'        <float name="fov" value="{fov}"/>\n'
             f'        <transform name="to_world"><lookat origin="{origin}" target="0, 0.5, 0" up="0, 1, 0"/></transform>\n'

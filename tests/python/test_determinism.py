@@ -83,7 +83,7 @@ def test_time_budget_prefix_matches_spp():
     _assert_identical(budget, mvpt.render(s, spp=k, threads=1))
 
 
-@pytest.mark.parametrize("rfilter", ["box", "tent", "gaussian"])
+@pytest.mark.parametrize("rfilter", ["box", "tent", "gaussian", "lanczos"])
 def test_multiview_threads_1_2_3(rfilter):
     """Multi-view path tracing splats into shared fixed-point sums from every thread, with the
     sensor's filter over several pixels, crop windows and adaptive passes included: the

@@ -112,6 +112,11 @@ CASES = {
                                                   '</bsdf>'),
                                       '<texture name="reflectance" type="rawconstant"/>',
                                       r"rawconstant needs a <float> or <vector> 'value'"),
+    "lanczos_lobes": Case(scene(sensor(film_extra='<rfilter type="lanczos"><integer name="lobes" value="0"/></rfilter>')),
+                          '<integer name="lobes" value="0"', r"'lobes' must be an integer in \[1, 64\], got 0"),
+    # Mitsuba's documentation names the Mitchell-Netravali parameters A and B; its code reads B and C.
+    "mitchell_a": Case(scene(sensor(film_extra='<rfilter type="mitchell"><float name="A" value="0.3"/></rfilter>')),
+                       '<float name="A"', r"rfilter 'mitchell' does not use a parameter named 'A'"),
     "unused_child": Case(_with_shape('<film type="hdrfilm"/>'), '<film type="hdrfilm"/>',
                          r"shape 'cube' does not accept a nested film"),
     "duplicate_parameter": Case(scene(sensor(film_extra='\n            <integer name="width" value="8"/>')),

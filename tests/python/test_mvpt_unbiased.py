@@ -159,9 +159,10 @@ def test_weighted_means_within_tolerance(case):
 # Pixel filters (design doc §5): contributions are splatted with the sensor's filter over the
 # pixels it covers, and native samples reach the filter's margin around the crop window, so
 # that multi-view path tracing converges to what path tracing's filter importance sampling
-# gives, edge pixels included. The box filter is the case above.
+# gives, edge pixels included. The box filter is the case above; mitchell and lanczos have
+# negative lobes (signed splat weights, path tracing's samples weighted ±).
 @pytest.mark.parametrize("name", ["cornell_phong9", "thinlens_metal"])
-@pytest.mark.parametrize("rfilter", ["tent", "gaussian"])
+@pytest.mark.parametrize("rfilter", ["tent", "gaussian", "mitchell", "lanczos"])
 def test_balance_is_unbiased_per_filter(name, rfilter):
     pt_spp, mv_spp = CASES[name]
     scene = _load(name, filter=rfilter)

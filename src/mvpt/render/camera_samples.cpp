@@ -13,7 +13,7 @@ void CameraSamples::draw(const Camera &cam, uint32_t seed, uint32_t view, const 
                          const uint32_t *index, size_t n, FilmSampling film_sampling, bool lens_always) {
     static_assert(DimFilm == 0 && DimLens == 1 && DimTime == 2 && DimCameraEnd == 3,
                   "independent_start_draws draws the camera dimensions 0, 1, 2");
-    film.resize(n), lens.resize(n), time.resize(n);
+    film.resize(n), lens.resize(n), time.resize(n), weight.resize(n);
     const bool independent = cam.sampler_kind == SamplerKind::Independent;
     if (independent) { // the samplers' starts and camera numbers in one vector loop (sampler_batch.h)
         pixel_hash.resize(n), sample_hash.resize(n);
@@ -41,10 +41,11 @@ void CameraSamples::draw(const Camera &cam, uint32_t seed, uint32_t view, const 
         }
         const Vec2f pixel{float(int32_t(px[i])), float(int32_t(py[i]))};
         if (film_sampling == FilmSampling::Filter) {
-            const Vec2f offset = filter.sample(u_film);
+            const Vec2f offset = filter.sample(u_film, weight[i]);
             film[i] = Vec2f(pixel.x + 0.5f + offset.x, pixel.y + 0.5f + offset.y);
         } else {
             film[i] = Vec2f(pixel.x + u_film.x, pixel.y + u_film.y);
+            weight[i] = 1.f;
         }
         lens[i] = with_lens ? warp::square_to_uniform_disk_concentric(u_lens) : Vec2f(0.f, 0.f);
         time[i] = cam.sample_time(u_time);

@@ -27,6 +27,9 @@ struct CameraSamples {
     std::vector<Vec2f> film; ///< film position (full-film pixels)
     std::vector<Vec2f> lens; ///< point on the unit disk
     std::vector<float> time;
+    /// The sample's filter weight h / p (ReconstructionFilter::sample): 1 but for filters
+    /// with negative lobes under FilmSampling::Filter.
+    std::vector<float> weight;
     /// The independent sampler's hashes of (seed, view, pixel) and of the sample, for
     /// Sampler::start_from; empty for the other samplers.
     std::vector<uint64_t> pixel_hash, sample_hash;

@@ -21,8 +21,8 @@ SplatFootprint SplatFootprint::of(int crop_x, int crop_y, int width, int height,
         f.filter = &filter;
         f.radius = filter.radius();
         f.peak = filter.peak_1d() * filter.peak_1d();
-        f.table = tabulated->pdf_table().data();
-        f.table_size = tabulated->pdf_table().size();
+        f.table = tabulated->table().data();
+        f.table_size = tabulated->table().size();
         f.table_scale = float(f.table_size) / (2.f * f.radius);
     }
     return f;
@@ -112,7 +112,7 @@ inline int floor_int(float v) {
 
 MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e) {
     // Pixels i of the crop window whose centre i + 1/2 lies within the radius of x, per axis,
-    // weighted by the tabulated density (the same operations as ReconstructionFilter::eval_1d).
+    // weighted by the tabulated filter h (the same operations as ReconstructionFilter::eval_1d).
     const SplatFootprint &f = m_film->footprint(slot);
     constexpr int MaxTaps = 2 * SplatFootprint::MaxRadius;
     float wx[MaxTaps], wy[MaxTaps];
@@ -132,8 +132,9 @@ MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sam
     const int ny = taps(film.y, f.crop_y, f.crop_y + f.height, wy, &y0);
     const int hx = floor_int(film.x) - x0, hy = floor_int(film.y) - y0; // the tap that holds x
     const int e_channels = m_e_rgb ? 3 : 1;
-    // Small taps by systematic sampling: the running sum of h / TapThreshold over them, shifted by
-    // one uniform number u, keeps a tap when it crosses an integer (probability h / TapThreshold).
+    // Small taps by systematic sampling: the running sum of |h| / TapThreshold over them, shifted
+    // by one uniform number u, keeps a tap when it crosses an integer (probability
+    // |h| / TapThreshold), with weight ±TapThreshold (h's sign: filters with negative lobes).
     float run = float(mix_bits(sample + m_tap_key[size_t(slot)]) >> 40) * 0x1p-24f; // u
     float next = 1.f; // the integer after run (each step adds less than 1)
     const uint32_t wx0 = uint32_t(x0 - f.crop_x), wy0 = uint32_t(y0 - f.crop_y); // in the window
@@ -141,14 +142,14 @@ MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sam
         const uint32_t row = (wy0 + uint32_t(j)) * uint32_t(f.width) + wx0;
         for (int i = 0; i < nx; ++i) {
             float h = wx[i] * wy[j];
-            if (h < TapThreshold) {
-                run += h * (1.f / TapThreshold);
+            if (std::abs(h) < TapThreshold) {
+                run += std::abs(h) * (1.f / TapThreshold);
                 if (run < next) { // not kept (h == 0 never is)
                     if ((i == hx) & (j == hy)) at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j)).count += 1;
                     continue;
                 }
                 next += 1.f;
-                h = TapThreshold;
+                h = std::copysign(TapThreshold, h);
             }
             SplatEntry &entry = at(slot, row + uint32_t(i), wx0 + uint32_t(i), wy0 + uint32_t(j));
             add_fixed(entry.lw, simd::load<simd::f32x4>(v) * h); // (lw[3] and w are contiguous)

@@ -64,15 +64,15 @@ static_assert(offsetof(SplatEntry, w) == 3 * sizeof(int64_t), "add_fixed adds lw
 /// Where a view's contributions land: its crop window (full-film pixels) and its pixel filter
 /// (design doc §5, "Pixel filters"). A contribution at film position x adds h(x - c_i) times
 /// its value to every pixel i of the window whose centre c_i lies within the filter's radius,
-/// h the density from which path tracing draws its film offsets; with the box filter that is
-/// the pixel that holds x, with weight 1.
+/// h the normalised filter (ReconstructionFilter::eval_1d, signed for filters with negative
+/// lobes); with the box filter that is the pixel that holds x, with weight 1.
 struct SplatFootprint {
     /// The largest filter radius (pixels) that multi-view path tracing splats with.
     static constexpr int MaxRadius = 16;
     int crop_x = 0, crop_y = 0, width = 0, height = 0;
     const ReconstructionFilter *filter = nullptr; ///< nullptr or a box: one pixel, weight 1
-    float radius = 0.5f, peak = 1.f;              ///< the filter's radius and the largest h(x, y)
-    /// The filter's tabulated density per axis (TabulatedFilter::pdf_table) and bins per pixel.
+    float radius = 0.5f, peak = 1.f;              ///< the filter's radius and the largest |h(x, y)|
+    /// The filter's table per axis (TabulatedFilter::table) and bins per pixel.
     const float *table = nullptr;
     size_t table_size = 0;
     float table_scale = 0.f;
@@ -230,8 +230,9 @@ public:
     }
     /// Add `v` (W*L, W) and `e` (E as the film keeps it, or none) that fit, spread over the
     /// pixels of view `slot` that the filter at film position `film` covers; counted in the
-    /// pixel that holds `film`. Taps of weight h >= TapThreshold get h v; a smaller one is kept
-    /// with probability h / TapThreshold and then gets TapThreshold v (Russian roulette, unbiased),
+    /// pixel that holds `film`. Taps of weight |h| >= TapThreshold get h v; a smaller one is kept
+    /// with probability |h| / TapThreshold and then gets ±TapThreshold v (h's sign; Russian
+    /// roulette, unbiased),
     /// the choices made by one number of the native sample `sample` (systematic sampling over the
     /// small taps: each kept with exactly its probability).
     void add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e);

@@ -184,6 +184,7 @@ void Renderer::PathPasses::render_group(const Tile &tile, int pass0, int pass1, 
                 drop_nonfinite(f, view, int(sx[i]), int(sy[i]), int(sq[i]), rc);
                 L = Spectrum(0.f);
             }
+            L *= cs.weight[i]; // (1 but for filters with negative lobes)
             const double v[3] = {L[0], L[1], L[2]};
             f.add(size_t(sy[i] - y0) * size_t(f.width) + size_t(sx[i] - x0), v);
         }

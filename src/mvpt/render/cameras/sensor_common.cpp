@@ -7,9 +7,10 @@ namespace mvpt {
 
 namespace {
 
+/// A film without an rfilter takes Mitsuba's: a gaussian of stddev 0.5 (Mitsuba 0.6's too).
 std::shared_ptr<ReconstructionFilter> default_filter() {
-    Properties p("rfilter", "box");
-    return std::static_pointer_cast<ReconstructionFilter>((*PluginRegistry::find("rfilter", "box"))(p, {}));
+    Properties p("rfilter", "gaussian");
+    return std::static_pointer_cast<ReconstructionFilter>((*PluginRegistry::find("rfilter", "gaussian"))(p, {}));
 }
 
 std::shared_ptr<Object> make_hdrfilm(const Properties &props, const LoadContext &) {
