@@ -24,6 +24,17 @@ pytest.importorskip("mitsuba")
 mvpt = pytest.importorskip("mvpt")
 
 SCENE = Path(__file__).resolve().parents[1] / "scenes" / "filters" / "checkerboard.xml"
+
+
+@pytest.fixture(autouse=True)
+def _restore_mitsuba_variant():
+    """These tests switch Mitsuba to `llvm_ad_rgb`; other modules keep objects of the variant
+    they set when they were imported."""
+    import mitsuba as mi
+    before = mi.variant()
+    yield
+    if before and mi.variant() != before:
+        mi.set_variant(before)
 BLOCK = 2
 SEEDS = 16
 MITSUBA_SPP = 32  # per seed
@@ -74,6 +85,25 @@ def test_another_filter_is_detected(mitsuba_filter, mvpt_filter):
     """The comparison tells filters apart: Catmull-Rom is Mitchell-Netravali with other B and C."""
     res = _compare(mitsuba_filter, mvpt_filter)
     assert not res.passed and res.block_failures, res.summary()
+
+
+@pytest.mark.parametrize("rfilter", ["tent", "gaussian", "mitchell", "lanczos"])
+def test_multiview_splats_are_as_precise_as_mitsubas(rfilter):
+    """Multi-view path tracing on one view splats each sample over the pixels its filter
+    reaches, with the first two passes each the other's control variate: per pixel as
+    precise as Mitsuba's normalised splatting at equal samples (measured 1.01-1.1 times its
+    variance). Where the filter has negative lobes, a held pass's ratio whose W nears 0 is
+    not used; using it gave `lanczos` 12 times Mitsuba's variance at 16 spp."""
+    seeds, spp = 16, 16
+    mi = mc._mitsuba("llvm_ad_rgb")
+    s_mi = mi.load_file(str(SCENE), filter=rfilter)
+    ref = [np.array(mi.render(s_mi, sensor=0, seed=1 + k, spp=spp), np.float64) for k in range(seeds)]
+    s = mvpt.load_file(SCENE, filter=rfilter)
+    ours = [np.asarray(mvpt.render(s, spp=spp, seed=100 + k, method="mvpt", views=["front"]).images["front"],
+                       np.float64) for k in range(seeds)]
+    ratio = np.var(ours, axis=0, ddof=1).mean() / np.var(ref, axis=0, ddof=1).mean()
+    print(f"{rfilter}: per-pixel variance, mvpt on one view / Mitsuba = {ratio:.3f}")
+    assert ratio < 1.5, ratio
 
 
 def test_a_film_without_a_filter_is_gaussian():

@@ -52,10 +52,13 @@ void Film::add_pass(size_t p, const MvPassEstimate &est, double wt) {
 }
 
 namespace {
-/// The ratio (W*L + E) / W of a pass's sums (0 without contributions): a pixel's estimate from
-/// that pass alone in which how many contributions landed cancels.
-void pass_ratio(const double v[3], double w, double out[3]) {
-    for (int c = 0; c < 3; ++c) out[c] = w > 0.0 ? v[c] / w : 0.0;
+/// The ratio (W*L + E) / W of a pass's sums (0 without contributions, or where W <= min_w): a
+/// pixel's estimate from that pass alone in which how many contributions landed cancels. With
+/// a non-negative filter it is a weighted mean of the contributions; where the filter has
+/// negative lobes, W near 0 makes it explode (the other pass's variance with `lanczos`, 16
+/// spp: ×10), so it is not used there: any beta independent of the pass keeps it unbiased.
+void pass_ratio(const double v[3], double w, double min_w, double out[3]) {
+    for (int c = 0; c < 3; ++c) out[c] = w > min_w ? v[c] / w : 0.0;
 }
 } // namespace
 
@@ -66,8 +69,9 @@ void Film::fold(MvPassFilm &pass, uint32_t offset, size_t begin, size_t end, dou
         if (holding) { // the first two passes, each with the other's ratio as beta
             MvPassEstimate first = take_held(p), second = mv_pass_estimate(t, estimator, nullptr, scale);
             double beta_first[3], beta_second[3];
-            pass_ratio(first.v, first.w, beta_first);
-            pass_ratio(second.v, second.w, beta_second);
+            const double min_w = signed_filter ? SignedRatioMinW : 0.0;
+            pass_ratio(first.v, first.w, min_w, beta_first);
+            pass_ratio(second.v, second.w, min_w, beta_second);
             for (int c = 0; c < 3; ++c) {
                 first.v[c] += beta_second[c] * (1.0 - first.w);
                 second.v[c] += beta_first[c] * (1.0 - second.w);

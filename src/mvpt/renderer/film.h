@@ -51,6 +51,10 @@ struct Film {
     /// (docs/multiview-path-tracing.md §5, "The first two passes"): meanwhile the pixels' count
     /// is 0, `sum` holds their W*L + E, `w_sum` their W and `e_sum` (if kept) E's mean.
     bool holding = false;
+    /// The view's filter has negative lobes: W sums terms of both signs, and a held pass's
+    /// ratio (W*L + E) / W is used only where W >= SignedRatioMinW (fold).
+    bool signed_filter = false;
+    static constexpr double SignedRatioMinW = 0.25;
     int margin = 0;                  ///< of the map
     double level = 0.0;              ///< the level c the adaptive map was last solved for
     uint64_t map_total = 0;          ///< the sum of n over the crop window this pass (its native samples)

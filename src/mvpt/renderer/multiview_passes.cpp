@@ -603,7 +603,9 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     }
     make_films([&](size_t slot) {
         const FilmDesc &f = m_mv.views[slot].camera->film;
-        return Film(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
+        Film film(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);
+        film.signed_filter = f.filter->has_negative_lobes();
+        return film;
     });
     for (const Film &film : m_films) m_mv.native_map.push_back(film.map.data());
     m_scene.prepare_segment_culling(); // visibility bundles that meet no occluder are not traced
