@@ -1,7 +1,8 @@
-"""Noise of one view under the scene's pixel filter: mvpt's path tracing (filter importance
-sampling), mvpt's multi-view machinery on that one view (samples uniform in their pixel,
-splatted with the filter) and Mitsuba 3 `llvm_ad_rgb` (splatted, normalised by the sum of
-the weights), at equal samples per pixel.
+"""Noise of one view under the scene's pixel filter: mvpt's path tracing and its multi-view
+machinery on that one view (samples uniform in their pixel and the filter's margin,
+splatted with the filter, each pass one estimate with a control variate for the sum of the
+weights) and Mitsuba 3 `llvm_ad_rgb` (splatted, normalised by the sum of the weights), at
+equal samples per pixel.
 
     python bench/bench_filter_noise.py               # the cases below, 12 seeds of 16 spp
     python bench/bench_filter_noise.py --seeds 8 --spp 8 --cases checker

@@ -83,17 +83,22 @@ def test_time_budget_prefix_matches_spp():
     _assert_identical(budget, mvpt.render(s, spp=k, threads=1))
 
 
+def _filtered_room(rfilter: str, spp: int):
+    """Three views of the closed room with filter `rfilter`, the second with a crop window."""
+    film = f'<rfilter type="{rfilter}"/>'
+    crop = film + ('<integer name="crop_offset_x" value="5"/><integer name="crop_offset_y" value="3"/>'
+                   '<integer name="crop_width" value="17"/><integer name="crop_height" value="14"/>')
+    sensors = "".join(sensor(id=f"v{i}", res=24, spp=spp, origin=f"{0.3 * i - 0.3:.2f}, 1.2, 4",
+                             film_extra=crop if i == 1 else film) for i in range(3))
+    return mvpt.load_string(scene(sensors, geometry=ROOM, max_depth=-1))
+
+
 @pytest.mark.parametrize("rfilter", ["box", "tent", "gaussian", "lanczos"])
 def test_multiview_threads_1_2_3(rfilter):
     """Multi-view path tracing splats into shared fixed-point sums from every thread, with the
     sensor's filter over several pixels, crop windows and adaptive passes included: the
     images and sample maps are the same bits for 1, 2 and 3 threads."""
-    film = f'<rfilter type="{rfilter}"/>'
-    crop = film + ('<integer name="crop_offset_x" value="5"/><integer name="crop_offset_y" value="3"/>'
-                   '<integer name="crop_width" value="17"/><integer name="crop_height" value="14"/>')
-    sensors = "".join(sensor(id=f"v{i}", res=24, spp=7, origin=f"{0.3 * i - 0.3:.2f}, 1.2, 4",
-                             film_extra=crop if i == 1 else film) for i in range(3))
-    s = mvpt.load_string(scene(sensors, geometry=ROOM, max_depth=-1))
+    s = _filtered_room(rfilter, spp=7)
     runs = [mvpt.render(s, method="mvpt", threads=t) for t in (1, 2, 3)]
     assert runs[0].stats["multiview"]["mean_sharing"] > 1.5  # the views do share
     assert runs[0].stats["passes"] > 4  # adaptive passes after the warm-up
@@ -102,6 +107,20 @@ def test_multiview_threads_1_2_3(rfilter):
         for vid in r.images:
             assert r.contributions[vid].tobytes() == runs[0].contributions[vid].tobytes()
             assert r.weight_sum[vid].tobytes() == runs[0].weight_sum[vid].tobytes()
+
+
+@pytest.mark.parametrize("rfilter", ["tent", "gaussian", "lanczos"])
+def test_path_tracing_splats_threads_1_2_3(rfilter):
+    """Under a filter other than the box, path tracing splats each sample into every pixel the
+    filter reaches, from tiles over the crop window and its margin, in shared fixed-point sums:
+    the same bits for 1, 2 and 3 threads, crop windows included, and another seed differs."""
+    s = _filtered_room(rfilter, spp=21)
+    runs = [mvpt.render(s, method="pt", threads=t) for t in (1, 2, 3)]
+    assert runs[0].stats["passes"] == 21 and not runs[0].contributions  # path tracing, no multi-view AOVs
+    for r in runs[1:]:
+        _assert_identical(runs[0], r)
+    other = mvpt.render(s, method="pt", threads=2, seed=99)
+    assert other.images["v1"].tobytes() != runs[0].images["v1"].tobytes()
 
 
 def _auto_splits_room():

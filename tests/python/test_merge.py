@@ -1,8 +1,8 @@
 """Ranges of a render and their merge (docs/distributed.md): `passes=(first, count)` takes the
 samples of those passes; the states of disjoint ranges (or seeds) merge into the render of
 all of them, in one order whatever order they are given in; path tracing's merge equals the
-one-process render of all the passes; multi-view path tracing's merged variance combines the
-ranges' (Chan et al.) and its merged image converges to path tracing's (block z-tests);
+one-process render of all the passes (under the box filter); multi-view path tracing's, and
+splatting path tracing's, merged variance combines the ranges' (Chan et al.) and its merged image converges to path tracing's (block z-tests);
 states that differ or share samples are refused; the command line writes the merged outputs."""
 from __future__ import annotations
 
@@ -48,9 +48,12 @@ def test_path_tracing_merge_is_the_whole_render(tmp_path):
         np.testing.assert_allclose(merged.variance[v], whole.variance[v], rtol=1e-4, atol=1e-12)
 
 
-def test_multiview_merged_variance_combines_the_ranges(tmp_path):
-    scene = mvpt.load_file(SCENES / "cornell_phong9.xml", res=16)
-    paths = _ranges(scene, tmp_path, "mvpt", [(0, 6), (6, 3)])
+@pytest.mark.parametrize("method, rfilter", [("mvpt", "box"), ("pt", "gaussian")])
+def test_merged_pass_estimates_combine_the_ranges(tmp_path, method, rfilter):
+    """Multi-view path tracing, and path tracing under a splatted filter, add pass estimates:
+    the merged mean and variance are the ranges' combined (Chan et al.)."""
+    scene = mvpt.load_file(SCENES / "cornell_phong9.xml", res=16, filter=rfilter)
+    paths = _ranges(scene, tmp_path, method, [(0, 6), (6, 3)])
     a, b = (mvpt.merge(scene, [p]) for p in paths)
     merged = mvpt.merge(scene, paths)
     na, nb = 6, 3

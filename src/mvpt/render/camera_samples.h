@@ -16,9 +16,11 @@ class Sampler;
 
 /// How a sample's film position is drawn in its pixel.
 enum class FilmSampling {
-    /// The pixel centre plus an offset drawn from the sensor's reconstruction filter (path tracing).
+    /// The pixel centre plus an offset drawn from the sensor's reconstruction filter (path
+    /// tracing under the box, or under a filter too wide to splat).
     Filter,
-    /// Uniform in the pixel: multi-view path tracing splats with the filter instead (§5).
+    /// Uniform in the pixel: the sample is splatted with the filter instead (multi-view path
+    /// tracing, §5, and path tracing under other filters).
     Box,
 };
 

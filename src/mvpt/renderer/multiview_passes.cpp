@@ -2,6 +2,7 @@
 // view, shared through mv_native_sample, splatted through per-thread caches into the pass's
 // fixed-point sums, which are folded into the accumulators once per pass; adaptive
 // native-sample maps between passes (§8).
+#include "film_blocks.h"
 #include "pass_schedule.h"
 #include "renderer.h"
 
@@ -648,20 +649,6 @@ std::vector<Renderer::Tile> Renderer::multiview_tiles(bool random_regions) const
     return tiles;
 }
 
-namespace {
-/// f(film, slot, begin, end) over every view's pixels in blocks, in parallel.
-template <class F> void film_blocks(std::vector<Film> &films, const F &f) {
-    constexpr size_t Block = 4096;
-    std::vector<std::pair<size_t, size_t>> blocks; // (slot, first pixel)
-    for (size_t slot = 0; slot < films.size(); ++slot)
-        for (size_t p = 0; p < films[slot].pixels(); p += Block) blocks.emplace_back(slot, p);
-    tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
-        const auto [slot, begin] = blocks[b];
-        f(films[slot], int(slot), begin, std::min(films[slot].pixels(), begin + Block));
-    });
-}
-} // namespace
-
 void Renderer::fold_pass(MvPassFilm &pass_film, double scale, double weight) {
     // Each pixel's pass estimate into the accumulators; a held first pass is added with it.
     film_blocks(m_films, [&](Film &mf, int slot, size_t begin, size_t end) {
@@ -680,8 +667,9 @@ bool Renderer::hold_pass(MvPassFilm &pass_film) {
 }
 
 void Renderer::release_held() {
-    if (m_films.empty() || !m_films.front().holding) return;
-    film_blocks(m_films, [&](Film &mf, int, size_t begin, size_t end) { mf.release(begin, end); });
+    film_blocks(m_films, [&](Film &mf, int, size_t begin, size_t end) {
+        if (mf.holding) mf.release(begin, end);
+    });
     for (Film &mf : m_films) mf.holding = false;
 }
 

@@ -1,7 +1,9 @@
 // Path tracing's steps of the pass loop (pass_schedule.h): every pixel of every view takes one
-// sample per pass, added to its sums; a step is a group of passes over all tiles, each tile
-// rendered for all of the step's passes by one task.
+// sample per pass, added to its sums or splatted (path_passes.h); a step is a group of passes
+// over all tiles, each tile rendered for all of the step's passes by one task.
 #include "path_passes.h"
+
+#include "film_blocks.h"
 
 #include "../core/per_thread.h"
 #include "../render/camera.h"
@@ -44,7 +46,10 @@ template <typename TooLong> int longest_group(int max, TooLong &&too_long) {
 // fit in the budget. Without a time budget the groups depend only on the film size and options,
 // so the batches do too (under a budget the number of passes depends on timing anyway).
 Renderer::PathPasses::PathPasses(Renderer &r, tbb::task_arena &arena)
-    : PassSchedule(arena), m_r(r), m_tiles(r.make_tiles()), m_sample0(uint32_t(r.m_opts.first_pass)) {
+    : PassSchedule(arena), m_r(r), m_sample0(uint32_t(r.m_opts.first_pass)) {
+    if (r.m_splat)
+        for (int v : r.m_views) m_windows.emplace_back(r.m_scene.cameras()[v]->film);
+    m_tiles = r.make_tiles(r.m_splat ? &m_windows : nullptr);
     // Target samples per view: the option, or each sensor's sampler, or unbounded under a time
     // budget; a range's passes. (Pass q takes sample first_pass + q of every pixel.)
     const RenderOptions &o = r.m_opts;
@@ -55,21 +60,45 @@ Renderer::PathPasses::PathPasses(Renderer &r, tbb::task_arena &arena)
         m_target.push_back(t);
         m_max_target = std::max(m_max_target, t);
     }
-    if (o.time_budget == 0.0) {
-        uint64_t pixels = 0;
-        for (const Tile &t : m_tiles) pixels += uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
-        m_group = longest_group(MaxStep, [&](int g) { return uint64_t(g) * pixels > GroupPaths; });
-    }
+    uint64_t pixels = 0;
+    for (const Film &f : r.m_films) pixels += f.pixels();
+    if (o.time_budget == 0.0) m_group = group_passes(pixels);
     m_step_passes = m_group;
+    if (!r.m_splat) return;
+    // Splatting: the sums of a group of passes (a step is one group), pass j of view slot s at
+    // slot j * views + s.
+    m_group_max = group_passes(pixels);
+    std::vector<SplatFootprint> footprints;
+    for (int j = 0; j < m_group_max; ++j)
+        for (int v : r.m_views) {
+            const FilmDesc &f = r.m_scene.cameras()[v]->film;
+            footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
+                                                    Sampler::dimension_key(DimSplatBase + uint32_t(v))));
+        }
+    arena.execute([&] { m_pass_film = std::make_unique<MvPassFilm>(footprints, false); });
+    m_caches = std::make_unique<tbb::enumerable_thread_specific<SplatCache>>([this] { return SplatCache(*m_pass_film); });
+}
+
+int Renderer::PathPasses::group_passes(uint64_t pixels) {
+    return longest_group(MaxStep, [&](int g) { return uint64_t(g) * pixels > GroupPaths; });
+}
+
+uint64_t Renderer::PathPasses::crop_pixels(const Tile &t) const {
+    if (!m_r.m_splat) return uint64_t(t.x1 - t.x0) * uint64_t(t.y1 - t.y0);
+    const Film &f = m_r.m_films[size_t(t.view_slot)];
+    const int m = f.margin;
+    const int w = std::min(t.x1, f.width + m) - std::max(t.x0, m), h = std::min(t.y1, f.height + m) - std::max(t.y0, m);
+    return uint64_t(std::max(w, 0)) * uint64_t(std::max(h, 0));
 }
 
 int Renderer::PathPasses::step_end(int pass, double fit, double last_pass) {
     const bool budget = m_r.m_opts.time_budget > 0.0;
-    if (pass > m_r.m_first_pass) { // after a step of this run
-        if (!budget && last_pass > 0.0)
+    if (pass > m_r.m_first_pass) { // after a step of this run (splatting: a step is one group)
+        if (!budget && last_pass > 0.0 && !m_r.m_splat)
             m_step_passes = std::max(m_group, int(std::clamp(StepSeconds / last_pass, 1.0, double(MaxStep))) / m_group * m_group);
         else if (budget && pass == m_r.m_first_pass + 1)
-            m_group = longest_group(MaxStep, [&](int g) { return double(g) * last_pass > StepSeconds; });
+            m_group = longest_group(m_r.m_splat ? m_group_max : MaxStep,
+                                    [&](int g) { return double(g) * last_pass > StepSeconds; });
     }
     if (pass > 0 && budget) {
         fit = std::min(fit, double(MaxStep));
@@ -86,13 +115,13 @@ StepTiles Renderer::PathPasses::begin_step(int pass, int end) {
     for (const Tile &t : m_tiles)
         if (pass < m_target[t.view_slot]) {
             m_step.push_back(&t);
-            m_step_samples += uint64_t(std::min(end, m_target[t.view_slot]) - pass) * uint64_t(t.x1 - t.x0) *
-                              uint64_t(t.y1 - t.y0);
+            m_step_samples += uint64_t(std::min(end, m_target[t.view_slot]) - pass) * crop_pixels(t);
         }
     return {m_step.size(), double(m_step_samples)};
 }
 
 bool Renderer::PathPasses::can_abandon(double last_pass, double in_step, bool) const {
+    if (m_r.m_splat) return true; // (the step is dropped: it lasts a quarter of a second, or one pass)
     // A step of one pass that is expected to last more than half a second, or has: its
     // finished tiles are kept. Steps of several passes are planned to last a quarter of a
     // second and finish, so that every pixel holds whole passes.
@@ -113,18 +142,63 @@ RayCounters Renderer::PathPasses::counters() const {
 uint64_t Renderer::PathPasses::render(size_t t) {
     // The passes of the step that the tile's pixels do not hold yet: a render stopped between
     // tiles keeps the tiles it finished (their pixels have more samples), and a render resumed
-    // from its state renders only the others' passes.
+    // from its state renders only the others' passes. (Splatting keeps whole steps only.)
     const Tile &tile = *m_step[t];
     const Film &film = m_r.m_films[tile.view_slot];
-    const int held = int(film.count[size_t(tile.y0) * size_t(film.width) + size_t(tile.x0)]);
+    const int held = m_r.m_splat ? 0 : int(film.count[size_t(tile.y0) * size_t(film.width) + size_t(tile.x0)]);
     const int end = std::min(m_end, m_target[tile.view_slot]);
     RayCounters &rc = m_counters.local();
     uint64_t samples = 0;
     for (int g = std::max(m_pass, held); g < end; g += m_group) {
         render_group(tile, g, std::min(g + m_group, end), rc);
-        samples += uint64_t(std::min(g + m_group, end) - g) * uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0);
+        samples += uint64_t(std::min(g + m_group, end) - g) * crop_pixels(tile);
     }
     return samples;
+}
+
+uint64_t Renderer::PathPasses::kept(const ChunksDone &done) const {
+    return m_r.m_splat && !done.finished ? 0 : done.samples;
+}
+
+bool Renderer::PathPasses::abandon(const ChunksDone &) {
+    if (m_r.m_splat)
+        for (SplatCache &c : *m_caches) c.discard();
+    return false;
+}
+
+void Renderer::PathPasses::end_step() {
+    if (!m_r.m_splat) return;
+    const size_t views = m_r.m_views.size();
+    std::vector<int> passes(views); // each view's passes in the step
+    for (size_t s = 0; s < views; ++s) passes[s] = std::max(0, std::min(m_end, m_target[s]) - m_pass);
+    std::vector<uint8_t> hold(views);
+    arena().execute([&] {
+        // What the caches still hold goes to the sums (exact integer sums).
+        tbb::parallel_for(m_caches->range(1), [](auto &r) {
+            for (SplatCache &c : r) c.flush();
+        });
+        // Pass by pass, each pixel's sums one estimate; a film's first pass is held for the
+        // second's fold, each the other's control variate (film.h).
+        for (int j = 0; j < m_end - m_pass; ++j) {
+            for (size_t s = 0; s < views; ++s) {
+                const Film &f = m_r.m_films[s];
+                hold[s] = j < passes[s] && !f.holding && !f.count.empty() && f.count[0] == 0;
+            }
+            film_blocks(m_r.m_films, [&](Film &f, int s, size_t begin, size_t end) {
+                if (j >= passes[size_t(s)]) return;
+                const uint32_t offset = m_pass_film->offset(j * int(views) + s);
+                if (hold[size_t(s)]) f.hold(*m_pass_film, offset, begin, end);
+                else f.fold(*m_pass_film, offset, begin, end);
+            });
+            for (size_t s = 0; s < views; ++s)
+                if (j < passes[s]) m_r.m_films[s].holding = hold[s] != 0;
+        }
+    });
+}
+
+void Renderer::PathPasses::finish() {
+    m_caches.reset();
+    m_pass_film.reset();
 }
 
 /// The samples of passes [pass0, pass1) of a tile in order: one pass, the tile's pixels row by
@@ -132,12 +206,13 @@ uint64_t Renderer::PathPasses::render(size_t t) {
 /// Embree packet holds one pixel's samples (its camera rays nearly coincide, its bounce and
 /// shadow rays leave from nearly one point: matpreview -16 % time). Every pixel still sums its
 /// samples in pass order, so the images are those of pass-by-pass rendering.
-static void order_samples(const FilmDesc &film, int x0, int y0, int x1, int y1, uint32_t pass0, uint32_t pass1,
+/// (ox, oy): the tile's origin in full-film pixels (a margin's negative ones stored as uint32).
+static void order_samples(int ox, int oy, int x0, int y0, int x1, int y1, uint32_t pass0, uint32_t pass1,
                           std::vector<uint32_t> &sx, std::vector<uint32_t> &sy, std::vector<uint32_t> &sq) {
     sx.clear(), sy.clear(), sq.clear();
     auto add = [&](int x, int y, uint32_t q) {
-        sx.push_back(uint32_t(x + film.crop_x));
-        sy.push_back(uint32_t(y + film.crop_y));
+        sx.push_back(uint32_t(x + ox));
+        sy.push_back(uint32_t(y + oy));
         sq.push_back(q);
     };
     if (pass1 - pass0 == 1) {
@@ -158,8 +233,11 @@ void Renderer::PathPasses::render_group(const Tile &tile, int pass0, int pass1, 
     const Camera &cam = *m_r.m_scene.cameras()[view];
     const uint32_t seed = uint32_t(m_r.m_opts.seed ? *m_r.m_opts.seed : cam.seed); // as Sampler keeps it
     TileBuffers &tb = per_thread<TileBuffers>();
-    order_samples(cam.film, tile.x0, tile.y0, tile.x1, tile.y1, m_sample0 + uint32_t(pass0),
-                  m_sample0 + uint32_t(pass1), tb.slot_x, tb.slot_y, tb.slot_pass);
+    const bool splat = m_r.m_splat;
+    const int ox = splat ? m_windows[size_t(tile.view_slot)].x0 : cam.film.crop_x;
+    const int oy = splat ? m_windows[size_t(tile.view_slot)].y0 : cam.film.crop_y;
+    order_samples(ox, oy, tile.x0, tile.y0, tile.x1, tile.y1, m_sample0 + uint32_t(pass0), m_sample0 + uint32_t(pass1),
+                  tb.slot_x, tb.slot_y, tb.slot_pass);
     // 1024 rather than 256: fuller packets and kernel chunks at the deep, sparse bounces (cbox -2.6 %).
     constexpr size_t BatchPaths = 1024;
     for (size_t b0 = 0; b0 < tb.slot_x.size(); b0 += BatchPaths) {
@@ -169,12 +247,16 @@ void Renderer::PathPasses::render_group(const Tile &tile, int pass0, int pass1, 
         tb.rays.resize(n);
         tb.radiance.resize(n);
         CameraSamples &cs = tb.camera;
-        cs.draw(cam, seed, uint32_t(view), sx, sy, sq, n, FilmSampling::Filter, false);
+        cs.draw(cam, seed, uint32_t(view), sx, sy, sq, n, splat ? FilmSampling::Box : FilmSampling::Filter, false);
         for (size_t i = 0; i < n; ++i) cs.start(tb.samplers[i], i, uint32_t(view), sx[i], sy[i], sq[i], DimCameraEnd);
         cam.generate_rays(cs.film.data(), cs.lens.data(), cs.time.data(), n, tb.rays.data());
         rc.camera_rays += n;
         m_r.m_scene.integrator().li_batch(m_r.m_scene, tb.rays.data(), tb.samplers.data(), tb.radiance.data(), n, rc,
                                           cam.medium.get());
+        if (splat) {
+            splat_batch(tile.view_slot, tb.radiance.data(), cs.film.data(), tb.samplers.data(), sx, sy, sq, n, rc);
+            continue;
+        }
         Film &f = m_r.m_films[tile.view_slot];
         const uint32_t x0 = uint32_t(cam.film.crop_x), y0 = uint32_t(cam.film.crop_y);
         for (size_t i = 0; i < n; ++i) {
@@ -191,6 +273,28 @@ void Renderer::PathPasses::render_group(const Tile &tile, int pass0, int pass1, 
     }
 }
 
+void Renderer::PathPasses::splat_batch(int slot, const Spectrum *radiance, const Vec2f *film, const Sampler *samplers,
+                                       const uint32_t *sx, const uint32_t *sy, const uint32_t *sq, size_t n,
+                                       RayCounters &rc) {
+    SplatCache &cache = m_caches->local();
+    Film &f = m_r.m_films[size_t(slot)];
+    const FilmDesc &fd = m_r.m_scene.cameras()[m_r.m_views[size_t(slot)]]->film;
+    const int views = int(m_r.m_views.size()), view = m_r.m_views[size_t(slot)];
+    for (size_t i = 0; i < n; ++i) {
+        // Pass j of the step splats into its own sums; a box's window is the crop window.
+        const int to = int(sq[i] - m_sample0 - uint32_t(m_pass)) * views + slot;
+        const uint32_t pixel =
+            cache.is_box(to) ? (sy[i] - uint32_t(fd.crop_y)) * uint32_t(f.width) + (sx[i] - uint32_t(fd.crop_x)) : 0;
+        const uint64_t hash = samplers[i].sample_hash();
+        const Spectrum &L = radiance[i];
+        if (!L.is_finite() || !cache.add(to, pixel, film[i], hash, L, 1.f)) [[unlikely]] {
+            // Never reaches the film: counted, the first one kept for replay, and zero splatted.
+            drop_nonfinite(f, view, int(sx[i]), int(sy[i]), int(sq[i]), rc);
+            cache.add(to, pixel, film[i], hash, Spectrum(0.f), 1.f);
+        }
+    }
+}
+
 void Renderer::PathPasses::drop_nonfinite(Film &film, int view, int px, int py, int pass, RayCounters &rc) {
     ++rc.nonfinite;
     std::atomic_ref<uint64_t>(film.nonfinite).fetch_add(1, std::memory_order_relaxed);
@@ -202,14 +306,16 @@ void Renderer::PathPasses::drop_nonfinite(Film &film, int view, int px, int py, 
         std::tie(st.nonfinite_sample, st.nonfinite_view, st.nonfinite_y, st.nonfinite_x) = key;
 }
 
-std::vector<Renderer::Tile> Renderer::make_tiles() const {
+std::vector<Renderer::Tile> Renderer::make_tiles(const std::vector<SampleWindow> *windows) const {
     constexpr int TileSize = 16;
     std::vector<Tile> tiles;
     for (size_t i = 0; i < m_views.size(); ++i) {
         const FilmDesc &f = m_scene.cameras()[m_views[i]]->film;
-        for (int y = 0; y < f.crop_height; y += TileSize)
-            for (int x = 0; x < f.crop_width; x += TileSize)
-                tiles.push_back({int(i), x, y, std::min(x + TileSize, f.crop_width), std::min(y + TileSize, f.crop_height)});
+        const int width = windows ? (*windows)[i].width() : f.crop_width;
+        const int height = windows ? (*windows)[i].height() : f.crop_height;
+        for (int y = 0; y < height; y += TileSize)
+            for (int x = 0; x < width; x += TileSize)
+                tiles.push_back({int(i), x, y, std::min(x + TileSize, width), std::min(y + TileSize, height)});
     }
     return tiles;
 }

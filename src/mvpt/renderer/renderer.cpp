@@ -6,6 +6,7 @@
 #include "../core/memory.h"
 #include "../integrators/multiview/mvpath.h"
 #include "../render/camera.h"
+#include "../render/filter.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -34,6 +35,17 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     if (scene.lights().empty()) m_stats.warnings.push_back("the scene has no emitter: every image is black");
     m_multiview = m_opts.method == RenderMethod::MultiView ||
                   (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));
+    // Path tracing splats under a filter other than the box (docs/mitsuba-compatibility.md,
+    // "Pixel filters"); a filter too wide to splat is importance-sampled instead.
+    if (!m_multiview) {
+        bool box = true, fits = true;
+        for (int v : m_views) {
+            const ReconstructionFilter &f = *cams[v]->film.filter;
+            box &= f.is_box();
+            fits &= f.is_box() || f.radius() <= float(SplatFootprint::MaxRadius);
+        }
+        m_splat = !box && fits;
+    }
     // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM
     // killer) fail mid-render.
     m_stats.estimated_bytes = estimate_peak_bytes();
@@ -46,7 +58,11 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     if (m_multiview) return; // multi-view path tracing makes its films when it prepares (prepare_multiview)
     make_films([&](size_t slot) {
         const FilmDesc &f = cams[m_views[slot]]->film;
-        return Film(f.crop_width, f.crop_height);
+        if (!m_splat) return Film(f.crop_width, f.crop_height);
+        // Each pass's splats are one estimate, with the balance estimator's control variate.
+        Film film(f.crop_width, f.crop_height, SampleWindow(f).margin, MvEstimator::Balance, true, false);
+        film.signed_filter = f.filter->has_negative_lobes();
+        return film;
     });
 }
 
@@ -71,6 +87,12 @@ double Renderer::estimate_peak_bytes() const {
                              developed + 2 * sizeof(float));
         // The splat cache, and the queues of a tile's native samples (up to 16 per pixel).
         per_thread = double(SplatCache::entries_for(m_views.size()) * sizeof(SplatEntry)) + (6 << 20);
+    } else if (m_splat) {
+        // The films of the balance estimator, and the sums of a group of passes (PathPasses).
+        const double film = double(Film::bytes_per_pixel(true, MvEstimator::Balance, false));
+        const double group = double(PathPasses::group_passes(uint64_t(view_pixels)));
+        per_pixel = std::max(film + group * double(MvPassFilm::bytes_per_pixel(false)), developed);
+        per_thread += double(SplatCache::entries_for(size_t(group) * m_views.size()) * sizeof(SplatEntry));
     }
     const int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     return resident_bytes() + view_pixels * per_pixel + threads * per_thread;
@@ -102,7 +124,11 @@ void Renderer::render(const std::atomic<bool> &cancel, const ProgressFn &progres
     PathPasses schedule(*this, arena);
     run_passes(schedule, cancel, progress);
     m_stats.counters = schedule.counters();
-    arena.execute([&] { develop(); });
+    schedule.finish();
+    arena.execute([&] {
+        release_held(); // (splatting: no second pass came)
+        develop();
+    });
 }
 
 void Renderer::develop() {
@@ -121,17 +147,17 @@ void Renderer::develop() {
         r.rgb.resize(3 * n);
         r.variance.resize(3 * n);
         r.sample_count.resize(n);
-        if (film.multiview()) r.weight_sum.resize(n);
+        if (m_multiview) r.weight_sum.resize(n);
         double sum[3] = {0.0, 0.0, 0.0};
         for (size_t p = 0; p < n; ++p) {
             film.develop(p, &r.rgb[3 * p], &r.variance[3 * p]);
             for (int c = 0; c < 3; ++c) sum[c] += r.rgb[3 * p + c];
             r.sample_count[p] = film.samples(p);
             r.samples += r.sample_count[p];
-            if (film.multiview()) r.weight_sum[p] = film.weight_sum(p);
+            if (m_multiview) r.weight_sum[p] = film.weight_sum(p);
         }
         for (int c = 0; c < 3; ++c) r.mean[c] = n > 0 ? sum[c] / double(n) : 0.0;
-        if (film.multiview()) {
+        if (m_multiview) {
             r.contributions.assign(film.received.begin(), film.received.end());
             for (float k : r.contributions) r.contributions_total += k;
         }

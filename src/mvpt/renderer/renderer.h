@@ -154,7 +154,7 @@ private:
     /// 16x16 tiles of the views (view_slot indexes m_views).
     struct Tile {
         int view_slot;
-        int x0, y0, x1, y1; // crop-window pixel range
+        int x0, y0, x1, y1; // pixel range of the crop window (or of the sample window, where samples are splatted)
     };
     /// The largest sample target of the rendered views (option or sensors).
     int spp_target() const;
@@ -178,8 +178,9 @@ private:
     /// short render).
     void make_films(const std::function<Film(size_t)> &make);
 
-    /// Path tracing: 16x16 tiles of every view's crop window.
-    std::vector<Tile> make_tiles() const;
+    /// Path tracing: 16x16 tiles of every view's crop window, or (`windows`, by slot) of its
+    /// sample window, in the window's coordinates.
+    std::vector<Tile> make_tiles(const std::vector<SampleWindow> *windows = nullptr) const;
 
     /// Multi-view path tracing: the whole render, in `arena`.
     void render_multiview(tbb::task_arena &arena, const std::atomic<bool> &cancel, const ProgressFn &progress);
@@ -200,7 +201,7 @@ private:
     /// Multi-view: the films' first pass (whole) held rather than folded (Film::hold), for the
     /// balance estimator with its control variate; false (nothing done) otherwise.
     bool hold_pass(MvPassFilm &pass_film);
-    /// Multi-view: a held first pass folded without a control variate (Film::release).
+    /// A held first pass folded without a control variate (Film::release), in every film that holds one.
     void release_held();
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
     void update_native_maps(int passes, double per_pixel);
@@ -221,6 +222,9 @@ private:
     const Scene &m_scene;
     RenderOptions m_opts;
     bool m_multiview = false; ///< multi-view path tracing (else independent path tracing)
+    /// Path tracing splats its samples with the views' pixel filters (path_passes.h): some view's
+    /// filter is not a box, and every filter reaches at most SplatFootprint::MaxRadius.
+    bool m_splat = false;
     std::vector<int> m_views;
     std::vector<Film> m_films; ///< by slot
     MvContext m_mv;

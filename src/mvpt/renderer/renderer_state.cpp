@@ -12,9 +12,20 @@
 namespace mvpt {
 
 namespace {
+/// The kinds of accumulators a state holds, as its layout names them.
+enum class FilmKind : uint32_t { PathTracing = 0, MultiView = 1, PathTracingSplats = 2 };
+const char *film_kind_name(uint32_t kind) {
+    switch (kind) {
+    case uint32_t(FilmKind::PathTracing): return "path tracing";
+    case uint32_t(FilmKind::MultiView): return "multi-view path tracing";
+    case uint32_t(FilmKind::PathTracingSplats): return "path tracing with a splatted pixel filter";
+    default: return "an unknown method";
+    }
+}
+
 /// What identifies the layout of a render's accumulators: the method and every view's crop window.
-void put_layout(StateWriter &out, bool multiview, const std::vector<int> &views, const Scene &scene) {
-    out.put(uint32_t(multiview));
+void put_layout(StateWriter &out, FilmKind kind, const std::vector<int> &views, const Scene &scene) {
+    out.put(uint32_t(kind));
     out.put(uint64_t(views.size()));
     for (int v : views) {
         const FilmDesc &f = scene.cameras()[v]->film;
@@ -22,9 +33,11 @@ void put_layout(StateWriter &out, bool multiview, const std::vector<int> &views,
     }
 }
 
-void check_layout(StateReader &in, bool multiview, const std::vector<int> &views, const Scene &scene) {
-    if (in.get<uint32_t>() != uint32_t(multiview))
-        throw StateError(std::string("the state was rendered with ") + (multiview ? "path tracing" : "multi-view path tracing"));
+void check_layout(StateReader &in, FilmKind kind, const std::vector<int> &views, const Scene &scene) {
+    const uint32_t theirs = in.get<uint32_t>();
+    if (theirs != uint32_t(kind))
+        throw StateError(std::string("the state was rendered with ") + film_kind_name(theirs) + ", this render uses " +
+                         film_kind_name(uint32_t(kind)));
     if (in.get<uint64_t>() != views.size()) throw StateError("the state has another number of views");
     for (int v : views) {
         const FilmDesc &f = scene.cameras()[v]->film;
@@ -37,12 +50,16 @@ void check_layout(StateReader &in, bool multiview, const std::vector<int> &views
     }
 }
 
+FilmKind film_kind(bool multiview, bool splat) {
+    return multiview ? FilmKind::MultiView : splat ? FilmKind::PathTracingSplats : FilmKind::PathTracing;
+}
+
 } // namespace
 
 void Renderer::write_state(int next_pass, double elapsed, double last_pass, const RayCounters &counters,
                            const std::vector<MvViewStats> &mv_stats, const std::vector<uint64_t> &mv_dropped) const {
     StateWriter out(m_opts.state_path, m_opts.state_header);
-    put_layout(out, m_multiview, m_views, m_scene);
+    put_layout(out, film_kind(m_multiview, m_splat), m_views, m_scene);
     out.put(int32_t(next_pass)), out.put(elapsed), out.put(last_pass), out.put(m_stats.samples), out.put(counters);
     out.put(SampleKey{m_stats.nonfinite_sample, m_stats.nonfinite_view, m_stats.nonfinite_y, m_stats.nonfinite_x});
     if (m_multiview) out.put(m_native_done), out.put(int32_t(m_stats.splits)); // (the splits chosen, for a merge's statistics)
@@ -60,7 +77,7 @@ void Renderer::write_state(int next_pass, double elapsed, double last_pass, cons
 
 void Renderer::read_state(const std::string &path) {
     StateReader in(path);
-    check_layout(in, m_multiview, m_views, m_scene);
+    check_layout(in, film_kind(m_multiview, m_splat), m_views, m_scene);
     m_first_pass = in.get<int32_t>();
     m_elapsed_before = in.get<double>();
     m_last_pass_before = in.get<double>();
