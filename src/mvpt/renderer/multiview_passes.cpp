@@ -596,12 +596,7 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     m_mv.prepare(); // the sample windows: crop windows grown by the filters' reach
     // The control variate of the balance estimator needs E[sum W] = 1 (§5: D over all valid views).
     const bool use_cv = cfg.estimator == MvEstimator::Balance && cfg.control_variate && !cfg.mis_selected_only;
-    std::vector<SplatFootprint> footprints;
-    for (size_t slot = 0; slot < m_views.size(); ++slot) {
-        const FilmDesc &f = m_mv.views[slot].camera->film;
-        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
-                                                Sampler::dimension_key(DimSplatBase + m_mv.views[slot].scene_index)));
-    }
+    std::vector<SplatFootprint> footprints = view_footprints();
     make_films([&](size_t slot) {
         const FilmDesc &f = m_mv.views[slot].camera->film;
         Film film(f.crop_width, f.crop_height, m_mv.windows[slot].margin, cfg.estimator, use_cv, adaptive);

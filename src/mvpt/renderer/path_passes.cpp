@@ -68,13 +68,9 @@ Renderer::PathPasses::PathPasses(Renderer &r, tbb::task_arena &arena)
     // Splatting: the sums of a group of passes (a step is one group), pass j of view slot s at
     // slot j * views + s.
     m_group_max = group_passes(pixels);
+    const std::vector<SplatFootprint> views = r.view_footprints();
     std::vector<SplatFootprint> footprints;
-    for (int j = 0; j < m_group_max; ++j)
-        for (int v : r.m_views) {
-            const FilmDesc &f = r.m_scene.cameras()[v]->film;
-            footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
-                                                    Sampler::dimension_key(DimSplatBase + uint32_t(v))));
-        }
+    for (int j = 0; j < m_group_max; ++j) footprints.insert(footprints.end(), views.begin(), views.end());
     arena.execute([&] { m_pass_film = std::make_unique<MvPassFilm>(footprints, false); });
     m_caches = std::make_unique<tbb::enumerable_thread_specific<SplatCache>>([this] { return SplatCache(*m_pass_film); });
 }

@@ -4,6 +4,7 @@
 #include "path_passes.h"
 
 #include "../core/memory.h"
+#include "../core/sampler.h"
 #include "../integrators/multiview/mvpath.h"
 #include "../render/camera.h"
 #include "../render/filter.h"
@@ -96,6 +97,16 @@ double Renderer::estimate_peak_bytes() const {
     }
     const int threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
     return resident_bytes() + view_pixels * per_pixel + threads * per_thread;
+}
+
+std::vector<SplatFootprint> Renderer::view_footprints() const {
+    std::vector<SplatFootprint> footprints;
+    for (int v : m_views) {
+        const FilmDesc &f = m_scene.cameras()[v]->film;
+        footprints.push_back(SplatFootprint::of(f.crop_x, f.crop_y, f.crop_width, f.crop_height, *f.filter,
+                                                Sampler::dimension_key(DimSplatBase + uint32_t(v))));
+    }
+    return footprints;
 }
 
 int Renderer::spp_target() const {

@@ -201,6 +201,9 @@ private:
     /// Multi-view: the films' first pass (whole) held rather than folded (Film::hold), for the
     /// balance estimator with its control variate; false (nothing done) otherwise.
     bool hold_pass(MvPassFilm &pass_film);
+    /// Where each rendered view's splats land (by slot): its crop window and filter, the taps'
+    /// roulette keyed by its scene index.
+    std::vector<SplatFootprint> view_footprints() const;
     /// A held first pass folded without a control variate (Film::release), in every film that holds one.
     void release_held();
     /// Multi-view path tracing: the native-sample maps of the next pass (§8) after `passes`.
