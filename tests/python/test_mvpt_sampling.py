@@ -3,6 +3,9 @@
 - the bounce's lobe mixture: χ² of `sample_lobe_mixture` against `lobe_mixture_pdf` for
   several sets of view directions and BSDFs (delta lobes excluded, as in the BSDF tests:
   the smooth part of the mixture must then integrate to the probability of a smooth sample);
+  at BSDFs with delta and smooth lobes, the probability of a delta lobe that each BSDF
+  reports, and the mixture's delta events, unbiased per view and drawn more often for more
+  views (§7, "Delta lobes");
 - the material similarity s_M of §6: 1 for diffuse lobes and for identical views, in [0, 1],
   symmetric, decreasing as the views separate and as the lobe sharpens, never NaN;
 - MVPT images are bit-identical for any thread count (the design's determinism rule).
@@ -36,6 +39,9 @@ BSDFS = {
     "roughplastic-beckmann-all-normals": '<bsdf type="roughplastic"><float name="alpha" value="0.3"/>'
                                          '<boolean name="sample_visible" value="false"/></bsdf>',
     "plastic": '<bsdf type="plastic"/>',  # a delta coating over a diffuse base
+    # Null, delta and diffuse lobes: the mixture draws a delta event or a smooth one (§7).
+    "mask-plastic": '<bsdf type="mask"><float name="opacity" value="0.6"/><bsdf type="plastic">'
+                    '<rgb name="diffuse_reflectance" value="0.8, 0.3, 0.3"/></bsdf></bsdf>',
     # Both sides: the views below the surface see the back's BRDF (mirrored).
     "twosided-roughconductor": '<bsdf type="twosided"><bsdf type="roughconductor">'
                                '<float name="alpha" value="0.2"/></bsdf></bsdf>',
@@ -79,7 +85,7 @@ def test_lobe_mixture_chi2(bsdf, views):
     wis = np.ascontiguousarray(VIEW_SETS[views], dtype=np.float32)
 
     def sample_fn(n):
-        wo, pdf, typ, view = pr.mixture_sample(wis, n, 11)
+        wo, pdf, typ, view, _ = pr.mixture_sample(wis, n, 11)
         valid = (pdf.ravel() > 0) & ((typ.astype(np.uint32).ravel() & DELTA) == 0)
         return wo, valid
 
@@ -90,10 +96,71 @@ def test_lobe_mixture_chi2(bsdf, views):
     assert ok, f"{bsdf} {views}: {msg}"
 
 
+# BSDFs with delta and smooth lobes: the shared bounce draws their kinds apart (§7, "Delta lobes").
+MIXED = {
+    "plastic": BSDFS["plastic"],
+    "mask-plastic": BSDFS["mask-plastic"],
+    "twosided-plastic": '<bsdf type="twosided"><bsdf type="plastic"><float name="int_ior" value="1.9"/></bsdf></bsdf>',
+    "normalmap-plastic": '<bsdf type="normalmap"><rgb name="normalmap" value="0.6, 0.45, 0.9"/>'
+                         '<bsdf type="plastic"/></bsdf>',
+    "mask-roughconductor": VIEWS_ONLY["mask-roughconductor"],
+}
+
+
+@pytest.mark.parametrize("bsdf", sorted(MIXED))
+@pytest.mark.parametrize("theta", [0, 40, 75])
+def test_delta_probability_matches_sampling(bsdf, theta):
+    """Bsdf::delta_probability is the share of delta lobes among the BSDF's own samples
+    (binomial, 5 sigma; the sampler is seeded, so the test is deterministic)."""
+    pr = probe(MIXED[bsdf])
+    wi = direction(theta, 30)
+    p = pr.delta_probability(*wi)
+    assert 0.0 < p < 1.0
+    n = 40_000
+    _, w, _, typ = pr.sample(*wi, n, 7)
+    k = int(np.count_nonzero((typ.astype(np.uint32).ravel() & DELTA) != 0))
+    assert abs(k - n * p) < 5 * np.sqrt(n * p * (1 - p)) + 1, (k, n * p)
+
+
+@pytest.mark.parametrize("bsdf", sorted(MIXED))
+@pytest.mark.parametrize("views", ["near", "spread"])
+def test_mixture_delta_events_are_unbiased(bsdf, views):
+    """A delta event of the mixture serves only its view, with the weight |S| f / P: per view,
+    its expected value is the view's own delta albedo, E[f/p 1{delta}] of the BSDF's own
+    sampling (two Monte Carlo means, 5 sigma of their difference, per channel)."""
+    pr = probe(MIXED[bsdf])
+    wis = np.ascontiguousarray(VIEW_SETS[views], dtype=np.float32)
+    n, m = 200_000, len(wis)
+    _, pdf, typ, view, w = pr.mixture_sample(wis, n, 5)
+    delta = ((typ.astype(np.uint32).ravel() & DELTA) != 0) & (pdf.ravel() > 0)
+    assert delta.any()
+    for c, wi in enumerate(wis):
+        mine = np.where((delta & (view.ravel() == c))[:, None], w * m, 0.0)
+        _, w1, _, typ1 = pr.sample(*wi, n, 6)
+        own = np.where(((typ1.astype(np.uint32).ravel() & DELTA) != 0)[:, None], w1, 0.0)
+        se = np.sqrt(mine.var(axis=0) / n + own.var(axis=0) / n)
+        diff = np.abs(mine.mean(axis=0) - own.mean(axis=0))
+        assert np.all(diff < 5 * se + 1e-6), (c, mine.mean(axis=0), own.mean(axis=0), se)
+
+
+def test_mixture_draws_more_delta_events_for_more_views():
+    """With n views a delta event has odds n^(1/4) times those of one view's own choice."""
+    pr = probe(BSDFS["plastic"])
+    wi = direction(20, 0)
+    p = pr.delta_probability(*wi)
+    for m in (1, 4, 25):
+        wis = np.ascontiguousarray([wi] * m, dtype=np.float32)
+        _, pdf, typ, _, _ = pr.mixture_sample(wis, 40_000, 9)
+        q = np.mean((typ.astype(np.uint32).ravel() & DELTA) != 0)
+        odds = m ** 0.25 * p / (1 - p)
+        expected = odds / (1 + odds)
+        assert abs(q - expected) < 5 * np.sqrt(expected * (1 - expected) / 40_000), (m, q, expected)
+
+
 def test_lobe_mixture_picks_views_uniformly():
     pr = probe(BSDFS["phong-4"])
     wis = np.ascontiguousarray(VIEW_SETS["spread"], dtype=np.float32)
-    _, _, _, view = pr.mixture_sample(wis, 40_000, 3)
+    _, _, _, view, _ = pr.mixture_sample(wis, 40_000, 3)
     counts = np.bincount(view.ravel().astype(int), minlength=len(wis))
     expected = 40_000 / len(wis)
     assert np.all(np.abs(counts - expected) < 5 * np.sqrt(expected)), counts

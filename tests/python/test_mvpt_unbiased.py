@@ -1,6 +1,7 @@
 """Multi-view path tracing converges to independent path tracing (design doc §9).
 
-Three scenes of our own (tests/scenes/mv): a 9-view Cornell box of Phong-4 glossy walls,
+Three scenes of our own (tests/scenes/mv): a 9-view Cornell box of Phong-4 glossy walls (and
+of smooth plastic, masks and two-sided plastic: delta and smooth lobes in one BSDF),
 rough metals seen by pinholes, thin lenses of different apertures/fov/film sizes and a moving
 camera, and moving objects seen by frames with overlapping shutters plus an instantaneous
 frame. Each method renders K independent seeds; the per-pixel variance of the mean comes
@@ -117,6 +118,35 @@ def test_balance_is_unbiased_for_any_splits(case, splits):
     assert res.passed, res.summary()
 
 
+# The Cornell box's Phong materials replaced by BSDFs with delta and smooth lobes, whose kinds
+# the shared bounce draws apart (§7, "Delta lobes"): smooth plastic, a mask (null events) over
+# plastic, and a two-sided plastic of a higher index.
+DELTA_AND_SMOOTH = {
+    "white": '<bsdf type="plastic" id="white"><rgb name="diffuse_reflectance" value="0.45, 0.44, 0.42"/></bsdf>',
+    "red": '<bsdf type="mask" id="red"><float name="opacity" value="0.7"/><bsdf type="plastic">'
+           '<rgb name="diffuse_reflectance" value="0.5, 0.05, 0.04"/></bsdf></bsdf>',
+    "green": '<bsdf type="twosided" id="green"><bsdf type="plastic"><float name="int_ior" value="1.9"/>'
+             '<rgb name="diffuse_reflectance" value="0.1, 0.4, 0.08"/></bsdf></bsdf>',
+}
+
+
+def test_balance_is_unbiased_with_delta_and_smooth_lobes():
+    import re
+    xml = (SCENES / "cornell_phong9.xml").read_text()
+    for name, bsdf in DELTA_AND_SMOOTH.items():
+        xml, n = re.subn(rf'<bsdf type="phong" id="{name}">.*?</bsdf>', bsdf, xml, count=1, flags=re.S)
+        assert n == 1, name
+    scene = mvpt.load_string(xml, SCENES)
+    ids = [v["id"] for v in scene.views]
+    pt = _estimates(_seeds(scene, 32, "pt", 12000), ids)
+    runs = _seeds(scene, 16, "mvpt", 13000)
+    assert all(runs[0].stats["views"][v]["multiview"]["mean_sharing"] > 1.3 for v in ids)
+    res = _compare("cornell_phong9 with plastic and masks, mvpt balance vs pt", ids, _estimates(runs, ids), pt,
+                   mean_tol=0.0)
+    print(res.summary())
+    assert res.passed, res.summary()
+
+
 @pytest.mark.parametrize("selection", sorted(SELECTION))
 def test_balance_weights_sum_to_one(case, selection):
     name, ids, _, mv_spp = case
@@ -205,6 +235,8 @@ REAL = {  # shared scene, its defines, rig spacing (scene units), PT / MVPT spp 
     "m06-living-room/scene.xml": ({}, 0.05, 16, 8),
     # Principled, rough metal and plastic, textures, mirrored panel lights ('path': mvpt has no media).
     "bitterli-staircase2/scene.xml": ({"integrator": "path"}, 0.05, 16, 8),
+    # Smooth plastic (delta coating, diffuse base) under an environment map, a checkered plane.
+    "m3data-matpreview/matpreview.xml": ({}, 0.05, 16, 8),
     # The material-preview object, normal- and bump-mapped rough plastic under an environment map.
     "m3data-testsuite/docs/scenes/bsdf_normalmap_with.xml": ({}, 0.05, 16, 8),
     "m3data-testsuite/docs/scenes/bsdf_bumpmap_with.xml": ({}, 0.05, 16, 8),

@@ -3,6 +3,7 @@
 // (Mitsuba's convention). `eval` includes the cosine foreshortening |cos wo|.
 #pragma once
 
+#include <optional>
 #include <tuple>
 
 #include "../core/math.h"
@@ -36,6 +37,11 @@ enum class TransportMode { Radiance, Importance };
 
 struct BsdfContext {
     TransportMode mode = TransportMode::Radiance;
+    /// The lobes `sample` may draw (BsdfFlags; Mitsuba's type_mask): BsdfDelta or BsdfSmooth draws
+    /// only that kind, its density and weight conditioned on it (the lobe probabilities
+    /// renormalised over the kind). Honoured by the BSDFs whose delta_probability has a value;
+    /// eval and pdf ignore it.
+    uint32_t type_mask = ~0u;
 };
 
 struct BsdfSample {
@@ -72,6 +78,14 @@ public:
     virtual void eval_pdf_views(const BsdfContext &ctx, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
                                 Vec3f wo, Spectrum *f, float *pdf) const {
         for (size_t c = 0; c < n; ++c) std::tie(f[c], pdf[c]) = eval_pdf(ctx, si, wi[c], wo);
+    }
+
+    /// Probability that `sample` draws a delta lobe (null included) for `wi`; a BSDF with both
+    /// delta and smooth lobes has one only if its `sample` honours BsdfContext::type_mask.
+    virtual std::optional<float> delta_probability(const SurfaceInteraction &, Vec3f) const {
+        if (!(m_flags & BsdfDelta)) return 0.f;
+        if (is_purely_delta()) return 1.f;
+        return std::nullopt;
     }
 
     /// The fraction of light that passes straight through (the null lobe's weight, wo = -wi;

@@ -92,34 +92,46 @@ struct BsdfProbe {
         return nb::make_tuple(wo, w, pdf, type);
     }
 
+    /// The probability that sampling draws a delta lobe for wi (-1: the BSDF cannot tell).
+    float delta_probability(float wx, float wy, float wz) {
+        return bsdf->delta_probability(si, Vec3f(wx, wy, wz)).value_or(-1.f);
+    }
+
     /// n directions from the lobe mixture of multi-view path tracing for views seen from
-    /// `wis` (m, 3): (wo, mixture pdf, sampled_type, view) arrays.
+    /// `wis` (m, 3): (wo, mixture pdf, sampled_type, view, weight) arrays (weight: the
+    /// MixtureSample's, f/pdf of the view's own lobe, or of its delta event over |S|).
     nb::tuple mixture_sample(Vec3Array wis, size_t n, uint32_t seed) {
         std::vector<Vec3f> wi(wis.shape(0));
         for (size_t c = 0; c < wi.size(); ++c) wi[c] = Vec3f(wis(c, 0), wis(c, 1), wis(c, 2));
         OutArray wo = out_array(n, 3), pdf = out_array(n, 1), type = out_array(n, 1), view = out_array(n, 1);
+        OutArray w = out_array(n, 3);
+        std::vector<float> p_delta(wi.size()), smooth_scale(wi.size());
+        const LobeClasses classes = lobe_classes(*bsdf, si, wi.data(), wi.size(), p_delta.data(), smooth_scale.data());
         Sampler s(SamplerKind::Independent, seed);
         for (size_t i = 0; i < n; ++i) {
             s.start(0, 0, 0, uint32_t(i));
             float u_view = s.next_1d(), u1 = s.next_1d();
             Vec2f u2 = s.next_2d();
-            MixtureSample ms = sample_lobe_mixture(*bsdf, si, wi.data(), wi.size(), u_view, u1, u2);
-            for (int c = 0; c < 3; ++c) wo.data()[3 * i + c] = ms.bs.wo[c];
+            MixtureSample ms = sample_lobe_mixture(*bsdf, si, wi.data(), wi.size(), classes, u_view, u1, u2);
+            for (int c = 0; c < 3; ++c) wo.data()[3 * i + c] = ms.bs.wo[c], w.data()[3 * i + c] = ms.weight[c];
             pdf.data()[i] = ms.weight.is_black() ? 0.f : ms.pdf;
             type.data()[i] = float(ms.bs.sampled_type);
             view.data()[i] = float(ms.view);
         }
-        return nb::make_tuple(wo, pdf, type, view);
+        return nb::make_tuple(wo, pdf, type, view, w);
     }
 
     /// The mixture density of directions `wo` (n, 3) for views seen from `wis` (m, 3).
     OutArray mixture_pdf(Vec3Array wis, Vec3Array wo) {
         std::vector<Vec3f> wi(wis.shape(0));
         for (size_t c = 0; c < wi.size(); ++c) wi[c] = Vec3f(wis(c, 0), wis(c, 1), wis(c, 2));
+        std::vector<float> p_delta(wi.size()), smooth_scale(wi.size());
+        const LobeClasses classes = lobe_classes(*bsdf, si, wi.data(), wi.size(), p_delta.data(), smooth_scale.data());
         size_t n = wo.shape(0);
         OutArray r = out_array(n, 1);
         for (size_t i = 0; i < n; ++i)
-            r.data()[i] = lobe_mixture_pdf(*bsdf, si, wi.data(), wi.size(), Vec3f(wo(i, 0), wo(i, 1), wo(i, 2)));
+            r.data()[i] =
+                lobe_mixture_pdf(*bsdf, si, wi.data(), wi.size(), classes, Vec3f(wo(i, 0), wo(i, 1), wo(i, 2)));
         return r;
     }
 
@@ -264,6 +276,7 @@ void bind_probes(nb::module_ &m) {
         .def("eval_pdf_views", &BsdfProbe::eval_pdf_views, "wis"_a, "wo"_a)
         .def("mixture_sample", &BsdfProbe::mixture_sample, "wis"_a, "n"_a, "seed"_a = 0)
         .def("mixture_pdf", &BsdfProbe::mixture_pdf, "wis"_a, "wo"_a)
+        .def("delta_probability", &BsdfProbe::delta_probability, "wx"_a, "wy"_a, "wz"_a)
         .def("material_similarity", &BsdfProbe::material_similarity, "wi_a"_a, "wi_b"_a, "monte_carlo"_a = false)
         .def_prop_ro("flags", [](const BsdfProbe &p) { return p.bsdf->flags(); })
         .def_prop_ro_static("flag_values", [](nb::handle) {

@@ -3,6 +3,9 @@
 #include "../../core/simd.h"
 
 #include <algorithm>
+#include <cmath>
+#include <optional>
+#include <vector>
 
 namespace mvpt {
 
@@ -35,17 +38,88 @@ MVPT_MULTI_ISA float max_over_views(const Spectrum *f, size_t n) {
     return m;
 }
 
-float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n, Vec3f wo) {
-    const BsdfContext ctx;
-    float p = 0.f;
-    for (size_t c = 0; c < n; ++c) p += bsdf.pdf(ctx, si, wi[c], wo);
-    return n ? p / float(n) : 0.f;
+LobeClasses lobe_classes(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n, float *p_delta,
+                         float *smooth_scale) {
+    LobeClasses classes;
+    if (n < 2 || !(bsdf.flags() & BsdfDelta) || !bsdf.has_smooth()) return classes;
+    float sum = 0.f;
+    for (size_t c = 0; c < n; ++c) {
+        const std::optional<float> p = bsdf.delta_probability(si, wi[c]);
+        if (!p) return classes;
+        p_delta[c] = std::clamp(*p, 0.f, 1.f);
+        sum += p_delta[c];
+    }
+    const float mean = sum / float(n);
+    if (!(mean > 0.f)) return classes; // no view draws a delta lobe here: the plain mixture
+    classes.split = true;
+    classes.q = 1.f;
+    if (mean < 1.f) {
+        const float odds = std::sqrt(std::sqrt(float(n))) * mean / (1.f - mean); // |S|^(1/4) P / (1 - P)
+        classes.q = odds / (1.f + odds);
+    }
+    for (size_t c = 0; c < n; ++c)
+        smooth_scale[c] = p_delta[c] < 1.f ? (1.f - classes.q) / (float(n) * (1.f - p_delta[c])) : 0.f;
+    classes.p_delta = p_delta;
+    classes.smooth_scale = smooth_scale;
+    return classes;
 }
 
+float smooth_mixture_pdf(const LobeClasses &classes, const float *pdf, size_t n) {
+    if (n == 0) return 0.f;
+    if (!classes.split) return sum_over_views(pdf, n) / float(n);
+    float p = 0.f;
+    for (size_t c = 0; c < n; ++c) p += pdf[c] * classes.smooth_scale[c];
+    return p;
+}
+
+float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
+                       const LobeClasses &classes, Vec3f wo) {
+    const BsdfContext ctx;
+    std::vector<float> pdf(n);
+    for (size_t c = 0; c < n; ++c) pdf[c] = bsdf.pdf(ctx, si, wi[c], wo);
+    return smooth_mixture_pdf(classes, pdf.data(), n);
+}
+
+namespace {
+
+/// A direction of split classes (§7, "Delta lobes"): the kind by u_lobe, the view by u_view, the
+/// view's lobe conditioned on the kind.
+MixtureSample sample_split_classes(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
+                                   const LobeClasses &classes, float u_view, float u_lobe, Vec2f u_dir, Spectrum *f,
+                                   float *pdf_buf) {
+    MixtureSample ms;
+    ms.view = std::min(size_t(u_view * float(n)), n - 1);
+    const float q = classes.q;
+    const bool delta = u_lobe < q;
+    const float u = std::min(delta ? u_lobe / q : (u_lobe - q) / (1.f - q), OneMinusEpsilon);
+    const float p_kind = delta ? classes.p_delta[ms.view] : 1.f - classes.p_delta[ms.view];
+    if (!(p_kind > 0.f)) return ms; // this view has no lobe of the kind
+    BsdfContext ctx;
+    ctx.type_mask = delta ? uint32_t(BsdfDelta) : uint32_t(BsdfSmooth);
+    auto [bs, weight] = bsdf.sample(ctx, si, wi[ms.view], u, u_dir);
+    ms.delta = (bs.sampled_type & BsdfDelta) != 0;
+    if (weight.is_black() || ms.delta != delta) return ms; // (zero weight: no direction)
+    ms.bs = bs;
+    if (ms.delta) { // probability q/n of the view's delta event times the lobe's within it
+        ms.pdf = q * bs.pdf / float(n);
+        ms.weight = weight * (1.f / q);
+    } else {
+        ms.weight = weight;
+        if (f && pdf_buf) bsdf.eval_pdf_views(BsdfContext{}, si, wi, n, bs.wo, f, pdf_buf);
+        ms.pdf = f && pdf_buf ? smooth_mixture_pdf(classes, pdf_buf, n)
+                              : lobe_mixture_pdf(bsdf, si, wi, n, classes, bs.wo);
+    }
+    return ms;
+}
+
+} // namespace
+
 MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
-                                  float u_view, float u_lobe, Vec2f u_dir, Spectrum *f, float *pdf_buf) {
+                                  const LobeClasses &classes, float u_view, float u_lobe, Vec2f u_dir, Spectrum *f,
+                                  float *pdf_buf) {
     MixtureSample ms;
     if (n == 0) return ms;
+    if (classes.split) return sample_split_classes(bsdf, si, wi, n, classes, u_view, u_lobe, u_dir, f, pdf_buf);
     ms.view = std::min(size_t(u_view * float(n)), n - 1);
     auto [bs, weight] = bsdf.sample(BsdfContext{}, si, wi[ms.view], u_lobe, u_dir);
     ms.bs = bs;
@@ -58,7 +132,7 @@ MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si
         bsdf.eval_pdf_views(BsdfContext{}, si, wi, n, bs.wo, f, pdf_buf);
         ms.pdf = sum_over_views(pdf_buf, n) / float(n);
     } else {
-        ms.pdf = lobe_mixture_pdf(bsdf, si, wi, n, bs.wo);
+        ms.pdf = lobe_mixture_pdf(bsdf, si, wi, n, classes, bs.wo);
     }
     return ms;
 }

@@ -289,7 +289,7 @@ const Vec3f *sharing_directions(MvScratch &sc, size_t ns) {
 /// light). Its shadow ray joins `pending` (its index into *shadow), or, through media, its
 /// transmittance is taken now.
 Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
-                    float u_select, Vec2f u_light, Spectrum *f_nee, MvScratch &sc, MvPendingSamples &pending,
+                    const LobeClasses &classes, float u_select, Vec2f u_light, Spectrum *f_nee, MvScratch &sc, MvPendingSamples &pending,
                     RayCounters &counters, int32_t *shadow) {
     const Scene &scene = *ctx.scene;
     const auto &lights = scene.lights();
@@ -303,7 +303,7 @@ Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, con
     auto &pdf = sc.view_pdf;
     grow_scratch(pdf, ns);
     bsdf.eval_pdf_views(Ctx, si, wi_s, ns, wo, f_nee, pdf.data());
-    const float p_mix = sum_over_views(pdf.data(), ns); // the lobe mixture's density times |S|
+    const float p_mix = smooth_mixture_pdf(classes, pdf.data(), ns); // the bounce's density of wo
     if (!(max_over_views(f_nee, ns) > 0.f)) return Spectrum(0.f); // no view reflects light this way
     const Ray ray = std::isinf(ls.dist) ? si.spawn_ray(ls.d) : si.spawn_ray_to(ls.p);
     if (ctx.volpath) { // the transmittance to the light, now
@@ -315,22 +315,22 @@ Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, con
         pending.shadow_rays.push_back(ray);
         ++counters.shadow_rays;
     }
-    return weight * emitter_sample_mis(ls, float(lights.size()), p_mix / float(ns));
+    return weight * emitter_sample_mis(ls, float(lights.size()), p_mix);
 }
 
 /// The shared bounce from the lobe mixture, one suffix for every sharing view (§7), with
 /// Russian roulette at y as the path tracer's at depth 0: the views' BSDF values into fs, the
 /// suffix into `pending`, and into `rec` its index, validity and the factor of b_i = f_i(wo) /
 /// p_mix(wo) (or, for a delta lobe, the sampled view and its weight).
-void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, float u_lobe,
-                   Vec2f u_dir, float u_rr, bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending,
+void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
+                   const LobeClasses &classes, float u_lobe, Vec2f u_dir, float u_rr, bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending,
                    MvPendingSamples::Sample &rec) {
     const PathConfig &pc = ctx.path->config();
     const SurfaceInteraction &si = s.si;
     s.sampler.set_dimension(DimBounceView);
     grow_scratch(sc.view_pdf, ns);
     MixtureSample mix =
-        sample_lobe_mixture(bsdf, si, wi_s, ns, s.sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
+        sample_lobe_mixture(bsdf, si, wi_s, ns, classes, s.sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     // (Validity is the path tracer's rule: the volumetric one keeps every path, as Mitsuba's.)
     rec.valid = valid || !(bs.sampled_type & BsdfNull) || ctx.volpath;
@@ -426,8 +426,8 @@ struct EmitterStrata {
 /// queued in `pending` until its suffix and shadow ray are traced. Per sharing view i the radiance is
 ///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included);
 /// the first split's record also holds the views' entries and E.
-void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns, int splits,
-                 int b, EmitterStrata strata, bool valid, const Spectrum &le_y, MvScratch &sc,
+void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
+                 const LobeClasses &classes, int splits, int b, EmitterStrata strata, bool valid, const Spectrum &le_y, MvScratch &sc,
                  MvPendingSamples &pending, RayCounters &counters) {
     s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
     const float u_emitter = strata.at(b, s.sampler.next_1d());
@@ -445,9 +445,9 @@ void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const 
     rec.count = uint32_t(ns);
     rec.splits = b == 0 ? uint32_t(splits) : 0u;
     rec.shadow = -1;
-    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, u_emitter, u_light, f_nee, sc, pending, counters, &rec.shadow);
+    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, classes, u_emitter, u_light, f_nee, sc, pending, counters, &rec.shadow);
     rec.nee = !rec.nee_weight.is_black();
-    shared_bounce(ctx, s, bsdf, wi_s, ns, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
+    shared_bounce(ctx, s, bsdf, wi_s, ns, classes, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
     if (b == 0) rec.e = le_y * (1.f / s.n);
     if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
     rec.hash = s.sampler.sample_hash(); // (the splats' taps take the first split's: the sample's)
@@ -473,6 +473,8 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     si.wi = si.to_local(-s.ray.d);
     const size_t ns = sharing_views(ctx, s, bsdf, sc, counters);
     const Vec3f *wi_s = sharing_directions(sc, ns);
+    grow_scratch(sc.p_delta, ns), grow_scratch(sc.smooth_scale, ns);
+    const LobeClasses classes = lobe_classes(bsdf, si, wi_s, ns, sc.p_delta.data(), sc.smooth_scale.data());
     const Sampler stream = s.sampler;
     const int splits = ctx.cfg.splits;
     // The splits' emitter choices are stratified; the pilot's stay independent, since the
@@ -485,7 +487,7 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     }
     for (int b = 0; b < splits; ++b) {
         if (b > 0) s.sampler = stream.rekeyed(SplitKey + uint64_t(b));
-        share_split(ctx, s, bsdf, wi_s, ns, splits, b, strata, valid, le_y, sc, pending, counters);
+        share_split(ctx, s, bsdf, wi_s, ns, classes, splits, b, strata, valid, le_y, sc, pending, counters);
     }
     s.sampler = stream;
     s.st.sharing += ns;

@@ -58,6 +58,7 @@ struct MvScratch {
     bool material = false; ///< s_M is evaluated at the current shared vertex
     std::vector<Vec3f> sharing_wi;
     std::vector<float> view_pdf;
+    std::vector<float> p_delta, smooth_scale; ///< the sharing views' lobe classes (LobeClasses)
     std::vector<Spectrum> tr; ///< candidates' camera-segment transmittance (media, §10)
     MvMediaWalks walks;
 };

@@ -76,6 +76,11 @@ public:
         }
     }
 
+    std::optional<float> delta_probability(const SurfaceInteraction &si, Vec3f wi) const final {
+        const Frame f = frame(perturbation(si), wi);
+        return m_nested->delta_probability(perturbed(si, f), f.to_local(wi));
+    }
+
     float roughness(const SurfaceInteraction &si) const final { return m_nested->roughness(si); }
 
 protected:

@@ -31,13 +31,15 @@ public:
         m_specular_sampling_weight = s_mean / (d_mean + s_mean);
     }
 
-    std::pair<BsdfSample, Spectrum> sample(const BsdfContext &, const SurfaceInteraction &si, Vec3f wi, float u1,
+    std::pair<BsdfSample, Spectrum> sample(const BsdfContext &ctx, const SurfaceInteraction &si, Vec3f wi, float u1,
                                            Vec2f u2) const override {
         BsdfSample bs;
         float cos_theta_i = Frame::cos_theta(wi);
         if (cos_theta_i <= 0.f) return {bs, {}};
         float f_i = fresnel_dielectric(cos_theta_i, m_eta).F;
         float prob_specular = specular_probability(f_i);
+        if (!(ctx.type_mask & BsdfDeltaReflection)) prob_specular = 0.f;
+        else if (!(ctx.type_mask & BsdfDiffuseReflection)) prob_specular = 1.f;
         if (u1 < prob_specular) {
             bs.wo = Vec3f(-wi.x, -wi.y, wi.z);
             bs.pdf = prob_specular;
@@ -86,6 +88,11 @@ public:
             f[c] = albedo * (cosine * m_inv_eta_2 * (1.f - f_i) * (1.f - f_o));
             pdf[c] = cosine * (1.f - specular_probability(f_i));
         }
+    }
+
+    std::optional<float> delta_probability(const SurfaceInteraction &, Vec3f wi) const override {
+        const float cos_theta_i = Frame::cos_theta(wi);
+        return cos_theta_i > 0.f ? specular_probability(fresnel_dielectric(cos_theta_i, m_eta).F) : 0.f;
     }
 
     float roughness(const SurfaceInteraction &) const override { return 1.f; }

@@ -69,6 +69,12 @@ public:
         }
     }
 
+    std::optional<float> delta_probability(const SurfaceInteraction &si, Vec3f wi) const override {
+        if (wi.z > 0.f) return m_brdf[0]->delta_probability(si, wi);
+        if (wi.z < 0.f) return m_brdf[1]->delta_probability(si, flip(wi));
+        return 0.f;
+    }
+
     float roughness(const SurfaceInteraction &si) const override {
         return si.wi.z < 0.f ? m_brdf[1]->roughness(si) : m_brdf[0]->roughness(si);
     }
