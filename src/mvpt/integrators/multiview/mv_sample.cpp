@@ -289,8 +289,8 @@ const Vec3f *sharing_directions(MvScratch &sc, size_t ns) {
 /// light). Its shadow ray joins `pending` (its index into *shadow), or, through media, its
 /// transmittance is taken now.
 Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
-                    const LobeClasses &classes, float u_select, Vec2f u_light, Spectrum *f_nee, MvScratch &sc, MvPendingSamples &pending,
-                    RayCounters &counters, int32_t *shadow) {
+                    const LobeClasses &classes, float u_select, Vec2f u_light, Spectrum *f_nee, MvScratch &sc,
+                    MvPendingSamples &pending, RayCounters &counters, int32_t *shadow) {
     const Scene &scene = *ctx.scene;
     const auto &lights = scene.lights();
     const SurfaceInteraction &si = s.si;
@@ -323,8 +323,8 @@ Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, con
 /// suffix into `pending`, and into `rec` its index, validity and the factor of b_i = f_i(wo) /
 /// p_mix(wo) (or, for a delta lobe, the sampled view and its weight).
 void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
-                   const LobeClasses &classes, float u_lobe, Vec2f u_dir, float u_rr, bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending,
-                   MvPendingSamples::Sample &rec) {
+                   const LobeClasses &classes, float u_lobe, Vec2f u_dir, float u_rr, bool valid, Spectrum *fs,
+                   MvScratch &sc, MvPendingSamples &pending, MvPendingSamples::Sample &rec) {
     const PathConfig &pc = ctx.path->config();
     const SurfaceInteraction &si = s.si;
     s.sampler.set_dimension(DimBounceView);
@@ -427,8 +427,8 @@ struct EmitterStrata {
 ///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included);
 /// the first split's record also holds the views' entries and E.
 void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
-                 const LobeClasses &classes, int splits, int b, EmitterStrata strata, bool valid, const Spectrum &le_y, MvScratch &sc,
-                 MvPendingSamples &pending, RayCounters &counters) {
+                 const LobeClasses &classes, int splits, int b, EmitterStrata strata, bool valid,
+                 const Spectrum &le_y, MvScratch &sc, MvPendingSamples &pending, RayCounters &counters) {
     s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
     const float u_emitter = strata.at(b, s.sampler.next_1d());
     const Vec2f u_light = s.sampler.next_2d();
@@ -445,7 +445,8 @@ void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const 
     rec.count = uint32_t(ns);
     rec.splits = b == 0 ? uint32_t(splits) : 0u;
     rec.shadow = -1;
-    rec.nee_weight = shared_nee(ctx, s, bsdf, wi_s, ns, classes, u_emitter, u_light, f_nee, sc, pending, counters, &rec.shadow);
+    rec.nee_weight =
+        shared_nee(ctx, s, bsdf, wi_s, ns, classes, u_emitter, u_light, f_nee, sc, pending, counters, &rec.shadow);
     rec.nee = !rec.nee_weight.is_black();
     shared_bounce(ctx, s, bsdf, wi_s, ns, classes, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
     if (b == 0) rec.e = le_y * (1.f / s.n);

@@ -28,6 +28,7 @@ public:
             bs.pdf *= p_nested; // f = opacity f_nested: without a mask the weight is the nested one
             return {bs, restricted ? weight * (opacity / p_nested) : weight};
         }
+        if (restricted && !(ctx.type_mask & BsdfNull)) return {BsdfSample{}, {}}; // nothing of the kind
         BsdfSample bs;
         bs.wo = -wi;
         bs.pdf = 1.f - p_nested;
