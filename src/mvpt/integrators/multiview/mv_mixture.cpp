@@ -80,58 +80,40 @@ float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec
     return smooth_mixture_pdf(classes, pdf.data(), n);
 }
 
-namespace {
-
-/// A direction of split classes (§7, "Delta lobes"): the kind by u_lobe, the view by u_view, the
-/// view's lobe conditioned on the kind.
-MixtureSample sample_split_classes(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
-                                   const LobeClasses &classes, float u_view, float u_lobe, Vec2f u_dir, Spectrum *f,
-                                   float *pdf_buf) {
-    MixtureSample ms;
-    ms.view = std::min(size_t(u_view * float(n)), n - 1);
-    const float q = classes.q;
-    const bool delta = u_lobe < q;
-    const float u = std::min(delta ? u_lobe / q : (u_lobe - q) / (1.f - q), OneMinusEpsilon);
-    const float p_kind = delta ? classes.p_delta[ms.view] : 1.f - classes.p_delta[ms.view];
-    if (!(p_kind > 0.f)) return ms; // this view has no lobe of the kind
-    BsdfContext ctx;
-    ctx.type_mask = delta ? uint32_t(BsdfDelta) : uint32_t(BsdfSmooth);
-    auto [bs, weight] = bsdf.sample(ctx, si, wi[ms.view], u, u_dir);
-    ms.delta = (bs.sampled_type & BsdfDelta) != 0;
-    if (weight.is_black() || ms.delta != delta) return ms; // (zero weight: no direction)
-    ms.bs = bs;
-    if (ms.delta) { // probability q/n of the view's delta event times the lobe's within it
-        ms.pdf = q * bs.pdf / float(n);
-        ms.weight = weight * (1.f / q);
-    } else {
-        ms.weight = weight;
-        if (f && pdf_buf) bsdf.eval_pdf_views(BsdfContext{}, si, wi, n, bs.wo, f, pdf_buf);
-        ms.pdf = f && pdf_buf ? smooth_mixture_pdf(classes, pdf_buf, n)
-                              : lobe_mixture_pdf(bsdf, si, wi, n, classes, bs.wo);
-    }
-    return ms;
-}
-
-} // namespace
-
 MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
                                   const LobeClasses &classes, float u_view, float u_lobe, Vec2f u_dir, Spectrum *f,
                                   float *pdf_buf) {
     MixtureSample ms;
     if (n == 0) return ms;
-    if (classes.split) return sample_split_classes(bsdf, si, wi, n, classes, u_view, u_lobe, u_dir, f, pdf_buf);
     ms.view = std::min(size_t(u_view * float(n)), n - 1);
-    auto [bs, weight] = bsdf.sample(BsdfContext{}, si, wi[ms.view], u_lobe, u_dir);
+    // With split classes (§7, "Delta lobes") u_lobe first draws the kind, a delta event with
+    // probability q; the view's lobe is then drawn conditioned on the kind.
+    BsdfContext ctx;
+    float u = u_lobe, p_delta_event = 1.f;
+    bool delta_event = false;
+    if (classes.split) {
+        const float q = classes.q;
+        delta_event = u_lobe < q;
+        u = std::min(delta_event ? u_lobe / q : (u_lobe - q) / (1.f - q), OneMinusEpsilon);
+        const float p_kind = delta_event ? classes.p_delta[ms.view] : 1.f - classes.p_delta[ms.view];
+        if (!(p_kind > 0.f)) return ms; // this view has no lobe of the kind
+        ctx.type_mask = delta_event ? uint32_t(BsdfDelta) : uint32_t(BsdfSmooth);
+        p_delta_event = q;
+    }
+    auto [bs, weight] = bsdf.sample(ctx, si, wi[ms.view], u, u_dir);
     ms.bs = bs;
-    ms.weight = weight;
-    if (weight.is_black()) return ms;
-    ms.delta = (bs.sampled_type & BsdfDelta) != 0;
-    if (ms.delta) {
-        ms.pdf = bs.pdf / float(n);
+    const bool delta = (bs.sampled_type & BsdfDelta) != 0;
+    if (weight.is_black() || (classes.split && delta != delta_event)) return ms; // (zero weight: no direction)
+    ms.delta = delta;
+    if (ms.delta) { // the view's delta event, 1/n of q (1 unsplit), times the lobe's probability within it
+        ms.pdf = p_delta_event * bs.pdf / float(n);
+        ms.weight = weight * (1.f / p_delta_event);
     } else if (f && pdf_buf) {
+        ms.weight = weight;
         bsdf.eval_pdf_views(BsdfContext{}, si, wi, n, bs.wo, f, pdf_buf);
-        ms.pdf = sum_over_views(pdf_buf, n) / float(n);
+        ms.pdf = smooth_mixture_pdf(classes, pdf_buf, n);
     } else {
+        ms.weight = weight;
         ms.pdf = lobe_mixture_pdf(bsdf, si, wi, n, classes, bs.wo);
     }
     return ms;
