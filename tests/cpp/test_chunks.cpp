@@ -22,8 +22,10 @@ template <typename Stop> ChunksDone run(int threads, std::vector<int> &rendered,
     ChunkTiming timing;
     std::atomic<size_t> so_far{0};
     rendered.assign(Tiles, 0);
+    std::vector<double> prefix(Tiles + 1);
+    for (size_t t = 0; t <= Tiles; ++t) prefix[t] = double(t);
     return run_in_chunks(
-        arena, Tiles, threads, double(Tiles), timing,
+        arena, prefix, threads, timing,
         [&](size_t t) {
             ++rendered[t];
             ++so_far;
@@ -61,4 +63,16 @@ TEST(Chunks, StopBetweenTilesAbandonsTheRest) {
     EXPECT_EQ(done.prefix, 0u); // not stopped at a boundary
     EXPECT_EQ(done.samples, 3u);
     for (size_t t = 0; t < Tiles; ++t) EXPECT_EQ(rendered[t], t < 3 ? 1 : 0) << t;
+}
+
+TEST(Chunks, ChunkEndsWhereItsTilesHoldTheSamplesAsked) {
+    // Tiles of 100, 1, 1, 1, 50, 50 samples (the adaptive maps make tiles unequal).
+    const std::vector<double> prefix{0, 100, 101, 102, 103, 153, 203};
+    EXPECT_EQ(chunk_last(prefix, 0, 10.0), 1u);   // one tile, even when it holds more
+    EXPECT_EQ(chunk_last(prefix, 0, 102.0), 3u);  // [0, 3) holds 102
+    EXPECT_EQ(chunk_last(prefix, 1, 2.5), 3u);    // [1, 3) holds 2
+    EXPECT_EQ(chunk_last(prefix, 1, 52.0), 4u);   // [1, 5) would hold 53
+    EXPECT_EQ(chunk_last(prefix, 1, 53.0), 5u);
+    EXPECT_EQ(chunk_last(prefix, 3, 1e9), 6u);    // at most every tile
+    EXPECT_EQ(chunk_last(prefix, 5, 0.0), 6u);    // the last tile
 }

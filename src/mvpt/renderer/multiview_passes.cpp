@@ -95,7 +95,7 @@ public:
     bool done(int pass) const override;
     int step_end(int pass, double fit, double) override;
     StepTiles begin_step(int pass, int end) override;
-    uint64_t render(size_t t) override { return render_tile(m_state.local(), m_tiles[t]); }
+    uint64_t render(size_t t) override;
     /// A later pass stops between any two tiles (it is dropped), the first between chunks,
     /// which end with a region.
     bool can_abandon(double, double, bool between_chunks) const override { return m_pass > 0 || between_chunks; }
@@ -114,6 +114,9 @@ public:
 
 private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
+    /// The work of each tile of the pass, in native samples weighed by the tile's cost per
+    /// sample in the last pass (what sizes the chunks: run_in_chunks).
+    std::vector<double> tile_work() const;
     /// Whether a thinned pass takes native sample `index` of pixel (px, py) of view `slot`.
     bool thin_takes(int slot, int px, int py, uint32_t index) const;
     /// fold_pass counted every native sample of each pixel's map: for the crop-window pixels of
@@ -187,6 +190,9 @@ private:
     /// of the crop windows it took.
     double m_share = 1.0;
     std::atomic<uint64_t> m_thin_taken{0};
+    /// Each tile's seconds and native samples in the last pass (scan order; empty before), by
+    /// which the next pass's chunks are sized.
+    std::vector<std::pair<float, uint32_t>> m_tile_cost;
     bool m_thinned = false; ///< a thinned pass ended the render
     /// Splits chosen per render under a time budget (m_pass_unit > 0): chosen again after the
     /// first pass from the pilot's statistics and the seconds of a pass per unit of model cost
@@ -347,13 +353,47 @@ StepTiles Renderer::MultiviewPasses::begin_step(int pass, int) {
     m_pass_samples = 0;
     for (const Film &mf : m_r.m_films) m_pass_samples += mf.map_total;
     m_thin_taken = 0;
-    return {m_tiles.size(), m_share * double(m_pass_samples)};
+    StepTiles step;
+    for (double work : tile_work()) step.add(work);
+    m_tile_cost.assign(m_random_order ? 0 : m_tiles.size(), {0.f, 0u});
+    return step;
+}
+
+std::vector<double> Renderer::MultiviewPasses::tile_work() const {
+    // Each tile's native samples (the adaptive maps make them unequal), counted in parallel,
+    // times its cost per native sample in the last pass over the mean (regions differ).
+    double seconds = 0.0, last = 0.0;
+    if (!m_random_order && m_tile_cost.size() == m_tiles.size())
+        for (const auto &[s, n] : m_tile_cost) seconds += s, last += double(n);
+    const double mean = seconds > 0.0 && last > 0.0 ? seconds / last : 0.0;
+    std::vector<double> work(m_tiles.size());
+    auto tile = [&](size_t t) {
+        const Tile &tile = m_tiles[t];
+        const Film &mf = m_r.m_films[tile.view_slot];
+        const size_t width = size_t(m_r.m_mv.windows[tile.view_slot].width());
+        uint64_t n = 0;
+        for (int y = tile.y0; y < tile.y1; ++y)
+            for (int x = tile.x0; x < tile.x1; ++x) n += mf.map[size_t(y) * width + size_t(x)];
+        const auto [s, last_n] = mean > 0.0 ? m_tile_cost[t] : std::pair<float, uint32_t>{};
+        const double cost = last_n > 0 ? std::clamp(double(s) / last_n / mean, 0.1, 10.0) : 1.0;
+        work[t] = m_share * double(n) * cost;
+    };
+    arena().execute([&] { tbb::parallel_for(size_t(0), m_tiles.size(), tile); });
+    return work;
 }
 
 bool Renderer::MultiviewPasses::thin_takes(int slot, int px, int py, uint32_t index) const {
     const MvContext &mv = m_r.m_mv;
     const uint64_t h = hash_ints(mv.seeds[size_t(slot)], mv.views[size_t(slot)].scene_index, px, py, index, ThinKey);
     return double(bits_to_unit_float(uint32_t(h))) < m_share;
+}
+
+uint64_t Renderer::MultiviewPasses::render(size_t t) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const uint64_t n = render_tile(m_state.local(), m_tiles[t]);
+    if (!m_tile_cost.empty())
+        m_tile_cost[t] = {std::chrono::duration<float>(std::chrono::steady_clock::now() - t0).count(), uint32_t(n)};
+    return n;
 }
 
 uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &tile) {

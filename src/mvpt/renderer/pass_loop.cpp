@@ -37,7 +37,7 @@ void Renderer::run_passes(PassSchedule &schedule, const std::atomic<bool> &cance
         auto report = [&](uint64_t samples) {
             report_progress(progress, pass, seconds(), m_stats.samples + samples, schedule.fraction(samples));
         };
-        const ChunksDone done = run_in_chunks(schedule.arena(), step.tiles, m_stats.threads, step.samples, timing,
+        const ChunksDone done = run_in_chunks(schedule.arena(), step.prefix, m_stats.threads, timing,
                                               [&](size_t t) { return schedule.render(t); }, stop, report,
                                               [&](size_t end) { return schedule.chunk_end(end); });
         m_stats.samples += schedule.kept(done);

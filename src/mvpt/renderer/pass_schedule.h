@@ -9,13 +9,17 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace mvpt {
 
-/// The tiles of a step and about how many samples they hold (what sizes its chunks).
+/// The tiles of a step and about how many samples they hold (what sizes its chunks):
+/// `prefix[t]` those of tiles [0, t), one entry more than there are tiles.
 struct StepTiles {
-    size_t tiles = 0;
-    double samples = 0.0;
+    std::vector<double> prefix{0.0};
+    size_t tiles() const { return prefix.size() - 1; }
+    /// Appends a tile of `samples` samples.
+    void add(double samples) { prefix.push_back(prefix.back() + samples); }
 };
 
 class PassSchedule {

@@ -108,12 +108,15 @@ StepTiles Renderer::PathPasses::begin_step(int pass, int end) {
     m_pass = pass, m_end = end;
     m_step.clear();
     m_step_samples = 0;
+    StepTiles step;
     for (const Tile &t : m_tiles)
         if (pass < m_target[t.view_slot]) {
             m_step.push_back(&t);
-            m_step_samples += uint64_t(std::min(end, m_target[t.view_slot]) - pass) * crop_pixels(t);
+            const uint64_t samples = uint64_t(std::min(end, m_target[t.view_slot]) - pass) * crop_pixels(t);
+            m_step_samples += samples;
+            step.add(double(samples));
         }
-    return {m_step.size(), double(m_step_samples)};
+    return step;
 }
 
 bool Renderer::PathPasses::can_abandon(double last_pass, double in_step, bool) const {
