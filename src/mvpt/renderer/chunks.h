@@ -43,11 +43,12 @@ inline size_t chunk_last(const std::vector<double> &prefix, size_t first, double
 /// Renders tiles [0, tiles) with render(tile) (which returns its samples) in chunks of about a
 /// quarter of a second, `prefix[t]` being about the samples of tiles [0, t) (tiles + 1
 /// entries: chunks are sized by the tiles' own samples, which the adaptive maps make unequal,
-/// weighed by their cost where the method knows it), so that `report(samples so far)` is called that often; a chunk ends where `chunk_end(proposed
-/// end)` says. Before each chunk after the first the loop asks `stop(true)` (timing.next: the
-/// chunk's expected seconds, shorter for the last chunk of the tiles), and between tiles every
-/// task asks `stop(false)`; a true answer abandons the tiles not begun (`finished` is then
-/// false). A tile is rendered whole or not at all.
+/// weighed by their cost where the method knows it), so that `report(samples so far)` is
+/// called that often; a chunk ends where `chunk_end(proposed end)` says. Before each chunk
+/// after the first the loop asks `stop(true)` (timing.next: the chunk's expected seconds,
+/// shorter for the last chunk of the tiles), and between tiles every task asks `stop(false)`;
+/// a true answer abandons the tiles not begun (`finished` is then false). A tile is rendered
+/// whole or not at all.
 template <typename Render, typename Stop, typename Report, typename ChunkEnd>
 ChunksDone run_in_chunks(tbb::task_arena &arena, const std::vector<double> &prefix, int threads, ChunkTiming &timing,
                          Render &&render, Stop &&stop, Report &&report, ChunkEnd &&chunk_end) {
