@@ -36,7 +36,8 @@ struct ChunksDone {
 /// [first, last) hold at most `samples` samples, `prefix[t]` being those of tiles [0, t) (at
 /// least one tile, at most every one).
 inline size_t chunk_last(const std::vector<double> &prefix, size_t first, double samples) {
-    const auto end = std::upper_bound(prefix.begin() + std::ptrdiff_t(first) + 1, prefix.end(), prefix[first] + samples);
+    const auto begin = prefix.begin() + std::ptrdiff_t(first) + 1;
+    const auto end = std::upper_bound(begin, prefix.end(), prefix[first] + samples);
     return std::max(first + 1, size_t(end - prefix.begin()) - 1);
 }
 
