@@ -17,7 +17,6 @@ namespace mvpt {
 /// `prefix[t]` those of tiles [0, t), one entry more than there are tiles.
 struct StepTiles {
     std::vector<double> prefix{0.0};
-    size_t tiles() const { return prefix.size() - 1; }
     /// Appends a tile of `samples` samples.
     void add(double samples) { prefix.push_back(prefix.back() + samples); }
 };
