@@ -281,7 +281,10 @@ THIN_LENS_ROW = """<scene version="3.0.0">
 
 
 def _with_rig_cells(name: str, cells: int):
-    option = f'<integer name="rig_cells" value="{cells}"/>'
+    return _with_options(name, f'<integer name="rig_cells" value="{cells}"/>')
+
+
+def _with_options(name: str, option: str):
     if name == "thin_lens_row":
         return mvpt.load_string(THIN_LENS_ROW.replace("$options", option), ".")
     scenes = Path(__file__).resolve().parents[1] / "scenes" / "mv"
@@ -302,3 +305,19 @@ def test_rig_visibility_cells_change_no_pixel(name):
         b = mvpt.render(on, spp=4, seed=9, threads=threads, method="mvpt")
         for v in a.images:
             assert np.array_equal(a.images[v], b.images[v]), (v, threads)
+
+
+@pytest.mark.parametrize("name, splits", [("cornell_phong9", 3), ("thin_lens_row", 2)])
+def test_batches_of_native_samples_change_no_pixel(name, splits):
+    """The pending samples of a tile are traced and splatted in batches of `batch_entries`
+    entries (mv_native_samples): after every native sample, every few, or once per tile, the
+    images are the same bit for bit, for one and two threads."""
+    def scene(batch):
+        option = f'<integer name="splits" value="{splits}"/>'
+        return _with_options(name, option + (f'<integer name="batch_entries" value="{batch}"/>' if batch else ""))
+    a = mvpt.render(scene(1 << 24), spp=4, seed=5, threads=2, method="mvpt")
+    assert a.stats["splits"] == splits
+    for batch, threads in ((1, 1), (1, 2), (40, 2), (None, 1)):
+        b = mvpt.render(scene(batch), spp=4, seed=5, threads=threads, method="mvpt")
+        for v in a.images:
+            assert np.array_equal(a.images[v], b.images[v]), (v, batch, threads)

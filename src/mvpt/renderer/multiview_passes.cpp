@@ -290,9 +290,7 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
             taken += prim.size();
             ts.pending.probe = &probes[t];
             mv_trace_primaries(pilot, slot, prim);
-            for (size_t i = 0; i < prim.size(); ++i)
-                mv_native_sample(pilot, slot, prim, i, ts.scratch, ts.pending, sink, counters, stats.data());
-            mv_finish_samples(pilot, slot, ts.pending, sink, counters, stats.data());
+            mv_native_samples(pilot, slot, prim, ts.scratch, ts.pending, sink, counters, stats.data());
             ts.pending.probe = nullptr;
         });
     });
@@ -421,12 +419,10 @@ uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &t
             }
         }
     if (thin) m_thin_taken += taken;
-    // The tile's camera rays as one stream, then each native sample.
+    // The tile's camera rays as one stream, then each native sample, their suffixes traced as
+    // wavefronts of the path tracer in batches.
     mv_trace_primaries(mv, tile.view_slot, prim);
-    for (size_t i = 0; i < prim.size(); ++i)
-        mv_native_sample(mv, tile.view_slot, prim, i, ts.scratch, ts.pending, sink, ts.counters, ts.stats.data());
-    // The tile's suffixes as one wavefront of the path tracer.
-    mv_finish_samples(mv, tile.view_slot, ts.pending, sink, ts.counters, ts.stats.data());
+    mv_native_samples(mv, tile.view_slot, prim, ts.scratch, ts.pending, sink, ts.counters, ts.stats.data());
     return prim.size();
 }
 

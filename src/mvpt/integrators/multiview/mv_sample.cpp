@@ -540,4 +540,14 @@ void mv_native_sample(const MvContext &ctx, int slot_l, MvPrimaries &prim, size_
     if (!trace_unshared(ctx, s, hit, sc, pending, sink, counters)) share_first_vertex(ctx, s, sc, pending, counters);
 }
 
+void mv_native_samples(const MvContext &ctx, int slot, MvPrimaries &prim, MvScratch &scratch, MvPendingSamples &pending,
+                       MvSplatSink &sink, RayCounters &counters, MvViewStats *stats) {
+    const size_t batch = size_t(std::max(ctx.cfg.batch_entries, 1));
+    for (size_t i = 0; i < prim.size(); ++i) {
+        mv_native_sample(ctx, slot, prim, i, scratch, pending, sink, counters, stats);
+        if (pending.entries >= batch) mv_finish_samples(ctx, slot, pending, sink, counters, stats);
+    }
+    mv_finish_samples(ctx, slot, pending, sink, counters, stats);
+}
+
 } // namespace mvpt

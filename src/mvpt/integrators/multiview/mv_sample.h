@@ -100,4 +100,10 @@ void mv_trace_primaries(const MvContext &ctx, int slot, MvPrimaries &prim);
 void mv_native_sample(const MvContext &ctx, int slot, MvPrimaries &prim, size_t i, MvScratch &scratch,
                       MvPendingSamples &pending, MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
 
+/// Take every native sample of `prim` (mv_native_sample) and trace and splat the pending ones
+/// (mv_finish_samples) whenever their entries reach ctx.cfg.batch_entries, and at the end: the
+/// entries written by a batch's samples are read back while they are in the core's cache.
+void mv_native_samples(const MvContext &ctx, int slot, MvPrimaries &prim, MvScratch &scratch, MvPendingSamples &pending,
+                       MvSplatSink &sink, RayCounters &counters, MvViewStats *stats);
+
 } // namespace mvpt

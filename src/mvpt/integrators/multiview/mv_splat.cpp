@@ -1,5 +1,5 @@
-// The end of a tile's native samples (§7): their suffixes traced as one wavefront, their
-// shared NEE's shadow rays as packets, and each sharing view's contribution W·L splatted.
+// The end of a batch of a tile's native samples (§7): their suffixes traced as one wavefront,
+// their shared NEE's shadow rays as packets, and each sharing view's contribution W·L splatted.
 #include "mv_splat.h"
 #include "mv_split_choice.h"
 #include "../path/path.h"

@@ -22,8 +22,8 @@ struct alignas(16) MvEntryRadiance {
 };
 
 /// Native samples whose suffix (the path continuing from the shared bounce, §7) waits to
-/// be traced with the other samples of its tile as one wavefront of the path tracer
-/// (PathIntegrator::trace_batch), and whose NEE shadow ray waits likewise;
+/// be traced with the other samples of its batch (mv_native_samples) as one wavefront of the
+/// path tracer (PathIntegrator::trace_batch), and whose NEE shadow ray waits likewise;
 /// mv_finish_samples then splats their contributions.
 struct MvPendingSamples {
     /// Per sample: its sharing views' entries [first, first + count) below (the native view

@@ -13,6 +13,7 @@
 //     <float name="adaptive_budget" value="1.25"/>           mean native samples per pixel and pass
 //     <float name="adaptive_eps" value="0.01"/>              eps of the relative error the maps even out
 //     <integer name="rig_cells" value="128"/>                 cells proven to see the rig unblocked (0: off)
+//     <integer name="batch_entries" value="4096"/>            pending entries traced and splatted together
 //     <string name="splits" value="auto"/>                    light samples and bounces per shared vertex (§7):
 //                                                             chosen per render, or <integer ...>: 1-64
 //   </integrator>
@@ -52,6 +53,7 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     if (!(cfg.adaptive_eps >= 0.f && cfg.adaptive_eps < INFINITY))
         props.fail("adaptive_eps", "'adaptive_eps' must be a finite number >= 0");
     cfg.rig_cells = int(props.get_int_in("rig_cells", 128, 0, 1024));
+    cfg.batch_entries = int(props.get_int_in("batch_entries", 4096, 1, 1 << 24));
     if (props.is_string("splits")) {
         const std::string word = props.get_string("splits");
         if (word != "auto") props.fail("splits", "'splits' must be 'auto' or an integer in [1, 64], got '" + word + "'");

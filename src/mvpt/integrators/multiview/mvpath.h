@@ -64,6 +64,11 @@ struct MvConfig {
     /// Visibility cells (accel/rig_visibility.h) along the scene's longest side; 0 turns them
     /// off. Static scenes and cameras only.
     int rig_cells = 128;
+    /// Entries (one per sharing view and split of a native sample, 44 bytes each) after which
+    /// the pending samples of a tile are traced and splatted (mv_native_samples), so that the
+    /// entries are read back from the core's own cache: about 180 KiB by default. Images do
+    /// not depend on it.
+    int batch_entries = 4096;
 };
 
 /// The `mvpath` integrator: path tracing whose first vertex is shared between views.
