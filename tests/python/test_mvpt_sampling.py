@@ -144,7 +144,7 @@ def test_mixture_delta_events_are_unbiased(bsdf, views):
 
 
 def test_mixture_draws_more_delta_events_for_more_views():
-    """With n views a delta event has odds n^(1/4) times those of one view's own choice."""
+    """With n views a delta event has odds n^(3/8) times those of one view's own choice."""
     pr = probe(BSDFS["plastic"])
     wi = direction(20, 0)
     p = pr.delta_probability(*wi)
@@ -152,7 +152,7 @@ def test_mixture_draws_more_delta_events_for_more_views():
         wis = np.ascontiguousarray([wi] * m, dtype=np.float32)
         _, pdf, typ, _, _ = pr.mixture_sample(wis, 40_000, 9)
         q = np.mean((typ.astype(np.uint32).ravel() & DELTA) != 0)
-        odds = m ** 0.25 * p / (1 - p)
+        odds = m ** 0.375 * p / (1 - p)
         expected = odds / (1 + odds)
         assert abs(q - expected) < 5 * np.sqrt(expected * (1 - expected) / 40_000), (m, q, expected)
 

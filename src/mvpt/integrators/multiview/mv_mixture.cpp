@@ -12,6 +12,8 @@ namespace mvpt {
 namespace {
 /// Eight running values, lane q taking the entries q, q + 8, ... (the order of the scalar loops).
 using F8 = simd::f32x8;
+/// The exponent of |S| in the odds of a delta event (§7, "Delta lobes"; docs/performance.md).
+constexpr float DeltaOddsExponent = 0.375f;
 [[gnu::always_inline]] inline F8 load8(const float *v) { return simd::load<F8>(v); }
 } // namespace
 
@@ -54,7 +56,7 @@ LobeClasses lobe_classes(const Bsdf &bsdf, const SurfaceInteraction &si, const V
     classes.split = true;
     classes.q = 1.f;
     if (mean < 1.f) {
-        const float odds = std::sqrt(std::sqrt(float(n))) * mean / (1.f - mean); // |S|^(1/4) P / (1 - P)
+        const float odds = std::pow(float(n), DeltaOddsExponent) * mean / (1.f - mean); // |S|^(3/8) P / (1 - P)
         classes.q = odds / (1.f + odds);
     }
     for (size_t c = 0; c < n; ++c)
@@ -85,22 +87,25 @@ MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si
                                   float *pdf_buf) {
     MixtureSample ms;
     if (n == 0) return ms;
-    ms.view = std::min(size_t(u_view * float(n)), n - 1);
-    // With split classes (§7, "Delta lobes") u_lobe first draws the kind, a delta event with
-    // probability q; the view's lobe is then drawn conditioned on the kind.
+    // With split classes (§7, "Delta lobes") u_view first draws the kind, a delta event with
+    // probability q, and what is left of it the view, whose lobe is then drawn conditioned on the
+    // kind: one number for both, so that splits stratified in it take each kind and view in turn.
     BsdfContext ctx;
-    float u = u_lobe, p_delta_event = 1.f;
+    float u = u_view, p_delta_event = 1.f;
     bool delta_event = false;
     if (classes.split) {
         const float q = classes.q;
-        delta_event = u_lobe < q;
-        u = std::min(delta_event ? u_lobe / q : (u_lobe - q) / (1.f - q), OneMinusEpsilon);
+        delta_event = u_view < q;
+        u = std::min(delta_event ? u_view / q : (u_view - q) / (1.f - q), OneMinusEpsilon);
+        p_delta_event = q;
+    }
+    ms.view = std::min(size_t(u * float(n)), n - 1);
+    if (classes.split) {
         const float p_kind = delta_event ? classes.p_delta[ms.view] : 1.f - classes.p_delta[ms.view];
         if (!(p_kind > 0.f)) return ms; // this view has no lobe of the kind
         ctx.type_mask = delta_event ? uint32_t(BsdfDelta) : uint32_t(BsdfSmooth);
-        p_delta_event = q;
     }
-    auto [bs, weight] = bsdf.sample(ctx, si, wi[ms.view], u, u_dir);
+    auto [bs, weight] = bsdf.sample(ctx, si, wi[ms.view], u_lobe, u_dir);
     ms.bs = bs;
     const bool delta = (bs.sampled_type & BsdfDelta) != 0;
     if (weight.is_black() || (classes.split && delta != delta_event)) return ms; // (zero weight: no direction)

@@ -28,7 +28,7 @@ float max_over_views(const Spectrum *f, size_t n);
 /// How the bounce of a shared vertex divides its directions between the views' delta lobes and
 /// their smooth lobes (§7, "Delta lobes"). A smooth direction serves every sharing view, a delta
 /// one only the view it was drawn for; so at a BSDF with both kinds (smooth plastic, a mask) a
-/// delta event is drawn with probability q, q / (1 - q) = n^(1/4) P / (1 - P) for n views whose
+/// delta event is drawn with probability q, q / (1 - q) = n^(3/8) P / (1 - P) for n views whose
 /// own sampling picks a delta lobe with mean probability P, else a smooth one from the mixture of
 /// the views' smooth lobes, each conditioned on its kind. Without `split` (a BSDF of one kind,
 /// one view, or one that cannot draw its kinds apart) each view's lobe is chosen as its own
@@ -53,8 +53,8 @@ float smooth_mixture_pdf(const LobeClasses &classes, const float *pdf, size_t n)
 float lobe_mixture_pdf(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,
                        const LobeClasses &classes, Vec3f wo);
 
-/// Pick a view with `u_view`, sample its lobe with (u_lobe, u_dir) (with split classes u_lobe
-/// also picks the kind). Zero weight: no direction. With `f` and `pdf_buf` (n entries each), a
+/// Pick a view with `u_view` (with split classes, the kind and then the view), sample its lobe
+/// with (u_lobe, u_dir). Zero weight: no direction. With `f` and `pdf_buf` (n entries each), a
 /// smooth direction also gets every view's f(wi[c], wo)|cos| and lobe density there, from the
 /// same BSDF evaluations as the mixture density.
 MixtureSample sample_lobe_mixture(const Bsdf &bsdf, const SurfaceInteraction &si, const Vec3f *wi, size_t n,

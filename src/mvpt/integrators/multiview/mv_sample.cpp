@@ -318,19 +318,32 @@ Spectrum shared_nee(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, con
     return weight * emitter_sample_mis(ls, float(lights.size()), p_mix);
 }
 
+/// A number of a shared vertex's splits drawn in strata (§7, "Splitting"): split b's is
+/// (b + u) / count, u the one split 0 draws, so that B splits take each of n choices about B / n
+/// times (the emitter; the bounce's kind and view).
+struct SplitStrata {
+    float u = 0.f;
+    int count = 1; ///< 1: each split chooses by its own number
+    /// Split b's number, given the one it drew itself.
+    float at(int b, float own) const {
+        return count > 1 ? std::min((float(b) + u) / float(count), OneMinusEpsilon) : own;
+    }
+};
+
 /// The shared bounce from the lobe mixture, one suffix for every sharing view (§7), with
 /// Russian roulette at y as the path tracer's at depth 0: the views' BSDF values into fs, the
 /// suffix into `pending`, and into `rec` its index, validity and the factor of b_i = f_i(wo) /
 /// p_mix(wo) (or, for a delta lobe, the sampled view and its weight).
 void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
-                   const LobeClasses &classes, float u_lobe, Vec2f u_dir, float u_rr, bool valid, Spectrum *fs,
-                   MvScratch &sc, MvPendingSamples &pending, MvPendingSamples::Sample &rec) {
+                   const LobeClasses &classes, float u_lobe, Vec2f u_dir, float u_rr, SplitStrata event, int b,
+                   bool valid, Spectrum *fs, MvScratch &sc, MvPendingSamples &pending, MvPendingSamples::Sample &rec) {
     const PathConfig &pc = ctx.path->config();
     const SurfaceInteraction &si = s.si;
     s.sampler.set_dimension(DimBounceView);
     grow_scratch(sc.view_pdf, ns);
     MixtureSample mix =
-        sample_lobe_mixture(bsdf, si, wi_s, ns, classes, s.sampler.next_1d(), u_lobe, u_dir, fs, sc.view_pdf.data());
+        sample_lobe_mixture(bsdf, si, wi_s, ns, classes, event.at(b, s.sampler.next_1d()), u_lobe, u_dir, fs,
+                            sc.view_pdf.data());
     const BsdfSample &bs = mix.bs;
     // (Validity is the path tracer's rule: the volumetric one keeps every path, as Mitsuba's.)
     rec.valid = valid || !(bs.sampled_type & BsdfNull) || ctx.volpath;
@@ -366,6 +379,8 @@ void shared_bounce(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, cons
     }
     if (mix.delta) b_scale *= float(ns);
     rec.delta_view = mix.delta ? int32_t(mix.view) : -1;
+    if (mix.delta && (bs.sampled_type & BsdfNull)) // its view's own odds of a null event over these
+        rec.null_scale = float(ns) * (classes.split ? classes.p_delta[mix.view] / classes.q : 1.f);
     rec.b_scale = b_scale;
     if (mix.delta) rec.delta_bounce = mix.weight * b_scale;
 }
@@ -410,27 +425,16 @@ void queue_shares(const MvScratch &sc, size_t ns, size_t first, MvPendingSamples
     }
 }
 
-/// The emitter choices of a shared vertex's splits (§7, "Splitting"): split b's number is (b + u) /
-/// count, u the number split 0 draws, so that B splits take each of n emitters about B / n times.
-struct EmitterStrata {
-    float u = 0.f;
-    int count = 1; ///< 1: each split chooses by its own number
-    /// Split b's number, given the one it drew itself.
-    float at(int b, float own) const {
-        return count > 1 ? std::min((float(b) + u) / float(count), OneMinusEpsilon) : own;
-    }
-};
-
-/// Split b of a shared first vertex (§7, "Splitting"), from its own stream but for the number
-/// that chooses its emitter (`strata`): one emitter sample and one bounce for every sharing view,
+/// Split b of a shared first vertex (§7, "Splitting"), from its own stream but for the numbers
+/// that choose its emitter and its bounce's kind and view (`emitter`, `event`): one emitter sample and one bounce for every sharing view,
 /// queued in `pending` until its suffix and shadow ray are traced. Per sharing view i the radiance is
 ///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included);
 /// the first split's record also holds the views' entries and E.
 void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
-                 const LobeClasses &classes, int splits, int b, EmitterStrata strata, bool valid,
+                 const LobeClasses &classes, int splits, int b, SplitStrata emitter, SplitStrata event, bool valid,
                  const Spectrum &le_y, MvScratch &sc, MvPendingSamples &pending, RayCounters &counters) {
     s.sampler.set_dimension(DimCameraEnd); // the path tracer's block of vertex 0
-    const float u_emitter = strata.at(b, s.sampler.next_1d());
+    const float u_emitter = emitter.at(b, s.sampler.next_1d());
     const Vec2f u_light = s.sampler.next_2d();
     const float u_lobe = s.sampler.next_1d();
     const Vec2f u_dir = s.sampler.next_2d();
@@ -448,7 +452,7 @@ void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const 
     rec.nee_weight =
         shared_nee(ctx, s, bsdf, wi_s, ns, classes, u_emitter, u_light, f_nee, sc, pending, counters, &rec.shadow);
     rec.nee = !rec.nee_weight.is_black();
-    shared_bounce(ctx, s, bsdf, wi_s, ns, classes, u_lobe, u_dir, u_rr, valid, fs, sc, pending, rec);
+    shared_bounce(ctx, s, bsdf, wi_s, ns, classes, u_lobe, u_dir, u_rr, event, b, valid, fs, sc, pending, rec);
     if (b == 0) rec.e = le_y * (1.f / s.n);
     if (ctx.volpath) camera_segments(ctx, s, sc, ns, le_y, f_nee, fs, rec, counters);
     rec.hash = s.sampler.sample_hash(); // (the splats' taps take the first split's: the sample's)
@@ -478,17 +482,19 @@ void share_first_vertex(const MvContext &ctx, NativeSample &s, MvScratch &sc, Mv
     const LobeClasses classes = lobe_classes(bsdf, si, wi_s, ns, sc.p_delta.data(), sc.smooth_scale.data());
     const Sampler stream = s.sampler;
     const int splits = ctx.cfg.splits;
-    // The splits' emitter choices are stratified; the pilot's stay independent, since the
-    // spread of its splits estimates r only then.
-    EmitterStrata strata;
+    // The splits' emitter choices and their bounces' kinds and views are stratified; the
+    // pilot's stay independent, since the spread of its splits estimates r only then.
+    SplitStrata emitter, event;
     if (!pending.probe) {
         Sampler first = stream;
         first.set_dimension(DimCameraEnd);
-        strata = {first.next_1d(), splits};
+        emitter = {first.next_1d(), splits};
+        first.set_dimension(DimBounceView);
+        event = {first.next_1d(), splits};
     }
     for (int b = 0; b < splits; ++b) {
         if (b > 0) s.sampler = stream.rekeyed(SplitKey + uint64_t(b));
-        share_split(ctx, s, bsdf, wi_s, ns, classes, splits, b, strata, valid, le_y, sc, pending, counters);
+        share_split(ctx, s, bsdf, wi_s, ns, classes, splits, b, emitter, event, valid, le_y, sc, pending, counters);
     }
     s.sampler = stream;
     s.st.sharing += ns;

@@ -98,12 +98,26 @@ MvSplatTerms split_terms(const MvPendingSamples &pending, const MvPendingSamples
 }
 
 /// The terms of one split of a shared vertex: a delta lobe's bounce serves its view only, so it
-/// is left out of t.bounce and *delta says so.
-MvSplatTerms shared_split_terms(const MvPendingSamples &pending, const MvPendingSamples::Sample &rec, bool *delta) {
+/// is left out of t.bounce and *delta says so. A view's null event whose path stays invalid
+/// (§7, "Validity") leaves the split valid for the other views; *void_scale is then the factor
+/// to take off that view's light sample (0 otherwise).
+MvSplatTerms shared_split_terms(const MvPendingSamples &pending, const MvPendingSamples::Sample &rec, bool *delta,
+                                float *void_scale) {
     MvSplatTerms t = split_terms(pending, rec);
     *delta = t.bounce && rec.delta_view >= 0;
     t.bounce = t.bounce && !*delta;
+    *void_scale = 0.f;
+    if (!t.valid && rec.null_scale > 0.f) {
+        t.valid = true;
+        *void_scale = t.nee ? rec.null_scale : 0.f;
+    }
     return t;
+}
+
+/// The light sample of entry i, times `scale`, taken off `sum`.
+void take_light_sample(const MvPendingSamples &pending, const MvSplatTerms &t, uint32_t i, float scale, float *sum) {
+    const Spectrum l = pending.f_nee[i] * t.nee_weight * scale;
+    for (int c = 0; c < 3; ++c) sum[c] -= l[c];
 }
 
 double luminance(const Spectrum &s) { return (double(s[0]) + double(s[1]) + double(s[2])) / 3.0; }
@@ -135,9 +149,12 @@ void probe_shared_vertex(const MvPendingSamples &pending, const MvPendingSamples
     for (uint32_t b = 0; b < std::min(group[0].splits, uint32_t(PilotSplits)); ++b) {
         const MvPendingSamples::Sample &rec = group[b];
         bool delta;
-        const MvSplatTerms t = shared_split_terms(pending, rec, &delta);
+        float void_scale;
+        const MvSplatTerms t = shared_split_terms(pending, rec, &delta, &void_scale);
         Spectrum lw = mv_entry_value(t, pending.f_nee[rec.first], pending.f_bounce[rec.first], pending.w[i]);
         if (delta && t.valid && rec.delta_view == 0) lw += rec.delta_bounce * t.suffix * pending.w[i];
+        if (void_scale > 0.f && rec.delta_view == 0)
+            lw += pending.f_nee[rec.first] * t.nee_weight * (-void_scale * pending.w[i]);
         x.split[b] = luminance(lw);
     }
     pending.probe->samples.push_back(x);
@@ -154,10 +171,13 @@ void splat_shared_vertex(MvPendingSamples &pending, const MvPendingSamples::Samp
     for (uint32_t b = 0; b < group[0].splits; ++b) {
         const MvPendingSamples::Sample &rec = group[b];
         bool delta;
-        const MvSplatTerms t = shared_split_terms(pending, rec, &delta);
+        float void_scale;
+        const MvSplatTerms t = shared_split_terms(pending, rec, &delta, &void_scale);
         mv_sum_entries(t, pending.f_nee.data() + rec.first, pending.f_bounce.data() + rec.first, n, sum);
         if (delta && t.valid)
             for (int c = 0; c < 3; ++c) sum[rec.delta_view].v[c] += rec.delta_bounce[c] * t.suffix[c];
+        if (void_scale > 0.f)
+            take_light_sample(pending, t, rec.first + uint32_t(rec.delta_view), void_scale, sum[rec.delta_view].v);
     }
     const float *w = pending.w.data() + first;
     const int *slots = pending.slot.data() + first;

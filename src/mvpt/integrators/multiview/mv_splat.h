@@ -49,6 +49,9 @@ struct MvPendingSamples {
         uint64_t hash = 0; ///< the native sample's Sampler::sample_hash (for the splats' taps)
         SampleKey key = NoSample; ///< the native sample, for the report of dropped contributions
         float b_scale = 0.f;
+        /// For a delta view's null event: that view's own probability of a null event over the
+        /// probability that the bounce drew it for that view (the validity of §7).
+        float null_scale = 0.f;
         Spectrum nee_weight{0.f}, delta_bounce{0.f};
         Spectrum e{0.f}; ///< the native view's own radiance E
     };
