@@ -426,8 +426,9 @@ void queue_shares(const MvScratch &sc, size_t ns, size_t first, MvPendingSamples
 }
 
 /// Split b of a shared first vertex (§7, "Splitting"), from its own stream but for the numbers
-/// that choose its emitter and its bounce's kind and view (`emitter`, `event`): one emitter sample and one bounce for every sharing view,
-/// queued in `pending` until its suffix and shadow ray are traced. Per sharing view i the radiance is
+/// that choose its emitter and its bounce's kind and view (`emitter`, `event`): one emitter
+/// sample and one bounce for every sharing view, queued in `pending` until its suffix and
+/// shadow ray are traced. Per sharing view i the radiance is
 ///   L_i = f_i(wo_nee) * nee_weight + b_i * suffix,   b_i = f_i(wo) / p_mix(wo) (RR included);
 /// the first split's record also holds the views' entries and E.
 void share_split(const MvContext &ctx, NativeSample &s, const Bsdf &bsdf, const Vec3f *wi_s, size_t ns,
