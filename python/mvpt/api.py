@@ -132,9 +132,10 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     spp: samples per pixel (0: each sensor's sample_count); time: wall-clock budget in
     seconds (0: none; passes stop when the next would end past it, and it is not overrun by
     more than about half a second, except by path tracing's first pass; multi-view path
-    tracing cuts its first pass, as on Ctrl-C below, and when less than a pass is left thins
-    its last pass to what fits: stats["thinned_pass_share"] is the share of native samples it
-    took). The render runs natively with the GIL
+    tracing cuts its first pass, as on Ctrl-C below, thins the passes after it so that at
+    least three fit, and when less than a pass is left thins its last pass to what fits:
+    stats["thinned_passes"] counts the thinned passes, stats["thinned_shares"] sums the shares
+    of native samples they took, stats["thinned_pass_share"] is the last one's, if thinned to fit). The render runs natively with the GIL
     released; `progress(dict)` is called every `poll` seconds and once at the end, with
     the passes finished, fraction done, elapsed seconds and samples so far. Ctrl-C (or
     KeyboardInterrupt raised by `progress`) cancels within about half a second (path tracing
@@ -331,7 +332,8 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "between_passes_seconds": raw["between_passes_seconds"],
         "estimated_bytes": raw["estimated_bytes"],
         "passes": raw["passes"], "cut_pass_share": raw["cut_pass_share"],
-        "thinned_pass_share": raw["thinned_pass_share"], "resumed_from_pass": raw["first_pass"],
+        "thinned_pass_share": raw["thinned_pass_share"], "thinned_passes": raw["thinned_passes"],
+        "thinned_shares": raw["thinned_shares"], "resumed_from_pass": raw["first_pass"],
         "cancelled": bool(raw["cancelled"]), "threads": raw["threads"],
         "samples": raw["samples"], "samples_per_second": rate(raw["samples"]),
         "rays": {"camera": raw["camera_rays"], "intersect": raw["rays"], "shadow": raw["shadow_rays"],

@@ -159,6 +159,8 @@ public:
         d["passes"] = s.passes;
         d["cut_pass_share"] = s.cut_pass_share;
         d["thinned_pass_share"] = s.thinned_pass_share;
+        d["thinned_passes"] = s.thinned_passes;
+        d["thinned_shares"] = s.thinned_shares;
         d["first_pass"] = s.first_pass;
         d["cancelled"] = s.cancelled;
         d["samples"] = s.samples;

@@ -37,17 +37,25 @@ constexpr uint64_t ThinKey = 0x7468696e; // "thin"
 constexpr uint64_t PilotKey = 0x70696c6f74; // "pilot"
 constexpr size_t PilotPixels = 8192, PilotShare = 8, MinPilotPixels = 16;
 constexpr int PilotTask = 32; ///< cells of one pilot task
-/// Under a time budget, the splits leave time for at least this many passes (as the pilot's
-/// pace predicts them, then the first pass's length): the two passes that are each other's
-/// control variate (§5) and one whose control variate comes from both (docs/performance.md,
-/// "Choosing the number of splits": 3 and 4 measured on four cases).
-constexpr double MinBudgetPasses = 3.0;
+/// Under a time budget a render runs at least this many passes where it can: the two passes
+/// that are each other's control variate (§5) and one whose control variate comes from both
+/// (docs/performance.md, "Choosing the number of splits": 3 and 4 measured on four cases).
+/// The first is whole; later ones are thinned to the share that lets them fit ("Passes thinned
+/// to the budget"), and the splits are chosen so that this share is at least MinPassShare.
+constexpr double MinBudgetPasses = 3.0, MinPassShare = 0.25;
 /// A pass thinned to share q lasts about (ThinOverhead + q) times a whole pass (its sampling and
 /// splatting shrink with q, the fold and the tiles' fixed costs do not; 32 views of 96^2, two
 /// threads: 0.14 at q = 0.1, 0.35 at 0.25, 0.5-0.6 at 0.5, 0.82 at 0.75). Under a time budget,
-/// the next pass is whole if it fits with ThinSlack of a pass to spare (a pass that overruns
-/// the budget is dropped), else thinned to the q that does, if q >= MinThinShare.
+/// the passes still wanted are whole if they fit with ThinSlack of a pass to spare (a pass
+/// that overruns the budget is dropped), else thinned to the q that does, if q >= MinThinShare.
 constexpr double ThinOverhead = 0.05, ThinSlack = 0.1, MinThinShare = 0.1;
+
+/// The whole passes' time that the passes a render still wants under a time budget need at the
+/// least, `done` passes done: the first whole, the others of MinPassShare.
+double budget_passes(int done) {
+    const double thinned = MinBudgetPasses - std::max(done, 1);
+    return (done == 0 ? 1.0 : 0.0) + std::max(thinned, 0.0) * (MinPassShare + ThinOverhead) + ThinSlack;
+}
 
 /// Per-thread state of the pass loop.
 struct MvThreadState {
@@ -86,8 +94,7 @@ MultiviewSettings multiview_settings(const Scene &scene) {
 /// is dropped, except the first, whose regions come in a random order: the regions it
 /// finished are kept, scaled by the inverse of their share (docs/multiview-path-tracing.md,
 /// "A first pass cut short"). Later passes take the regions in scan order; under a time budget
-/// that leaves less than a pass, the last one is thinned to what fits ("A last pass thinned to
-/// the budget").
+/// they are thinned to what fits where whole ones do not ("Passes thinned to the budget").
 class Renderer::MultiviewPasses final : public PassSchedule {
 public:
     /// Prepares the method and `r`'s accumulators, and reads the state a render resumes from.
@@ -106,6 +113,9 @@ public:
     uint64_t kept(const ChunksDone &done) const override;
     bool abandon(const ChunksDone &done) override;
     void end_step() override;
+    double whole_pass_seconds(double seconds) const override {
+        return m_share < 1.0 ? seconds / (ThinOverhead + m_share) : seconds;
+    }
     double fraction(uint64_t samples) const override;
     double fraction_after(int pass) const override;
     void save(int next_pass, double elapsed, double last_pass) override;
@@ -117,14 +127,21 @@ private:
     /// The work of each tile of the pass, in native samples weighed by the tile's cost per
     /// sample in the last pass (what sizes the chunks: run_in_chunks).
     std::vector<double> tile_work() const;
-    /// Whether a thinned pass takes native sample `index` of pixel (px, py) of view `slot`.
-    bool thin_takes(int slot, int px, int py, uint32_t index) const;
+    /// Whether a thinned pass takes the j-th of the native samples its map gives pixel (px, py) of
+    /// view `slot` (a function of the pass, not of the sample's index: the samples taken are
+    /// numbered on from the pixel's next one, so that no index is taken twice).
+    bool thin_takes(int slot, int px, int py, uint32_t j) const;
+    /// The native samples a thinned pass takes of the n its map gives pixel (px, py) of `slot`.
+    uint32_t thin_count(int slot, int px, int py, uint32_t n) const {
+        uint32_t k = 0;
+        for (uint32_t j = 0; j < n; ++j) k += thin_takes(slot, px, py, j);
+        return k;
+    }
     /// fold_pass counted every native sample of each pixel's map: for the crop-window pixels of
-    /// tiles [begin, end), subtracts those `skipped(slot, n, first, px, py)` says were not taken of
-    /// the pixel's n, numbered from `first`, at (px, py) in full-film coordinates. The pixels' next
-    /// samples stay numbered on from the last one taken.
+    /// tiles [begin, end), subtracts those `skipped(slot, n, px, py)` says were not taken of the
+    /// pixel's n, at (px, py) in full-film coordinates.
     template <class Skipped> void uncount(size_t begin, const Skipped &skipped);
-    /// After a whole pass: the native-sample maps of the next (§8), on their schedule.
+    /// After a pass (not a thinned last one): the native-sample maps of the next (§8), on their schedule.
     void update_maps();
     /// Whether the maps may be made after pass `pass` (update_maps: its schedule aside).
     bool maps_after(int pass) const { return m_adaptive && pass + 1 >= std::max(2, m_cfg.adaptive_warmup); }
@@ -186,14 +203,15 @@ private:
     // The current pass and its native samples (of the crop windows).
     int m_pass = 0;
     uint64_t m_pass_samples = 0;
-    /// The share of its native samples the pass takes (below 1: a thinned last pass), and those
-    /// of the crop windows it took.
+    /// The share of its native samples the pass takes (below 1: a thinned pass), and those of the
+    /// crop windows it took.
     double m_share = 1.0;
+    bool m_last_thinned = false; ///< the thinned pass is the render's last
     std::atomic<uint64_t> m_thin_taken{0};
     /// Each tile's seconds and native samples in the last pass (scan order; empty before), by
     /// which the next pass's chunks are sized.
     std::vector<std::pair<float, uint32_t>> m_tile_cost;
-    bool m_thinned = false; ///< a thinned pass ended the render
+    bool m_thinned = false; ///< a thinned last pass ended the render
     /// Splits chosen per render under a time budget (m_pass_unit > 0): chosen again after the
     /// first pass from the pilot's statistics and the seconds of a pass per unit of model cost
     /// its pace gave.
@@ -300,13 +318,13 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
     const double budget = m_r.m_opts.time_budget;
     if (!(budget > 0.0) || m_range || !(st.c1 > 0.0) || taken.load() == 0) return choose_splits(st);
     // Under a time budget, a pass of B splits lasts about the pilot's time per unit of model
-    // cost times its own cost, and the splits leave time for MinBudgetPasses passes; budgets make
-    // renders depend on time anyway, so the choice may too.
+    // cost times its own cost, and the splits leave time for MinBudgetPasses passes, the later
+    // ones thinned (budget_passes); budgets make renders depend on time anyway, so the choice may too.
     double pass_samples = 0.0;
     for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
     m_pass_unit = pass_samples * seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
     m_pilot = st;
-    return choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, budget, MinBudgetPasses));
+    return choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, budget, budget_passes(0)));
 }
 
 double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double last_pass) {
@@ -314,7 +332,7 @@ double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double l
     // fold between passes) is a part of a native sample's cost that no split changes.
     const SplitStatistics &st = m_pilot;
     const double c0 = std::max(st.c0, last_pass / m_pass_unit - m_cfg.splits * st.c1);
-    const int b = choose_splits(st, splits_fitting(st, c0, m_pass_unit, fit * last_pass, MinBudgetPasses - pass));
+    const int b = choose_splits(st, splits_fitting(st, c0, m_pass_unit, fit * last_pass, budget_passes(pass)));
     const double longer = (c0 + b * st.c1) / (c0 + m_cfg.splits * st.c1);
     m_cfg.splits = m_r.m_mv.cfg.splits = m_r.m_stats.splits = b;
     return fit / longer;
@@ -327,21 +345,26 @@ bool Renderer::MultiviewPasses::done(int pass) const {
 }
 
 int Renderer::MultiviewPasses::step_end(int pass, double fit, double last_pass) {
-    m_share = 1.0;
+    m_share = 1.0, m_last_thinned = false;
     if (m_pass_unit > 0.0 && pass == m_r.m_first_pass + 1 && fit > 0.0 && std::isfinite(fit))
         fit = rechoose_splits(pass, fit, last_pass);
-    const double forced = m_r.m_opts.thin_last_pass; // tests: the last pass of a range
-    if (forced < 1.0 && m_range && pass + 1 == m_r.m_opts.pass_count) {
-        m_share = forced;
+    const RenderOptions &o = m_r.m_opts; // tests: the last passes of a range thinned
+    if (o.thin_last_pass < 1.0 && m_range && pass + o.thin_passes >= o.pass_count && (pass > 0 || o.pass_count == 1)) {
+        m_share = o.thin_last_pass, m_last_thinned = pass + 1 == o.pass_count;
         return pass + 1;
     }
     // The first pass is cut rather than thinned, and a range's passes are whole.
-    if (pass == 0 || m_range || fit >= 1.0 + ThinOverhead + ThinSlack) return fit >= 1.0 ? pass + 1 : pass;
-    // Less than a pass fits with time to spare: a last pass thinned to what does ("A last pass
+    if (pass == 0 || m_range || !std::isfinite(fit)) return fit >= 1.0 ? pass + 1 : pass;
+    // The passes still wanted (at least the next) each whole if they fit with time to spare,
+    // else thinned to what does; if that is too thin, a last pass thinned to what fits ("Passes
     // thinned to the budget").
-    const double q = fit - ThinOverhead - ThinSlack;
+    const int wanted = std::max(1, int(MinBudgetPasses) - pass);
+    double q = (fit - ThinSlack) / wanted - ThinOverhead;
+    if (q >= 1.0) return pass + 1;
+    m_last_thinned = !(q >= MinThinShare) || wanted == 1;
+    if (m_last_thinned) q = fit - ThinOverhead - ThinSlack;
     if (!(q >= MinThinShare)) return pass; // (also when fit is not a number)
-    m_share = q;
+    m_share = std::min(q, 1.0);
     return pass + 1;
 }
 
@@ -380,9 +403,10 @@ std::vector<double> Renderer::MultiviewPasses::tile_work() const {
     return work;
 }
 
-bool Renderer::MultiviewPasses::thin_takes(int slot, int px, int py, uint32_t index) const {
+bool Renderer::MultiviewPasses::thin_takes(int slot, int px, int py, uint32_t j) const {
     const MvContext &mv = m_r.m_mv;
-    const uint64_t h = hash_ints(mv.seeds[size_t(slot)], mv.views[size_t(slot)].scene_index, px, py, index, ThinKey);
+    const uint64_t h =
+        hash_ints(mv.seeds[size_t(slot)], mv.views[size_t(slot)].scene_index, px, py, uint32_t(m_pass), j, ThinKey);
     return double(bits_to_unit_float(uint32_t(h))) < m_share;
 }
 
@@ -412,11 +436,10 @@ uint64_t Renderer::MultiviewPasses::render_tile(MvThreadState &ts, const Tile &t
             const uint32_t first = inside ? m_sample0 + mf.native[size_t(cy) * size_t(mf.width) + size_t(cx)]
                                           : m_margin0 + uint32_t(m_pass);
             const uint16_t n = mf.map[size_t(y) * size_t(w.width()) + size_t(x)];
-            for (uint32_t j = 0; j < n; ++j) {
-                if (thin && !thin_takes(tile.view_slot, x + w.x0, y + w.y0, first + j)) continue;
-                prim.push(x + w.x0, y + w.y0, first + j);
-                taken += inside;
-            }
+            uint32_t k = 0;
+            for (uint32_t j = 0; j < n; ++j)
+                if (!thin || thin_takes(tile.view_slot, x + w.x0, y + w.y0, j)) prim.push(x + w.x0, y + w.y0, first + k++);
+            if (inside) taken += k;
         }
     if (thin) m_thin_taken += taken;
     // The tile's camera rays as one stream, then each native sample, their suffixes traced as
@@ -453,9 +476,7 @@ template <class Skipped> void Renderer::MultiviewPasses::uncount(size_t begin, c
         for (int y = c.y0; y < c.y1; ++y)
             for (int x = c.x0; x < c.x1; ++x) {
                 const size_t p = size_t(y) * size_t(mf.width) + size_t(x);
-                const uint32_t n = mf.n(p);
-                mf.native[p] -= skipped(tile.view_slot, n, m_sample0 + mf.native[p] - n, x + w.margin + w.x0,
-                                        y + w.margin + w.y0);
+                mf.native[p] -= skipped(tile.view_slot, uint32_t(mf.n(p)), x + w.margin + w.x0, y + w.margin + w.y0);
             }
     });
 }
@@ -474,7 +495,7 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
     arena().execute([&] {
         fold_pass(1.0 / share);
         // The pixels of the regions not rendered took no native sample (fold counted one).
-        uncount(done.prefix, [](int, uint32_t, uint32_t, int, int) { return 1u; });
+        uncount(done.prefix, [](int, uint32_t, int, int) { return 1u; });
     });
     m_r.m_native_done += double(kept(done)) / double(m_pixels_total);
     m_r.m_stats.cut_pass_share = share;
@@ -484,18 +505,16 @@ bool Renderer::MultiviewPasses::abandon(const ChunksDone &done) {
 void Renderer::MultiviewPasses::end_step() {
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
-    if (m_share < 1.0) { // a thinned pass, the last: its sums scaled by 1/q, weighing q (film.h)
+    if (m_share < 1.0) { // a thinned pass: its sums scaled by 1/q, weighing q (film.h)
         arena().execute([&] {
             fold_pass(1.0 / m_share, m_share);
-            uncount(0, [&](int slot, uint32_t n, uint32_t first, int px, int py) {
-                uint32_t skipped = 0;
-                for (uint32_t j = 0; j < n; ++j) skipped += !thin_takes(slot, px, py, first + j);
-                return skipped;
-            });
+            uncount(0, [&](int slot, uint32_t n, int px, int py) { return n - thin_count(slot, px, py, n); });
         });
         m_r.m_native_done += double(m_thin_taken.load()) / double(m_pixels_total);
-        m_r.m_stats.thinned_pass_share = m_share;
-        m_thinned = true;
+        RenderStats &st = m_r.m_stats;
+        ++st.thinned_passes, st.thinned_shares += m_share;
+        if (m_last_thinned) st.thinned_pass_share = m_share, m_thinned = true;
+        else update_maps();
     } else {
         // The films' first pass is held for the second's fold (§5, "The first two passes"),
         // unless a map made from it would draw the second's samples (a range from a later pass).

@@ -50,9 +50,10 @@ void Renderer::run_passes(PassSchedule &schedule, const std::atomic<bool> &cance
             break;
         }
         schedule.end_step();
-        last_pass = (seconds() - t_step) / double(end - pass);
+        const double step_pass = (seconds() - t_step) / double(end - pass);
+        last_pass = schedule.whole_pass_seconds(step_pass);
         for (int q = pass; q < end; ++q) {
-            m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, last_pass);
+            m_stats.max_pass_seconds = std::max(m_stats.max_pass_seconds, step_pass);
             m_stats.passes = q + 1;
             report_progress(progress, q + 1, seconds(), m_stats.samples, schedule.fraction_after(q));
         }

@@ -32,8 +32,9 @@ public:
     /// Whether the sample target is reached before `pass`.
     virtual bool done(int pass) const = 0;
     /// The end of the step that starts at `pass` (it renders passes [pass, end)), given how
-    /// many passes still fit in the time budget (`fit`: infinite without a budget, below 1 or
-    /// not a number when none fits) and the seconds of the last pass; `pass` ends the render.
+    /// many whole passes still fit in the time budget (`fit`: infinite without a budget, below 1
+    /// or not a number when none fits) and the seconds of a whole pass as the last pass measured
+    /// them (whole_pass_seconds); `pass` ends the render.
     virtual int step_end(int pass, double fit, double last_pass) = 0;
     /// Starts step [pass, end): its tiles.
     virtual StepTiles begin_step(int pass, int end) = 0;
@@ -55,6 +56,9 @@ public:
     virtual bool abandon(const ChunksDone &) { return false; }
     /// After a step finished (the work between passes).
     virtual void end_step() {}
+    /// The seconds a whole pass would have lasted, from those of the step's last pass (a method
+    /// that thins its passes scales them up; what `fit` and `last_pass` count in).
+    virtual double whole_pass_seconds(double seconds) const { return seconds; }
     /// The share of the sample target reached after `samples` of the step's samples, and
     /// after pass `pass`.
     virtual double fraction(uint64_t samples) const = 0;

@@ -57,10 +57,11 @@ struct RenderOptions {
     /// pixel's native samples from first_pass times the most it takes in a pass). Ranges that do
     /// not overlap take disjoint samples, and their states merge (Renderer::merge).
     int first_pass = 0, pass_count = 0;
-    /// Multi-view path tracing, for tests: below 1, the last pass of a range (pass_count) is
-    /// thinned to this share, as a time budget thins a last pass (docs/multiview-path-tracing.md,
-    /// "A last pass thinned to the budget").
+    /// Multi-view path tracing, for tests: below 1, the last `thin_passes` passes of a range
+    /// (pass_count; never its first) are thinned to this share, as a time budget thins passes
+    /// (docs/multiview-path-tracing.md, "Passes thinned to the budget").
     double thin_last_pass = 1.0;
+    int thin_passes = 1;
     /// Multi-view: the splits of the shared vertex instead of the scene's `mvpath` setting (-1:
     /// the scene's; 0: chosen per render; 1-64).
     int splits = -1;
@@ -104,6 +105,10 @@ struct RenderStats {
     /// Multi-view path tracing: when its last pass was thinned to fit the time budget, the share
     /// q of the native samples it took (its sums scaled by 1/q, weighing q); else 0.
     double thinned_pass_share = 0.0;
+    /// Multi-view path tracing under a time budget: the passes thinned to fit it (the last
+    /// included) and the sum of their shares.
+    int thinned_passes = 0;
+    double thinned_shares = 0.0;
     /// The pass a resumed render started from (0: not resumed).
     int first_pass = 0;
     bool cancelled = false;

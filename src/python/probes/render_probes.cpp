@@ -52,14 +52,17 @@ nb::list render_cut_first_pass(const std::string &xml, const std::vector<uint32_
 }
 
 /// For each seed: the images of every view of a multi-view render of `passes` passes whose last
-/// is thinned to `share` of its native samples, and the render's native samples per view.
-nb::list render_thinned_last_pass(const std::string &xml, const std::vector<uint32_t> &seeds, int passes, double share) {
+/// `thinned` are thinned to `share` of their native samples, the render's native samples per view
+/// and the share of the last pass.
+nb::list render_thinned_last_pass(const std::string &xml, const std::vector<uint32_t> &seeds, int passes, double share,
+                                  int thinned) {
     std::unique_ptr<Scene> scene = mvpt_py::scene_errors_as_value_errors([&] { return load_scene_string(xml, "."); });
     nb::list out;
     for (uint32_t seed : seeds) {
         RenderOptions o;
         o.method = RenderMethod::MultiView;
         o.pass_count = passes, o.seed = seed, o.threads = 1, o.thin_last_pass = share;
+        o.thin_passes = thinned;
         Renderer r(*scene, o);
         std::atomic<bool> cancel{false};
         {
@@ -82,5 +85,6 @@ nb::list render_thinned_last_pass(const std::string &xml, const std::vector<uint
 
 void bind_render_probes(nb::module_ &m) {
     m.def("render_cut_first_pass", &render_cut_first_pass, "xml"_a, "seeds"_a, "threads"_a);
-    m.def("render_thinned_last_pass", &render_thinned_last_pass, "xml"_a, "seeds"_a, "passes"_a, "share"_a);
+    m.def("render_thinned_last_pass", &render_thinned_last_pass, "xml"_a, "seeds"_a, "passes"_a, "share"_a,
+          "thinned"_a = 1);
 }
