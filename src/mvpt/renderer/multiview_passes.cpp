@@ -113,9 +113,9 @@ public:
     uint64_t kept(const ChunksDone &done) const override;
     bool abandon(const ChunksDone &done) override;
     void end_step() override;
-    double whole_pass_seconds(double seconds) const override {
-        return m_share < 1.0 ? seconds / (ThinOverhead + m_share) : seconds;
-    }
+    /// A whole pass of the next pass's maps (made at the end of the step: the adaptive maps'
+    /// first takes more native samples than the passes before it).
+    double whole_pass_seconds(double seconds) const override;
     double fraction(uint64_t samples) const override;
     double fraction_after(int pass) const override;
     void save(int next_pass, double elapsed, double last_pass) override;
@@ -124,9 +124,9 @@ public:
 
 private:
     uint64_t render_tile(MvThreadState &ts, const Tile &tile);
-    /// The work of each tile of the pass, in native samples weighed by the tile's cost per
-    /// sample in the last pass (what sizes the chunks: run_in_chunks).
-    std::vector<double> tile_work() const;
+    /// The work of each tile of a pass of share `share`, in native samples weighed by the tile's
+    /// cost per sample in the last pass over the mean (what sizes the chunks: run_in_chunks).
+    std::vector<double> tile_work(double share) const;
     /// Whether a thinned pass takes the j-th of the native samples its map gives pixel (px, py) of
     /// view `slot` (a function of the pass, not of the sample's index: the samples taken are
     /// numbered on from the pixel's next one, so that no index is taken twice).
@@ -375,12 +375,12 @@ StepTiles Renderer::MultiviewPasses::begin_step(int pass, int) {
     for (const Film &mf : m_r.m_films) m_pass_samples += mf.map_total;
     m_thin_taken = 0;
     StepTiles step;
-    for (double work : tile_work()) step.add(work);
+    for (double work : tile_work(m_share)) step.add(work);
     m_tile_cost.assign(m_random_order ? 0 : m_tiles.size(), {0.f, 0u});
     return step;
 }
 
-std::vector<double> Renderer::MultiviewPasses::tile_work() const {
+std::vector<double> Renderer::MultiviewPasses::tile_work(double share) const {
     // Each tile's native samples (the adaptive maps make them unequal), counted in parallel,
     // times its cost per native sample in the last pass over the mean (regions differ).
     double seconds = 0.0, last = 0.0;
@@ -397,7 +397,7 @@ std::vector<double> Renderer::MultiviewPasses::tile_work() const {
             for (int x = tile.x0; x < tile.x1; ++x) n += mf.map[size_t(y) * width + size_t(x)];
         const auto [s, last_n] = mean > 0.0 ? m_tile_cost[t] : std::pair<float, uint32_t>{};
         const double cost = last_n > 0 ? std::clamp(double(s) / last_n / mean, 0.1, 10.0) : 1.0;
-        work[t] = m_share * double(n) * cost;
+        work[t] = share * double(n) * cost;
     };
     arena().execute([&] { tbb::parallel_for(size_t(0), m_tiles.size(), tile); });
     return work;
@@ -408,6 +408,22 @@ bool Renderer::MultiviewPasses::thin_takes(int slot, int px, int py, uint32_t j)
     const uint64_t h =
         hash_ints(mv.seeds[size_t(slot)], mv.views[size_t(slot)].scene_index, px, py, uint32_t(m_pass), j, ThinKey);
     return double(bits_to_unit_float(uint32_t(h))) < m_share;
+}
+
+double Renderer::MultiviewPasses::whole_pass_seconds(double seconds) const {
+    // The last pass whole, then scaled by the next's work over its own: its native samples, each
+    // tile's at its cost per sample in the last pass where the last pass ran in scan order.
+    const double whole = m_share < 1.0 ? seconds / (ThinOverhead + m_share) : seconds;
+    double next = 0.0, last = 0.0;
+    if (!m_tile_cost.empty()) {
+        for (double w : tile_work(1.0)) next += w;
+        for (const auto &[s, n] : m_tile_cost) last += double(n);
+        last /= m_share;
+    } else {
+        for (const Film &mf : m_r.m_films) next += double(mf.map_total);
+        last = double(m_pass_samples);
+    }
+    return next > 0.0 && last > 0.0 ? whole * next / last : whole;
 }
 
 uint64_t Renderer::MultiviewPasses::render(size_t t) {
