@@ -215,9 +215,10 @@ private:
     void update_native_maps(int passes, double per_pixel);
 
     // State files (renderer_state.cpp).
-    /// The state file at a pass boundary: the next pass, the elapsed seconds, the last pass's
-    /// seconds (what a time budget expects of the next), the ray counters so far and, for
-    /// multi-view path tracing, its statistics and dropped contributions by slot.
+    /// The state file at a pass boundary: the next pass, the elapsed seconds, a whole pass's
+    /// seconds (what a time budget expects of the next: PassSchedule::whole_pass_seconds), the
+    /// ray counters so far and, for multi-view path tracing, its statistics and dropped
+    /// contributions by slot.
     void write_state(int next_pass, double elapsed, double last_pass, const RayCounters &counters,
                      const std::vector<MvViewStats> &mv_stats = {}, const std::vector<uint64_t> &mv_dropped = {}) const;
     /// Loads the state file at `path` into the accumulators (made for this render).
