@@ -206,12 +206,12 @@ private:
     /// The share of its native samples the pass takes (below 1: a thinned pass), and those of the
     /// crop windows it took.
     double m_share = 1.0;
-    bool m_last_thinned = false; ///< the thinned pass is the render's last
+    /// The thinned pass is the render's last (after it ran, done() says so).
+    bool m_last_thinned = false;
     std::atomic<uint64_t> m_thin_taken{0};
     /// Each tile's seconds and native samples in the last pass (scan order; empty before), by
     /// which the next pass's chunks are sized.
     std::vector<std::pair<float, uint32_t>> m_tile_cost;
-    bool m_thinned = false; ///< a thinned last pass ended the render
     /// Splits chosen per render under a time budget (m_pass_unit > 0): chosen again after the
     /// first pass from the pilot's statistics and the seconds of a pass per unit of model cost
     /// its pace gave.
@@ -339,7 +339,7 @@ double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double l
 }
 
 bool Renderer::MultiviewPasses::done(int pass) const {
-    if (m_thinned) return true;
+    if (m_last_thinned) return true;
     if (m_range) return pass >= m_r.m_opts.pass_count;
     return !m_unbounded && !(m_r.m_native_done < double(m_spp_target) - 1e-6);
 }
@@ -364,7 +364,7 @@ int Renderer::MultiviewPasses::step_end(int pass, double fit, double last_pass) 
     m_last_thinned = !(q >= MinThinShare) || wanted == 1;
     if (m_last_thinned) q = fit - ThinOverhead - ThinSlack;
     if (!(q >= MinThinShare)) return pass; // (also when fit is not a number)
-    m_share = std::min(q, 1.0);
+    m_share = q;
     return pass + 1;
 }
 
@@ -529,7 +529,7 @@ void Renderer::MultiviewPasses::end_step() {
         m_r.m_native_done += double(m_thin_taken.load()) / double(m_pixels_total);
         RenderStats &st = m_r.m_stats;
         ++st.thinned_passes, st.thinned_shares += m_share;
-        if (m_last_thinned) st.thinned_pass_share = m_share, m_thinned = true;
+        if (m_last_thinned) st.thinned_pass_share = m_share;
         else update_maps();
     } else {
         // The films' first pass is held for the second's fold (§5, "The first two passes"),
