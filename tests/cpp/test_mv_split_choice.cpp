@@ -60,7 +60,7 @@ TEST(MvSplitChoice, StatisticsSeparateTheVarianceOfYFromThatOfTheSplits) {
 TEST(MvSplitChoice, ChoiceMinimisesVarianceTimesCost) {
     // (1 + 16 / B)(1 + B) is least at B = 4 (25), and 3 is within 5 % of it (25.3), 2 not (27).
     EXPECT_EQ(choose_splits({1.0, 16.0, 1.0, 1.0, 100}), 3);
-    // (1 + 100 / B)(1 + B) up to 8: least at 8 (121.5), 5 within 5 % of it (126), 4 not (130).
+    // (1 + 100 / B)(1 + B): least at 10 (121), 5 within 5 % of it (126), 4 not (130).
     EXPECT_EQ(choose_splits({1.0, 100.0, 1.0, 1.0, 100}), 5);
     // Splitting removes nothing: one split; it removes all: the most.
     EXPECT_EQ(choose_splits({1.0, 0.0, 1.0, 1.0, 100}), 1);

@@ -239,6 +239,35 @@ TEST(SplatFilm, FootprintSpreadsWithTheFilterDensity) {
     }
 }
 
+TEST(SplatFilm, MeanWritesCountsTheEntriesAFootprintAddsTo) {
+    // SplatFootprint::mean_writes, a part of the cost model of the splits' choice, is the mean
+    // number of pixels a contribution at a uniform position in a pixel adds to (its taps of
+    // weight TapThreshold or more, and the small ones Russian roulette keeps), away from the
+    // crop window's edges.
+    constexpr int Samples = 20000;
+    for (const char *type : {"box", "tent", "gaussian", "mitchell", "lanczos"}) {
+        auto filter = make_filter(type);
+        MvPassFilm film({SplatFootprint::of(0, 0, 48, 48, *filter, Sampler::dimension_key(5))}, false);
+        SplatCache cache(film);
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<float> u(0.f, 1.f);
+        double writes = 0.0, squares = 0.0;
+        for (uint64_t sample = 0; sample < Samples; ++sample) {
+            const Vec2f x(20.f + u(rng), 20.f + u(rng));
+            ASSERT_TRUE(cache.add(0, 20 * 48 + 20, x, mix_bits(sample), Spectrum(1.f), 1.f));
+            cache.flush();
+            int n = 0;
+            for (uint32_t k = 0; k < film.size(); ++k) n += film.take(k).w != 0;
+            writes += n, squares += double(n) * n;
+        }
+        const double mean = writes / Samples, sd = std::sqrt(squares / Samples - mean * mean);
+        const double expected = film.footprint(0).mean_writes();
+        if (std::string(type) == "box") EXPECT_EQ(expected, 1.0);
+        // Five standard errors, and 1/2 % for the grid of positions mean_writes averages over.
+        EXPECT_NEAR(mean, expected, 5.0 * sd / std::sqrt(double(Samples)) + 0.005 * expected) << type;
+    }
+}
+
 TEST(SplatFilm, FilterSamplesAreDistributedAndWeightedByTheFilter) {
     // sample() draws offsets with density |h| / ∫|h| per axis (h = eval_1d) and weights them by
     // h / p: a histogram of the offsets matches that density, and the weighted histogram

@@ -301,7 +301,7 @@ def test_render_splits_option():
     s = mvpt.load_string(scene(views(3, res=16, spp=2)))
     assert mvpt.render(s, method="mvpt", splits=3).stats["splits"] == 3
     auto = mvpt.render(s, method="mvpt", splits="auto").stats
-    assert 1 <= auto["splits"] <= 8 and auto["split_pilot"]["r"] > 0.0
+    assert 1 <= auto["splits"] <= 16 and auto["split_pilot"]["r"] > 0.0
     assert auto["settings"]["splits"] == "auto"
     assert "split_pilot" in mvpt.render(s, method="mvpt").stats  # the scene's: the default, auto
     assert "split_pilot" not in mvpt.render(s, method="mvpt", splits=2).stats

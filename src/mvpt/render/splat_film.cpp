@@ -108,28 +108,53 @@ inline int floor_int(float v) {
     const int i = int(v);
     return i - (float(i) > v);
 }
+
+constexpr int MaxTaps = 2 * SplatFootprint::MaxRadius;
+
+/// The pixels i in [lo, hi) of one axis whose centre i + 1/2 lies within the radius of x, and
+/// their weights h(x - i - 1/2) into w (the same operations as ReconstructionFilter::eval_1d):
+/// how many, the first into `first`. (Inlined into each instruction set's add_footprint.)
+[[gnu::always_inline]] inline int footprint_taps(const SplatFootprint &f, float x, int lo, int hi, float *w,
+                                                 int *first) {
+    const int i0 = std::max(lo, floor_int(x - 0.5f - f.radius) + 1);
+    const int i1 = std::min(hi - 1, -floor_int(-(x - 0.5f + f.radius)) - 1); // ceil - 1
+    int n = 0;
+    for (int i = i0; i <= i1 && n < MaxTaps; ++i) {
+        const float t = (x - (float(i) + 0.5f) + f.radius) * f.table_scale;
+        w[n++] = t >= 0.f && t < float(f.table_size) ? f.table[size_t(t)] : 0.f;
+    }
+    *first = i0;
+    return n;
+}
 } // namespace
 
-MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e) {
-    // Pixels i of the crop window whose centre i + 1/2 lies within the radius of x, per axis,
-    // weighted by the tabulated filter h (the same operations as ReconstructionFilter::eval_1d).
-    const SplatFootprint &f = m_film->footprint(slot);
-    constexpr int MaxTaps = 2 * SplatFootprint::MaxRadius;
-    float wx[MaxTaps], wy[MaxTaps];
-    auto taps = [&](float x, int lo, int hi, float *w, int *first) {
-        const int i0 = std::max(lo, floor_int(x - 0.5f - f.radius) + 1);
-        const int i1 = std::min(hi - 1, -floor_int(-(x - 0.5f + f.radius)) - 1); // ceil - 1
-        int n = 0;
-        for (int i = i0; i <= i1 && n < MaxTaps; ++i) {
-            const float t = (x - (float(i) + 0.5f) + f.radius) * f.table_scale;
-            w[n++] = t >= 0.f && t < float(f.table_size) ? f.table[size_t(t)] : 0.f;
+double SplatFootprint::mean_writes() const {
+    if (is_box()) return 1.0;
+    // Over a 16 x 16 grid of positions in a pixel away from the window's edges: every tap of weight
+    // TapThreshold or more, a smaller one with probability |h| / TapThreshold.
+    constexpr int Grid = 16;
+    constexpr int Far = 1 << 20;
+    double sum = 0.0;
+    for (int gy = 0; gy < Grid; ++gy)
+        for (int gx = 0; gx < Grid; ++gx) {
+            float wx[MaxTaps], wy[MaxTaps];
+            int first;
+            const int nx = footprint_taps(*this, (float(gx) + 0.5f) / Grid, -Far, Far, wx, &first);
+            const int ny = footprint_taps(*this, (float(gy) + 0.5f) / Grid, -Far, Far, wy, &first);
+            for (int j = 0; j < ny; ++j)
+                for (int i = 0; i < nx; ++i)
+                    sum += std::min(1.0, double(std::abs(wx[i] * wy[j])) / double(SplatCache::TapThreshold));
         }
-        *first = i0;
-        return n;
-    };
+    return sum / double(Grid * Grid);
+}
+
+MVPT_MULTI_ISA void SplatCache::add_footprint(int slot, Vec2f film, uint64_t sample, const float v[4], const float *e) {
+    // Per axis, the pixels of the crop window within the filter's radius and their weights.
+    const SplatFootprint &f = m_film->footprint(slot);
+    float wx[MaxTaps], wy[MaxTaps];
     int x0, y0;
-    const int nx = taps(film.x, f.crop_x, f.crop_x + f.width, wx, &x0);
-    const int ny = taps(film.y, f.crop_y, f.crop_y + f.height, wy, &y0);
+    const int nx = footprint_taps(f, film.x, f.crop_x, f.crop_x + f.width, wx, &x0);
+    const int ny = footprint_taps(f, film.y, f.crop_y, f.crop_y + f.height, wy, &y0);
     const int hx = floor_int(film.x) - x0, hy = floor_int(film.y) - y0; // the tap that holds x
     const int e_channels = m_e_rgb ? 3 : 1;
     // Small taps by systematic sampling: the running sum of |h| / TapThreshold over them, shifted

@@ -87,6 +87,9 @@ struct SplatFootprint {
     static SplatFootprint of(int crop_x, int crop_y, int width, int height, const ReconstructionFilter &filter,
                              uint64_t tap_key);
     bool is_box() const { return filter == nullptr; }
+    /// The splat cache entries a contribution adds to, on average over the positions in a pixel
+    /// (SplatCache::add_footprint; 1 for a box): a part of its cost.
+    double mean_writes() const;
     size_t pixels() const { return size_t(width) * size_t(height); }
 };
 

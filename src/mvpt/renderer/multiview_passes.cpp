@@ -313,7 +313,9 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
         });
     });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps);
+    double writes = 0.0;
+    for (const SplatFootprint &f : m_footprints) writes += f.mean_writes() / double(views);
+    const SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps, writes);
     m_r.m_stats.split_pilot = {st.a, st.r, st.c0, st.c1};
     const double budget = m_r.m_opts.time_budget;
     if (!(budget > 0.0) || m_range || !(st.c1 > 0.0) || taken.load() == 0) return choose_splits(st);
@@ -330,10 +332,10 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
 double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double last_pass) {
     // The pilot records rather than splats: what a pass spends beyond its pace (the splats, the
     // fold between passes) is a part of a native sample's cost that no split changes.
-    const SplitStatistics &st = m_pilot;
-    const double c0 = std::max(st.c0, last_pass / m_pass_unit - m_cfg.splits * st.c1);
-    const int b = choose_splits(st, splits_fitting(st, c0, m_pass_unit, fit * last_pass, budget_passes(pass)));
-    const double longer = (c0 + b * st.c1) / (c0 + m_cfg.splits * st.c1);
+    SplitStatistics st = m_pilot;
+    st.c0 = std::max(st.c0, last_pass / m_pass_unit - m_cfg.splits * st.c1);
+    const int b = choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, fit * last_pass, budget_passes(pass)));
+    const double longer = (st.c0 + b * st.c1) / (st.c0 + m_cfg.splits * st.c1);
     m_cfg.splits = m_r.m_mv.cfg.splits = m_r.m_stats.splits = b;
     return fit / longer;
 }

@@ -10,11 +10,12 @@ namespace mvpt {
 namespace {
 
 /// The model cost of a native sample, in path-traced samples (docs/performance.md, "Choosing
-/// the number of splits"): c0 = 1 + KappaShift (|S| - 1) for the camera ray, the shifts, the
-/// visibility, the sums D and the splats of a shared vertex, and c1 = SplitPath + KappaLobe |S|
+/// the number of splits"): c0 = 1 + (KappaShift + KappaWrite (w - 1)) (|S| - 1) for the camera
+/// ray, the shifts, the visibility, the sums D and the splats of a shared vertex (w: the splat
+/// cache entries a contribution adds to, 1 for a box filter), and c1 = SplitPath + KappaLobe |S|
 /// per split for its light sample, bounce and suffix and the lobes of every sharing view. A
 /// sample that no view shares costs one path: 1 + 0 B.
-constexpr double KappaShift = 0.04, SplitPath = 1.3, KappaLobe = 0.005;
+constexpr double KappaShift = 0.04, KappaWrite = 0.03, SplitPath = 1.3, KappaLobe = 0.005;
 /// choose_splits takes the fewest splits whose variance times cost is within this of the least.
 constexpr double SplitTolerance = 1.05;
 
@@ -49,14 +50,15 @@ std::pair<double, double> estimate(const MvPilotSample &s) {
 
 } // namespace
 
-SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps) {
+SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps, double writes) {
     SplitStatistics st;
+    const double per_view = KappaShift + KappaWrite * std::max(writes - 1.0, 0.0);
     uint64_t samples = 0;
     for (const MvSplitProbe &probe : probes) {
         const std::vector<MvPilotSample> s = merged(probe.samples);
         for (const MvPilotSample &x : s) {
             const double ns = x.sharing;
-            st.c0 += x.sharing ? 1.0 + KappaShift * (ns - 1.0) : 1.0;
+            st.c0 += x.sharing ? 1.0 + per_view * (ns - 1.0) : 1.0;
             st.c1 += x.sharing ? SplitPath + KappaLobe * ns : 0.0;
             ++samples;
         }

@@ -16,7 +16,7 @@ namespace mvpt {
 inline constexpr int PilotSplits = 8;
 /// The most splits a render chooses: beyond, the variance times cost changes by a few per cent
 /// on the scenes measured (docs/performance.md) while passes grow longer.
-inline constexpr int MaxChosenSplits = 8;
+inline constexpr int MaxChosenSplits = 16;
 
 /// What one native sample of the pilot brought to its own pixel (luminance, the mean of RGB):
 /// the part no split changes (native-only radiance E, medium vertices) and, per split b, the
@@ -44,8 +44,10 @@ struct SplitStatistics {
     uint64_t pixels = 0;
 };
 
-/// The pilot's statistics from the records of every view (pairs of samples at each pixel).
-SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps);
+/// The pilot's statistics from the records of every view (pairs of samples at each pixel);
+/// `writes`: the splat cache entries a contribution adds to, on average over the views
+/// (SplatFootprint::mean_writes).
+SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps, double writes = 1.0);
 
 /// The fewest splits in [1, min(most, MaxChosenSplits)] whose (a + r / B) (c0 + B c1), the
 /// variance of a pixel at equal time, is within 5 % of the least there; 1 without statistics.
