@@ -64,8 +64,9 @@ def split_spec(spec: str) -> tuple:
 
 def reference(scene_path: Path, rig, defines: dict, spp: int, threads: int, cache: Path) -> tuple:
     """Per-view reference images and the relMSE their own noise adds (from their variance)."""
-    key = hashlib.sha1(f"{scene_path.resolve()}|{rig}|{sorted(defines.items())}|{spp}|"
-                       f"{scene_path.stat().st_mtime_ns}".encode()).hexdigest()[:12]
+    # The scene file's bytes, not its time stamp: a fresh copy of the same scene keeps its reference.
+    key = hashlib.sha1(f"{scene_path.resolve()}|{rig}|{sorted(defines.items())}|{spp}|".encode()
+                       + hashlib.sha1(scene_path.read_bytes()).digest()).hexdigest()[:12]
     path = cache / f"ref_{scene_path.stem}_{key}.npz"
     if path.exists():
         data = np.load(path)

@@ -5,6 +5,7 @@ Used by `mvpt bench-equal-time scene.xml --time T [--methods pt,mvpt]
 [--reference R | --reference-spp N]`; report.py turns the result into an HTML page."""
 from __future__ import annotations
 
+import hashlib
 import inspect
 import json
 import os
@@ -143,7 +144,11 @@ def _render_command(cfg: BenchConfig, out: Path, method: str | None, spp: int = 
 
 
 def _reference_settings(cfg: BenchConfig) -> dict:
-    return {"scene": str(Path(cfg.scene).resolve()), "defines": {str(k): str(v) for k, v in cfg.defines.items()},
+    """What a saved reference must match to be reused: among them the scene file's bytes (an
+    edited scene renders its reference again; the files it refers to are not hashed)."""
+    scene = Path(cfg.scene)
+    return {"scene": str(scene.resolve()), "scene_sha1": hashlib.sha1(scene.read_bytes()).hexdigest(),
+            "defines": {str(k): str(v) for k, v in cfg.defines.items()},
             "reference_spp": int(cfg.reference_spp), "seed": cfg.seed, "views": cfg.views, "variance": True}
 
 

@@ -79,6 +79,24 @@ def test_reference_is_rendered_once_and_reused(report):
     assert all(v["spp"] == 32 for v in summary["views"].values())
 
 
+def test_an_edited_scene_renders_its_reference_again(tmp_path):
+    """A saved reference is reused only for the same scene bytes: after an edit it is rendered
+    again (whatever the file's time stamp says)."""
+    import hashlib
+    path = tmp_path / "one.xml"
+    out = tmp_path / "out"
+    argv = ["bench-equal-time", str(path), "--time", "0.05", "--methods", "pt", "--reference-spp", "4",
+            "--seed", "1", "--threads", "1", "-o", str(out), "-q"]
+    summaries = []
+    for origin in ("0, 1, 4", "0, 1, 5"):
+        path.write_text(scene(sensor("v", res=8, spp=1, origin=origin)))
+        assert cli.main(argv) == 0
+        summaries.append(json.loads((out / "reference" / "one.json").read_text()))
+    digests = [s["settings"]["bench_reference"]["scene_sha1"] for s in summaries]
+    assert digests[1] == hashlib.sha1(path.read_bytes()).hexdigest() != digests[0]
+    assert summaries[0]["views"]["v"]["mean"] != summaries[1]["views"]["v"]["mean"]
+
+
 def test_every_method_runs_each_budget_and_is_scored(report):
     data = json.loads((report["out"] / "bench.json").read_text())
     assert sorted(data["methods"]) == sorted(METHODS)
