@@ -77,10 +77,12 @@ TEST(MvSplitChoice, ChoiceMinimisesVarianceTimesCost) {
 TEST(MvSplitChoice, BudgetBoundsTheSplitsByThePassesThatFit) {
     const SplitStatistics st{1.0, 16.0, 1.0, 0.5, 100};
     // Six passes of 0.1 (1 + 0.5 B) seconds in 2.5 s: 1 + 0.5 B <= 4.17, B <= 6.
-    EXPECT_EQ(splits_fitting(st, 1.0, 0.1, 2.5, 6.0), 6);
+    EXPECT_EQ(splits_fitting(st, 0.1, 2.5, 6.0), 6);
     // A larger part no split changes (the splats) leaves room for fewer: 2 + 0.5 B <= 4.17.
-    EXPECT_EQ(splits_fitting(st, 2.0, 0.1, 2.5, 6.0), 4);
+    SplitStatistics splats = st;
+    splats.c0 = 2.0;
+    EXPECT_EQ(splits_fitting(splats, 0.1, 2.5, 6.0), 4);
     // None fits: one split; no passes wanted any more: no bound.
-    EXPECT_EQ(splits_fitting(st, 1.0, 1.0, 2.4, 6.0), 1);
-    EXPECT_EQ(splits_fitting(st, 1.0, 1.0, 2.4, 0.0), MaxChosenSplits);
+    EXPECT_EQ(splits_fitting(st, 1.0, 2.4, 6.0), 1);
+    EXPECT_EQ(splits_fitting(st, 1.0, 2.4, 0.0), MaxChosenSplits);
 }

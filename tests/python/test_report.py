@@ -4,6 +4,7 @@ decodable data: URI, every other reference an existing file) and loads in headle
 from __future__ import annotations
 
 import base64
+import hashlib
 import io
 import json
 import re
@@ -82,7 +83,6 @@ def test_reference_is_rendered_once_and_reused(report):
 def test_an_edited_scene_renders_its_reference_again(tmp_path):
     """A saved reference is reused only for the same scene bytes: after an edit it is rendered
     again (whatever the file's time stamp says)."""
-    import hashlib
     path = tmp_path / "one.xml"
     out = tmp_path / "out"
     argv = ["bench-equal-time", str(path), "--time", "0.05", "--methods", "pt", "--reference-spp", "4",

@@ -326,7 +326,7 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
     for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
     m_pass_unit = pass_samples * seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
     m_pilot = st;
-    return choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, budget, budget_passes(0)));
+    return choose_splits(st, splits_fitting(st, m_pass_unit, budget, budget_passes(0)));
 }
 
 double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double last_pass) {
@@ -334,7 +334,7 @@ double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double l
     // fold between passes) is a part of a native sample's cost that no split changes.
     SplitStatistics st = m_pilot;
     st.c0 = std::max(st.c0, last_pass / m_pass_unit - m_cfg.splits * st.c1);
-    const int b = choose_splits(st, splits_fitting(st, st.c0, m_pass_unit, fit * last_pass, budget_passes(pass)));
+    const int b = choose_splits(st, splits_fitting(st, m_pass_unit, fit * last_pass, budget_passes(pass)));
     const double longer = (st.c0 + b * st.c1) / (st.c0 + m_cfg.splits * st.c1);
     m_cfg.splits = m_r.m_mv.cfg.splits = m_r.m_stats.splits = b;
     return fit / longer;

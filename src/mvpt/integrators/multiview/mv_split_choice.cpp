@@ -94,9 +94,9 @@ int choose_splits(const SplitStatistics &s, int most) {
     return last;
 }
 
-int splits_fitting(const SplitStatistics &s, double c0, double unit, double left, double passes) {
+int splits_fitting(const SplitStatistics &s, double unit, double left, double passes) {
     int most = MaxChosenSplits;
-    while (most > 1 && passes * unit * (c0 + most * s.c1) > left) --most;
+    while (most > 1 && passes * unit * (s.c0 + most * s.c1) > left) --most;
     return most;
 }
 

@@ -54,8 +54,7 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
 int choose_splits(const SplitStatistics &s, int most = MaxChosenSplits);
 
 /// Under a time budget: the most splits B in [1, MaxChosenSplits] for which `passes` passes, each
-/// lasting `unit` (c0 + B s.c1) seconds (`c0`: the part of a native sample's cost no split
-/// changes, s.c0 or more), fit in `left` seconds; 1 when none does.
-int splits_fitting(const SplitStatistics &s, double c0, double unit, double left, double passes);
+/// lasting `unit` (s.c0 + B s.c1) seconds, fit in `left` seconds; 1 when none does.
+int splits_fitting(const SplitStatistics &s, double unit, double left, double passes);
 
 } // namespace mvpt
