@@ -54,6 +54,16 @@ REAL_SUITE = [
     (str(SHARED / "m3data-matpreview" / "matpreview.xml") + "@grid:5x5,spacing=0.05",
      {"width": "128", "height": "128"}),
 ]
+SUITE = ROOT / "bench" / "suite"
+# (scene spec, defines) of --suite display: the renders users make for displays and shots, on
+# the HDRI table-top with glass (bench/suite; skipped without ../shared/scenes): a 45-view
+# Looking-Glass-like row over +-13 degrees at the focal plane, and a 24-frame camera move with a
+# rolling sphere and without.
+DISPLAY_SUITE = [
+    (str(SUITE / "table-hdri.xml") + "@linear:n=45,baseline=1.8,focus_distance=3.9", {}),
+    (str(SUITE / "table-shot.xml"), {"moving": "1"}),
+    (str(SUITE / "table-shot.xml"), {"moving": "0"}),
+]
 
 
 def split_spec(spec: str) -> tuple:
@@ -82,9 +92,12 @@ def reference(scene_path: Path, rig, defines: dict, spp: int, threads: int, cach
         print(f"  reference done in {time.time() - t0:.0f} s", flush=True)
         data = np.load(path)
     images = {k[4:]: data[k] for k in data.files if k.startswith("img:")}
+    variance = {k[4:]: data[k] for k in data.files if k.startswith("var:")}
     # Expected relMSE contributed by the reference's noise: mean of var / (r^2 + eps).
-    noise = {k[4:]: float(np.mean(data[k] / (images[k[4:]].astype(np.float64) ** 2 + metrics.RELMSE_EPS)))
-             for k in data.files if k.startswith("var:")}
+    noise = {v: float(np.mean(var / (images[v].astype(np.float64) ** 2 + metrics.RELMSE_EPS)))
+             for v, var in variance.items()}
+    # The same for what a display shows (views blended with their neighbours along the row).
+    noise["display"] = metrics.display_relmse(images, images, variance)[1]
     return images, noise
 
 
@@ -98,7 +111,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenes", nargs="*", default=None, help="FILE or FILE@RIG (default: the Cornell box and "
                     "the light field)")
-    ap.add_argument("--suite", choices=["real"], help="the cases the gain is judged on (see the module doc)")
+    ap.add_argument("--suite", choices=["real", "display"], help="the cases the gain is judged on (see the module doc)")
     ap.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE")
     ap.add_argument("--time", type=float, default=20.0, help="seconds per method and round")
     ap.add_argument("--rounds", type=int, default=3)
@@ -112,7 +125,7 @@ def main(argv=None) -> int:
     given = dict(d.split("=", 1) for d in args.define)
     if args.quick:
         args.time, args.rounds, args.ref_spp = 2.0, 2, 512
-    cases = REAL_SUITE if args.suite == "real" else [(s, {}) for s in (args.scenes or DEFAULT_SCENES)]
+    cases = {"real": REAL_SUITE, "display": DISPLAY_SUITE}.get(args.suite) or [(s, {}) for s in (args.scenes or DEFAULT_SCENES)]
     for spec, case_defines in cases:
         scene_path, rig = split_spec(spec)
         if not scene_path.is_file():
@@ -137,18 +150,20 @@ def main(argv=None) -> int:
                                 splits=splits)
                 per_view = {v: metrics.relmse(r.images[v], ref[v]) for v in views}
                 per_view["overall"] = pooled_relmse(r.images, ref)
+                per_view["display"] = metrics.display_relmse(r.images, ref)[0]
                 err[method].append(per_view)
                 stats[method].append(r.stats)
                 print(f"  round {rnd + 1} {method:4s}: {r.stats['seconds']:.1f} s, {r.stats['passes']} passes, "
                       f"relMSE {per_view['overall']:.3e}", flush=True)
 
-        med = {m: {v: statistics.median(e[v] for e in err[m]) for v in views + ["overall"]} for m in err}
+        rows = views + ["overall", "display"]
+        med = {m: {v: statistics.median(e[v] for e in err[m]) for v in rows} for m in err}
         npx = {v: np.asarray(ref[v]).size for v in views}
         ref_noise["overall"] = sum(ref_noise[v] * npx[v] for v in views) / sum(npx.values())
         ref_all = ref_noise["overall"]
         print("\n| view | relMSE pt | relMSE mvpt | pt / mvpt | corrected pt / mvpt | mvpt time to pt's relMSE |")
         print("|---|---|---|---|---|---|")
-        for v in views + ["overall"]:
+        for v in rows:
             ratio = med["pt"][v] / med["mvpt"][v]
             pt_c, mv_c = med["pt"][v] - ref_noise[v], med["mvpt"][v] - ref_noise[v]
             corrected = pt_c / mv_c if mv_c > 0 else float("inf")

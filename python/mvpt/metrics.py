@@ -158,3 +158,56 @@ def errors(test: dict, ref: dict, with_flip: bool = True) -> Errors:
     out = Errors(views={k: view_errors(img, ref[k], with_flip) for k, img in test.items()})
     out.overall = pool(out.views)
     return out
+
+
+def display_rows(views) -> list:
+    """The views as a display lays them out, in rows: a grid rig's `r{row}c{col}` views by row
+    (columns in order), any other set of views in the order given as one row."""
+    import re
+    grid = [re.fullmatch(r"r(\d+)c(\d+)", str(v)) for v in views]
+    if views and all(grid):
+        rows: dict = {}
+        for v, m in zip(views, grid):
+            rows.setdefault(int(m[1]), []).append((int(m[2]), v))
+        return [[v for _, v in sorted(r)] for _, r in sorted(rows.items())]
+    return [list(views)]
+
+
+def display_weights(n: int) -> np.ndarray:
+    """(n, n) weights of a row of n views as a lenticular panel's crosstalk shows them: each view
+    blended with its neighbours, 1/4, 1/2, 1/4, the ends clamped (a view at an end counts its
+    missing neighbour as itself); the identity for one view."""
+    w = np.zeros((n, n))
+    for i in range(n):
+        for j, a in ((i - 1, 0.25), (i, 0.5), (i + 1, 0.25)):
+            w[i, min(max(j, 0), n - 1)] += a
+    return w
+
+
+def display_images(images: dict, rows=None) -> dict:
+    """Each view as a display shows it (display_weights along its row of display_rows)."""
+    out = {}
+    for row in rows if rows is not None else display_rows(list(images)):
+        stack = np.stack([np.asarray(images[v], dtype=np.float64) for v in row])
+        blended = np.tensordot(display_weights(len(row)), stack, axes=1)
+        out.update(zip(row, blended))
+    return out
+
+
+def display_relmse(test: dict, ref: dict, variance: dict | None = None, eps: float = RELMSE_EPS) -> tuple:
+    """relMSE of what a display shows, pooled over every pixel of every view: the test's views and
+    the reference's blended alike (display_images, the reference's rows). Second, the part of it
+    that the reference's own noise adds (its views independent: the blended variance is the sum
+    of the squared weights times each view's variance), None without `variance`."""
+    rows = display_rows(list(ref))
+    t, r = display_images(test, rows), display_images(ref, rows)
+    num = sum(relative_squared_error(t[v], r[v], eps).sum() for v in r)
+    den = sum(np.asarray(r[v]).size for v in r)
+    if variance is None:
+        return float(num / den), None
+    noise = 0.0
+    for row in rows:
+        w2 = display_weights(len(row)) ** 2
+        var = np.tensordot(w2, np.stack([np.asarray(variance[v], dtype=np.float64) for v in row]), axes=1)
+        noise += sum(float(np.sum(var[i] / (r[v] ** 2 + eps))) for i, v in enumerate(row))
+    return float(num / den), noise / den

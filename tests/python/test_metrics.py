@@ -96,3 +96,40 @@ def test_reference_noise_is_what_a_noisy_reference_adds():
     assert abs((raw - noise["overall"]) - own) < 0.05 * own, (raw, noise, own)
     assert raw - own > 0.5 * noise["overall"]  # the noise term is real and large here
     assert metrics.reference_noise({"v": ref}, {}) == {}  # variance unknown
+
+
+def test_display_rows_of_grids_and_rows():
+    assert metrics.display_rows(["r1c0", "r0c1", "r0c0", "r1c1"]) == [["r0c0", "r0c1"], ["r1c0", "r1c1"]]
+    assert metrics.display_rows(["view002", "view000"]) == [["view002", "view000"]]
+    assert metrics.display_rows(["left", "r0c0"]) == [["left", "r0c0"]]
+
+
+def test_display_weights_blend_neighbours_with_clamped_ends():
+    np.testing.assert_allclose(metrics.display_weights(1), [[1.0]])
+    np.testing.assert_allclose(metrics.display_weights(3), [[0.75, 0.25, 0], [0.25, 0.5, 0.25], [0, 0.25, 0.75]])
+    np.testing.assert_allclose(metrics.display_weights(7).sum(axis=1), 1.0)
+
+
+def test_display_relmse_by_hand():
+    # Two views of one pixel: 0 and 2 against 1 and 1; blended, each shows 0.75*x + 0.25*y.
+    test = {"a": np.zeros((1, 1, 3)), "b": np.full((1, 1, 3), 2.0)}
+    ref = {"a": np.ones((1, 1, 3)), "b": np.ones((1, 1, 3))}
+    shown_a, shown_b = 0.5, 1.5  # 0.75*0 + 0.25*2, 0.75*2 + 0.25*0
+    want = ((shown_a - 1) ** 2 + (shown_b - 1) ** 2) / 2 / 1.01
+    assert metrics.display_relmse(test, ref)[0] == pytest.approx(want)
+
+
+def test_display_reference_noise_is_what_independent_noise_adds():
+    # Views of independent noise of variance s2 around a flat truth: the blended relMSE's
+    # expectation is the noise term (sum of squared weights times s2, over r^2 + eps).
+    rng = np.random.default_rng(4)
+    views = [f"view{i:03d}" for i in range(9)]
+    truth = {v: np.full((64, 64, 3), 0.5) for v in views}
+    s2 = 0.01
+    noisy = {v: truth[v] + rng.normal(0.0, np.sqrt(s2), truth[v].shape) for v in views}
+    measured = metrics.display_relmse(noisy, truth)[0]
+    predicted = metrics.display_relmse(truth, truth, {v: np.full((64, 64, 3), s2) for v in views})[1]
+    # 110592 values: the mean's relative standard deviation is about 0.5 %
+    assert measured == pytest.approx(predicted, rel=0.03)
+    # and blending averages independent noise: 0.375 of a view's for interior views
+    assert predicted < 0.45 * s2 / (0.25 + 0.01)
