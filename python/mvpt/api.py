@@ -346,6 +346,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "notes": list(scene.notes) + list(raw["notes"]),
         "warnings": _warnings(raw, results),
         "views": views,
-    } | ({"estimator": raw["estimator"], "splits": raw["splits"], "multiview": dict(raw["multiview"])}
+    } | ({"estimator": raw["estimator"], "splits": raw["splits"], "delta_splits": raw["delta_splits"],
+          "multiview": dict(raw["multiview"])}
          if raw["method"] == "mvpt" else {}) \
       | ({"split_pilot": dict(raw["split_pilot"])} if "split_pilot" in raw else {})

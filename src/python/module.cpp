@@ -173,6 +173,7 @@ public:
         if (s.method == "mvpt") {
             d["estimator"] = s.estimator;
             d["splits"] = s.splits;
+            d["delta_splits"] = s.delta_splits;
             if (s.split_pilot[3] > 0.0) {
                 nb::dict pilot;
                 pilot["a"] = s.split_pilot[0];

@@ -86,3 +86,51 @@ TEST(MvSplitChoice, BudgetBoundsTheSplitsByThePassesThatFit) {
     EXPECT_EQ(splits_fitting(st, 1.0, 2.4, 6.0), 1);
     EXPECT_EQ(splits_fitting(st, 1.0, 2.4, 0.0), MaxChosenSplits);
 }
+
+// Paths of purely specular first vertices split K ways (delta_splits): K balances the variance
+// r_d / K that splitting removes against the cost K d1, at the splits B of the shared vertex.
+TEST(MvSplitChoice, DeltaSplitsBalanceVarianceAndCost) {
+    SplitStatistics s;
+    s.a = 1.0, s.r = 1.0, s.c0 = 4.0, s.c1 = 1.0;
+    EXPECT_EQ(choose_delta_splits(s, 2), 1); // no specular first vertices
+    s.r_d = 4.0, s.d1 = 0.25;
+    // (1.5 + 4/K)(6 + K/4) is least near K = sqrt(6 * 4 / (1.5 * 0.25)) = 8.
+    const int k = choose_delta_splits(s, 2);
+    EXPECT_GE(k, 7);
+    EXPECT_LE(k, 9);
+    auto v = [&](int kk) { return (s.a + s.r / 2 + s.r_d / kk) * (s.c0 + 2 * s.c1 + kk * s.d1); };
+    for (int kk = 1; kk <= MaxDeltaSplits; ++kk) EXPECT_LE(v(k), v(kk) + 1e-12);
+    // Costlier paths: fewer of them.
+    s.d1 = 1.0;
+    EXPECT_LT(choose_delta_splits(s, 2), k);
+    // Without variance between the paths there is nothing to split.
+    s.r_d = 0.0;
+    EXPECT_EQ(choose_delta_splits(s, 2), 1);
+}
+
+TEST(MvSplitChoice, StatisticsSeparateSpecularPathsFromSplits) {
+    // Half the pixels' samples are shared (y of variance 0.5, splits of 4), half have a specular
+    // first vertex whose eight paths vary by 2 around a camera part of variance 1: r takes the
+    // splits' variance, r_d the paths', a both camera parts; a specular sample costs d1 per path.
+    const int pixels = 40000;
+    const double eps = 1e6;
+    MvSplitProbe probe = synthetic_pilot(pixels / 2, 0.5, 4.0, false, 11);
+    std::mt19937_64 rng(12);
+    std::normal_distribution<double> cam(0.0, 1.0), path(0.0, std::sqrt(2.0));
+    for (int p = pixels / 2; p < pixels; ++p)
+        for (int64_t index = 0; index < 2; ++index) {
+            MvPilotSample x;
+            x.key = SampleKey{index, 0, p / 64, p % 64};
+            x.delta = true;
+            const double at = 3.0 + cam(rng);
+            for (double &v : x.split) v = at + path(rng);
+            probe.samples.push_back(x);
+        }
+    const SplitStatistics st = split_statistics({probe}, eps);
+    EXPECT_EQ(st.pixels, uint64_t(pixels));
+    EXPECT_NEAR(st.r * eps / (pixels / 2), 4.0, 0.2);
+    EXPECT_NEAR(st.r_d * eps / (pixels / 2), 2.0, 0.1);
+    EXPECT_NEAR(st.a * eps / pixels, 0.75, 0.06); // (0.5 + 1) / 2
+    EXPECT_NEAR(st.d1, 0.5, 1e-9);                // one path per specular sample, half the samples
+    EXPECT_GT(choose_delta_splits(st, choose_splits(st)), 1);
+}

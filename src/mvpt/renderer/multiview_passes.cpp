@@ -12,7 +12,9 @@
 #include "../integrators/multiview/mvpath.h"
 #include "../integrators/path/volpath.h"
 #include "../core/sampler.h"
+#include "../render/bsdf.h"
 #include "../render/camera.h"
+#include "../render/shape.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -76,6 +78,15 @@ struct MultiviewSettings {
     const VolPathIntegrator *volpath = nullptr; ///< set when the scene's media are rendered (§10)
     MvConfig cfg;
 };
+
+/// Whether a shape of `scene` has a BSDF without a smooth lobe (glass, a mirror, a null
+/// surface): a first vertex that no view can share (§3 test 4). Instances take their shape
+/// group's materials, which are not looked into: they count as such shapes.
+bool has_specular_surfaces(const Scene &scene) {
+    for (const auto &shape : scene.shapes())
+        if (!shape->bsdf || !shape->bsdf->has_smooth()) return true;
+    return false;
+}
 
 MultiviewSettings multiview_settings(const Scene &scene) {
     if (auto *mv = dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()))
@@ -145,12 +156,13 @@ private:
     void update_maps();
     /// Whether the maps may be made after pass `pass` (update_maps: its schedule aside).
     bool maps_after(int pass) const { return m_adaptive && pass + 1 >= std::max(2, m_cfg.adaptive_warmup); }
-    /// The splits of the shared vertex (§7, "Choosing the number of splits"): a pilot of two
+    /// The splits of the shared vertex and the paths of a specular first vertex that are
+    /// `auto` (0 in m_cfg), chosen (§7, "Choosing the number of splits"): a pilot of two
     /// native samples at each of a fixed set of pixels of every view, from seeds of its own
     /// and with one native sample per pixel everywhere, its contributions recorded, not
     /// splatted. A function of the scene and the settings alone: every range, resume and
     /// thread count of a render chooses the same. Ctrl-C (`cancel`) skips its tasks not begun.
-    int pilot_splits(const std::atomic<bool> &cancel);
+    void pilot_splits(const std::atomic<bool> &cancel);
     /// Under a time budget with splits chosen per render, after the render's first pass (of
     /// `last_pass` seconds, `fit` of them left): the splits chosen again from its measured
     /// length (§7, "Choosing the number of splits"); returns how many passes of the new splits
@@ -243,8 +255,11 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena, 
     m_region_end.push_back(m_tiles.size());
     arena.execute(
         [&] { m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted); });
-    if (m_cfg.splits == 0) m_cfg.splits = m_r.m_mv.cfg.splits = pilot_splits(cancel);
+    // Paths of specular first vertices are split only where the scene has such surfaces.
+    if (m_cfg.delta_splits == 0 && !has_specular_surfaces(r.m_scene)) m_cfg.delta_splits = r.m_mv.cfg.delta_splits = 1;
+    if (m_cfg.splits == 0 || m_cfg.delta_splits == 0) pilot_splits(cancel);
     r.m_stats.splits = m_cfg.splits;
+    r.m_stats.delta_splits = m_cfg.delta_splits;
 }
 
 std::pair<int, int> Renderer::MultiviewPasses::pilot_cells(int slot, size_t pixels) const {
@@ -269,9 +284,13 @@ void Renderer::MultiviewPasses::pilot_samples(int slot, std::pair<int, int> cell
     }
 }
 
-int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
+void Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
     const size_t views = m_r.m_mv.views.size();
-    if (views < 2) return 1; // nothing is shared
+    auto set = [&](int b, int k) {
+        if (m_cfg.splits == 0) m_cfg.splits = m_r.m_mv.cfg.splits = b;
+        if (m_cfg.delta_splits == 0) m_cfg.delta_splits = m_r.m_mv.cfg.delta_splits = k;
+    };
+    if (views < 2) return set(1, 1); // nothing is shared
     MvContext pilot = m_r.m_mv;
     pilot.cfg.splits = PilotSplits;
     for (uint32_t &seed : pilot.seeds) seed = uint32_t(hash_ints(seed, PilotKey));
@@ -315,18 +334,25 @@ int Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     double writes = 0.0;
     for (const SplatFootprint &f : m_footprints) writes += f.mean_writes() / double(views);
-    const SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps, writes);
+    SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps, writes);
     m_r.m_stats.split_pilot = {st.a, st.r, st.c0, st.c1};
+    // The paths of specular first vertices for the splits chosen without a budget (or given).
+    const int k = m_cfg.delta_splits > 0 ? m_cfg.delta_splits
+                                         : choose_delta_splits(st, m_cfg.splits > 0 ? m_cfg.splits : choose_splits(st));
+    const double pilot_cost = st.c0 + PilotSplits * (st.c1 + st.d1); // (the pilot's own paths)
+    // From here on they are a fixed part of a native sample's variance and cost.
+    st.a += std::max(st.r_d, 0.0) / k, st.c0 += k * st.d1, st.r_d = st.d1 = 0.0;
     const double budget = m_r.m_opts.time_budget;
-    if (!(budget > 0.0) || m_range || !(st.c1 > 0.0) || taken.load() == 0) return choose_splits(st);
+    if (m_cfg.splits > 0 || !(budget > 0.0) || m_range || !(st.c1 > 0.0) || taken.load() == 0)
+        return set(choose_splits(st), k);
     // Under a time budget, a pass of B splits lasts about the pilot's time per unit of model
     // cost times its own cost, and the splits leave time for MinBudgetPasses passes, the later
     // ones thinned (budget_passes); budgets make renders depend on time anyway, so the choice may too.
     double pass_samples = 0.0;
     for (const Film &mf : m_r.m_films) pass_samples += double(mf.map.size());
-    m_pass_unit = pass_samples * seconds / (double(taken.load()) * (st.c0 + PilotSplits * st.c1));
+    m_pass_unit = pass_samples * seconds / (double(taken.load()) * pilot_cost);
     m_pilot = st;
-    return choose_splits(st, splits_fitting(st, m_pass_unit, budget, budget_passes(0)));
+    set(choose_splits(st, splits_fitting(st, m_pass_unit, budget, budget_passes(0))), k);
 }
 
 double Renderer::MultiviewPasses::rechoose_splits(int pass, double fit, double last_pass) {
@@ -656,11 +682,10 @@ std::vector<SplatFootprint> Renderer::prepare_multiview(const PathIntegrator *pa
     m_mv.volpath = volpath;
     m_mv.cfg = cfg;
     // Moving shapes or lights: a shared sample keeps its time (§3 test 1).
-    m_mv.scene_moves = m_scene.is_animated();
-    for (const auto &light : m_scene.lights()) m_mv.scene_moves |= light->moves();
+    m_mv.scene_moves = mv_scene_moves(m_scene);
     for (int v : m_views) {
         const Camera &cam = *cams[v];
-        m_mv.views.push_back({&cam, uint32_t(v), cam.shutter_open, cam.shutter_close - cam.shutter_open});
+        m_mv.views.push_back(mv_view(cam, uint32_t(v)));
         m_mv.seeds.push_back(m_opts.seed ? *m_opts.seed : cam.seed);
         if (!cam.film.filter->is_box() && cam.film.filter->radius() > float(SplatFootprint::MaxRadius))
             throw std::runtime_error("view '" + cam.id + "': multi-view path tracing splats with filters of radius up to " +

@@ -5,6 +5,7 @@
 
 #include "../core/memory.h"
 #include "../core/sampler.h"
+#include "../integrators/multiview/mv_context.h"
 #include "../integrators/multiview/mvpath.h"
 #include "../render/camera.h"
 #include "../render/filter.h"
@@ -36,6 +37,20 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     if (scene.lights().empty()) m_stats.warnings.push_back("the scene has no emitter: every image is black");
     m_multiview = m_opts.method == RenderMethod::MultiView ||
                   (m_opts.method == RenderMethod::Scene && dynamic_cast<const MultiViewPathIntegrator *>(&scene.integrator()));
+    // Where no two views can share a path in time (one view; a shot of moving shapes whose
+    // shutters do not overlap), multi-view path tracing would pay for shifts and splats that
+    // never share: the views are path traced instead (docs/multiview-path-tracing.md, "Where
+    // nothing can be shared").
+    if (m_multiview) {
+        std::vector<MvView> views;
+        for (int v : m_views) views.push_back(mv_view(*cams[v], uint32_t(v)));
+        if (!views_share_in_time(views, mv_scene_moves(scene))) {
+            m_multiview = false;
+            m_stats.notes.push_back(views.size() < 2 ? "one view: multi-view path tracing has nothing to share, the view is path traced"
+                                                     : "no two views' shutters overlap while shapes or lights move: multi-view path "
+                                                       "tracing has nothing to share, the views are path traced");
+        }
+    }
     // Path tracing splats under a filter other than the box (docs/mitsuba-compatibility.md,
     // "Pixel filters"); a filter too wide to splat is importance-sampled instead.
     if (!m_multiview) {

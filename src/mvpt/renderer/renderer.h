@@ -121,6 +121,7 @@ struct RenderStats {
     /// "pt" or "mvpt" (what ran), and the multi-view estimator ("balance" / "weighted").
     std::string method = "pt", estimator;
     int splits = 0; ///< multi-view: light samples and bounces per shared vertex (MvConfig::splits)
+    int delta_splits = 0; ///< multi-view: paths per specular first vertex (MvConfig::delta_splits)
     /// Multi-view with splits chosen per render: the pilot's a, r, c0 and c1 (SplitStatistics), else zeros.
     std::array<double, 4> split_pilot{};
     /// Things the user should know about the run (e.g. a filter replaced by a box).

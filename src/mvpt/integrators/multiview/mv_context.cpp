@@ -2,7 +2,9 @@
 
 #include "mv_media.h"
 
+#include "../../accel/scene.h"
 #include "../../render/camera.h"
+#include "../../render/light.h"
 
 #include <cmath>
 
@@ -12,6 +14,12 @@ MvViewStats &MvViewStats::operator+=(const MvViewStats &o) {
     native += o.native; received += o.received; tried += o.tried; sharing += o.sharing; rays += o.rays;
     for (int i = 0; i < int(ShiftTest::Count); ++i) rejected[i] += o.rejected[i];
     return *this;
+}
+
+bool mv_scene_moves(const Scene &scene) {
+    bool moves = scene.is_animated();
+    for (const auto &light : scene.lights()) moves |= light->moves();
+    return moves;
 }
 
 void MvContext::prepare() {

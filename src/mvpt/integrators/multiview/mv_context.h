@@ -43,6 +43,9 @@ struct MvViewStats {
 };
 
 /// Read-only state shared by every native sample of a pass.
+/// Whether a shape or a light of `scene` moves: then a shared sample keeps its time (§3 test 1).
+bool mv_scene_moves(const Scene &scene);
+
 struct MvContext {
     const Scene *scene = nullptr;
     const PathIntegrator *path = nullptr;

@@ -4,6 +4,7 @@
 #include "mv_densities.h"
 #include "mv_media.h"
 #include "mv_mixture.h"
+#include "mv_split_choice.h"
 #include "../path/path_steps.h"
 #include "../path/transmittance.h"
 #include "../path/volpath.h"
@@ -21,6 +22,7 @@ namespace mvpt {
 namespace {
 const BsdfContext Ctx;
 constexpr uint64_t SplitKey = 0x73706c6974; // "split": split b > 0 of a shared vertex re-keys its stream by SplitKey + b
+constexpr uint64_t DeltaSplitKey = 0x64656c7461; // "delta": path k > 0 of a specular first vertex re-keys by DeltaSplitKey + k
 } // namespace
 
 void mv_shift_views(const MvContext &ctx, int slot_l, const MvVertex &y, MvScratch &sc) {
@@ -239,12 +241,28 @@ bool trace_unshared(const MvContext &ctx, NativeSample &s, bool hit, MvScratch &
     }
     if (!unshared) return false;
     // Purely specular (or null) first vertex, or no bounce at all: test 4 of §3 fails for
-    // every view, the path is the ordinary path tracer's.
+    // every view, the path is the ordinary path tracer's. Where the views could share others'
+    // first vertices it is split K ways (MvConfig::delta_splits), path k > 0 from the stream
+    // re-keyed by k; the pilot records its PilotSplits paths apart.
     PathState state;
     state.valid = !pc.hide_emitters && env != nullptr;
-    Spectrum L = ctx.path->trace(scene, s.ray, state, s.sampler, counters, &s.si);
     if (ctx.views.size() >= 2 && max_depth > 1) s.st.rejected[int(ShiftTest::Bsdf)] += ctx.views.size() - 1;
-    splat_native_only(s, sink, pending.probe, counters, L);
+    const bool split = ctx.views.size() >= 2 && max_depth > 1; // (so the first vertex has no smooth lobe)
+    const int k_paths = !split ? 1 : pending.probe ? PilotSplits : std::max(ctx.cfg.delta_splits, 1);
+    const Sampler stream = s.sampler;
+    Spectrum paths[PilotSplits], L(0.f);
+    for (int k = 0; k < k_paths; ++k) {
+        Sampler other = k > 0 ? stream.rekeyed(DeltaSplitKey + uint64_t(k)) : stream;
+        const Spectrum lk = ctx.path->trace(scene, s.ray, state, k > 0 ? other : s.sampler, counters, &s.si);
+        if (k < PilotSplits) paths[k] = lk;
+        L += lk;
+    }
+    if (pending.probe && split) {
+        mv_probe_delta(*pending.probe, s.key, paths, 1.f / s.n);
+        s.st.rays += counters.rays + counters.shadow_rays - s.rays_before;
+        return true;
+    }
+    splat_native_only(s, sink, pending.probe, counters, k_paths > 1 ? L * (1.f / float(k_paths)) : L);
     return true;
 }
 

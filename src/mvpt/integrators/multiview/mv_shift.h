@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 namespace mvpt {
 
@@ -16,6 +17,11 @@ struct MvView {
     uint32_t scene_index = 0; ///< index among the scene's sensors (the sampler's view number)
     float t0 = 0.f, dt = 0.f; ///< shutter open time and length
 };
+
+/// Sensor `scene_index` of a scene, `cam`, as the method sees it.
+inline MvView mv_view(const Camera &cam, uint32_t scene_index) {
+    return {&cam, scene_index, cam.shutter_open, cam.shutter_close - cam.shutter_open};
+}
 
 /// The shared first vertex y of a native sample of view l.
 struct MvVertex {
@@ -42,6 +48,31 @@ inline bool time_compatible(const MvView &j, const MvView &k, bool scene_moves) 
     if (scene_moves) return false;
     const MvView &timed = j.dt > 0.f ? j : k;
     return !timed.camera->is_animated();
+}
+
+/// Whether some pair of `views` can share a native sample at all in time (§3 test 1): a pair
+/// that is time_compatible and, when shapes move (`scene_moves`), whose shutters overlap over a
+/// positive length or are one instant (shutters that only touch, as a shot's frames with a
+/// shutter of 1.0, share a set of times of measure zero). False for fewer than two views.
+inline bool views_share_in_time(const std::vector<MvView> &views, bool scene_moves) {
+    if (views.size() < 2) return false;
+    // Without moving shapes two views of the same kind (instant or timed) always pair.
+    if (!scene_moves) return views.size() > 2 || time_compatible(views[0], views[1], false);
+    std::vector<std::pair<float, float>> timed; // (open, close)
+    std::vector<float> instants;
+    for (const MvView &v : views)
+        if (v.dt > 0.f) timed.emplace_back(v.t0, v.t0 + v.dt);
+        else instants.push_back(v.t0);
+    std::sort(timed.begin(), timed.end());
+    std::sort(instants.begin(), instants.end());
+    for (size_t i = 1; i < instants.size(); ++i)
+        if (instants[i] == instants[i - 1]) return true;
+    float close = -INFINITY; // the latest close of the shutters opened so far
+    for (const auto &[t0, t1] : timed) {
+        if (t0 < close) return true;
+        close = std::max(close, t1);
+    }
+    return false;
 }
 
 /// Time of the shifted sample in view `k` (§3 test 1). When shapes move (`scene_moves`) the

@@ -192,6 +192,14 @@ void splat_shared_vertex(MvPendingSamples &pending, const MvPendingSamples::Samp
 
 } // namespace
 
+void mv_probe_delta(MvSplitProbe &probe, const SampleKey &key, const Spectrum *paths, float scale) {
+    MvPilotSample x;
+    x.key = key;
+    x.delta = true;
+    for (int k = 0; k < PilotSplits; ++k) x.split[k] = luminance(paths[k] * scale);
+    probe.samples.push_back(x);
+}
+
 void mv_probe_native(MvSplitProbe &probe, const SampleKey &key, const Spectrum &e) {
     MvPilotSample x;
     x.key = key;

@@ -110,6 +110,9 @@ size_t mv_splat_entries(SplatCache &cache, const MvEntryRadiance *sum, const flo
 
 /// Records radiance `e` that no split changes of native sample `key` into `probe`.
 void mv_probe_native(MvSplitProbe &probe, const SampleKey &key, const Spectrum &e);
+/// Records the PilotSplits paths traced on from the purely specular first vertex of native
+/// sample `key`, each times `scale` (1/n_l), into `probe`.
+void mv_probe_delta(MvSplitProbe &probe, const SampleKey &key, const Spectrum *paths, float scale);
 
 /// Trace the pending samples' suffixes as one wavefront and splat their contributions; the
 /// suffixes' rays count for the view in `slot` (pending samples are flushed per tile).

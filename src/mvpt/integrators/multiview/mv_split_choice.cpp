@@ -34,6 +34,7 @@ std::vector<MvPilotSample> merged(std::vector<MvPilotSample> s) {
         m.e += r.e;
         for (int b = 0; b < PilotSplits; ++b) m.split[b] += r.split[b];
         m.sharing = std::max(m.sharing, r.sharing);
+        m.delta |= r.delta;
     }
     return out;
 }
@@ -58,8 +59,9 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
         const std::vector<MvPilotSample> s = merged(probe.samples);
         for (const MvPilotSample &x : s) {
             const double ns = x.sharing;
-            st.c0 += x.sharing ? 1.0 + per_view * (ns - 1.0) : 1.0;
+            st.c0 += x.sharing ? 1.0 + per_view * (ns - 1.0) : x.delta ? 0.0 : 1.0;
             st.c1 += x.sharing ? SplitPath + KappaLobe * ns : 0.0;
+            st.d1 += x.delta ? 1.0 : 0.0; // (each of its K paths, the first with its camera ray, one path)
             ++samples;
         }
         // Pairs of samples of one pixel: (X1 - X2)^2 / 2 estimates the variance of one, a + r / PilotSplits.
@@ -68,22 +70,40 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
             const auto [x1, r1] = estimate(s[i]);
             const auto [x2, r2] = estimate(s[i + 1]);
             const double m = 0.5 * (x1 + x2), weight = 1.0 / (m * m + eps);
+            // The spread of a specular first vertex's paths is r_d's, of a shared vertex's splits r's.
             const double total = 0.5 * (x1 - x2) * (x1 - x2), r = 0.5 * (r1 + r2);
+            const double r_d = 0.5 * ((s[i].delta ? r1 : 0.0) + (s[i + 1].delta ? r2 : 0.0));
             st.a += weight * (total - r / PilotSplits);
-            st.r += weight * r;
+            st.r += weight * (r - r_d);
+            st.r_d += weight * r_d;
             ++st.pixels, ++i;
         }
     }
-    if (samples) st.c0 /= double(samples), st.c1 /= double(samples);
+    if (samples) st.c0 /= double(samples), st.c1 /= double(samples), st.d1 /= double(samples);
     return st;
 }
 
-int choose_splits(const SplitStatistics &s, int most) {
-    if (!(s.r > 0.0) || !(s.c1 > 0.0) || !std::isfinite(s.a + s.r)) return 1;
+namespace {
+/// The variance of a pixel at equal time with B splits and K paths of a specular first vertex.
+double equal_time_variance(const SplitStatistics &s, int b, int k) {
     // a may come out below zero (the pairs' spread is itself noisy): splitting then removes
     // nearly all the variance, and the cost alone bounds B.
-    const double a = std::max(s.a, 0.0);
-    auto cost = [&](int b) { return (a + s.r / b) * (s.c0 + b * s.c1); };
+    const double a = std::max(s.a, 0.0), r_d = std::max(s.r_d, 0.0);
+    return (a + s.r / b + r_d / k) * (s.c0 + b * s.c1 + k * s.d1);
+}
+} // namespace
+
+int choose_delta_splits(const SplitStatistics &s, int splits) {
+    if (!(s.r_d > 0.0) || !(s.d1 > 0.0) || !std::isfinite(s.a + s.r + s.r_d)) return 1;
+    int best = 1;
+    for (int k = 2; k <= MaxDeltaSplits; ++k)
+        if (equal_time_variance(s, splits, k) < equal_time_variance(s, splits, best)) best = k;
+    return best;
+}
+
+int choose_splits(const SplitStatistics &s, int most) {
+    if (!(s.r > 0.0) || !(s.c1 > 0.0) || !std::isfinite(s.a + s.r + s.r_d)) return 1;
+    auto cost = [&](int b) { return equal_time_variance(s, b, choose_delta_splits(s, b)); };
     const int last = std::clamp(most, 1, MaxChosenSplits);
     double best = INFINITY;
     for (int b = 1; b <= last; ++b) best = std::min(best, cost(b));

@@ -26,6 +26,9 @@ struct MvPilotSample {
     double e = 0.0;
     double split[PilotSplits] = {};
     uint32_t sharing = 0; ///< |S|, the views sharing its first vertex (0: not shared)
+    /// Its first vertex is purely specular (no view can share it): `split` holds PilotSplits
+    /// paths traced on from it, each its own estimate of the sample's radiance (e is 0).
+    bool delta = false;
 };
 
 /// Pilot records, in any order, several per native sample allowed (mv_finish_samples and the
@@ -41,6 +44,11 @@ struct MvSplitProbe {
 struct SplitStatistics {
     double a = 0.0, r = 0.0;
     double c0 = 0.0, c1 = 0.0;
+    /// The same for the native samples whose first vertex is purely specular, split K ways
+    /// (MvConfig::delta_splits): r_d, one path's variance given the sample, and d1, a path's
+    /// mean cost per native sample (one path-traced sample each); their a is in a. A native
+    /// sample's variance is a + r / B + r_d / K, its cost c0 + B c1 + K d1.
+    double r_d = 0.0, d1 = 0.0;
     uint64_t pixels = 0;
 };
 
@@ -49,12 +57,22 @@ struct SplitStatistics {
 /// (SplatFootprint::mean_writes).
 SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps, double writes = 1.0);
 
-/// The fewest splits in [1, min(most, MaxChosenSplits)] whose (a + r / B) (c0 + B c1), the
-/// variance of a pixel at equal time, is within 5 % of the least there; 1 without statistics.
+/// The most ways a purely specular first vertex's path is split (MvConfig::delta_splits).
+inline constexpr int MaxDeltaSplits = 64;
+
+/// The fewest splits in [1, min(most, MaxChosenSplits)] whose (a + r / B + r_d / K) (c0 + B c1 +
+/// K d1), the variance of a pixel at equal time, is within 5 % of the least there, each B with
+/// its best K (choose_delta_splits); 1 without statistics.
 int choose_splits(const SplitStatistics &s, int most = MaxChosenSplits);
 
+/// For B splits of the shared vertex, the K in [1, MaxDeltaSplits] ways to split the path of a
+/// purely specular first vertex that makes (a + r / B + r_d / K) (c0 + B c1 + K d1) least; 1
+/// without such samples.
+int choose_delta_splits(const SplitStatistics &s, int splits);
+
 /// Under a time budget: the most splits B in [1, MaxChosenSplits] for which `passes` passes, each
-/// lasting `unit` (s.c0 + B s.c1) seconds, fit in `left` seconds; 1 when none does.
+/// lasting `unit` (s.c0 + B s.c1) seconds, fit in `left` seconds; 1 when none does. (The paths of
+/// specular first vertices, K d1, are in s.c0 there: the caller adds them once K is chosen.)
 int splits_fitting(const SplitStatistics &s, double unit, double left, double passes);
 
 } // namespace mvpt

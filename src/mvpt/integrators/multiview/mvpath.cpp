@@ -61,6 +61,14 @@ std::shared_ptr<Object> make_mvpath(const Properties &props, const LoadContext &
     } else if (props.has("splits")) {
         cfg.splits = int(props.get_int_in("splits", 1, 1, 64));
     }
+    if (props.is_string("delta_splits")) {
+        const std::string word = props.get_string("delta_splits");
+        if (word != "auto")
+            props.fail("delta_splits", "'delta_splits' must be 'auto' or an integer in [1, 64], got '" + word + "'");
+        cfg.delta_splits = 0;
+    } else if (props.has("delta_splits")) {
+        cfg.delta_splits = int(props.get_int_in("delta_splits", 1, 1, 64));
+    }
     return std::make_shared<MultiViewPathIntegrator>(pc, cfg);
 }
 

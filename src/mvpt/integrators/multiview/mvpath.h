@@ -61,6 +61,11 @@ struct MvConfig {
     /// 1/splits. The shifts, visibility and densities D of the first vertex are paid once.
     /// 0 (`auto`, the default): chosen per render from a pilot (mv_split_choice.h).
     int splits = 0;
+    /// Paths traced on from a purely specular first vertex (glass, a mirror), which no view can
+    /// share, each weighted 1/delta_splits: such a pixel's samples are its own, as in path
+    /// tracing, and far cheaper than a shared one (docs/multiview-path-tracing.md, "Where
+    /// nothing can be shared"). 0 (`auto`, the default): chosen with the splits from the pilot.
+    int delta_splits = 0;
     /// Visibility cells (accel/rig_visibility.h) along the scene's longest side; 0 turns them
     /// off. Static scenes and cameras only.
     int rig_cells = 128;
