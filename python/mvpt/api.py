@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import signal
 import threading
@@ -17,12 +18,40 @@ from . import state as state_file
 
 def _text(s: str, what: str) -> str:
     """`s` if it is text the native code can take (command-line bytes that are not UTF-8 arrive
-    as lone surrogates); a ValueError naming `what` and showing the bytes escaped otherwise."""
+    as lone surrogates); a ValueError naming `what` and showing the bytes escaped otherwise, or
+    naming the type of what is not a str."""
+    if not isinstance(s, str):
+        raise ValueError(f"{what} must be text (str), got {type(s).__name__}")
     try:
         s.encode("utf-8")
     except UnicodeEncodeError:
         raise ValueError(f"{what} is not UTF-8 text: {shown(s)}") from None
     return s
+
+
+def _scene(scene, what: str) -> _core.Scene:
+    """`scene` if it is a loaded scene; a ValueError saying how to make one otherwise."""
+    if not isinstance(scene, _core.Scene):
+        raise ValueError(f"{what} takes a scene from mvpt.load_file or mvpt.load_string, got {type(scene).__name__}")
+    return scene
+
+
+def _path(p, what: str) -> str:
+    """A file path given as str or os.PathLike, as text; a ValueError naming `what` otherwise."""
+    if not isinstance(p, (str, os.PathLike)):
+        raise ValueError(f"{what} must be a path (str or os.PathLike), got {type(p).__name__}")
+    return _text(os.fspath(p), what)
+
+
+def _rig(rig) -> str:
+    """A rig specification for the native loader: "" for none; an empty or blank one is an error
+    (it would silently render the scene's own sensors)."""
+    if rig is None:
+        return ""
+    rig = _text(rig, "the rig")
+    if not rig.strip():
+        raise ValueError("the rig is empty: give one such as 'stereo', 'linear:n=9' or 'grid:5x5', or none")
+    return rig
 
 
 def shown(s: str) -> str:
@@ -60,13 +89,13 @@ def load_file(path: str | os.PathLike, rig: Optional[str] = None, **defines) -> 
     sensors by the views generated from its first sensor (README, "Camera rigs and shots").
     Raises mvpt.SceneError (a ValueError) naming file:line:col on bad input; the error
     also has the attributes file, line, column and message."""
-    return _core.load_file(_text(os.fspath(path), "the scene path"), _defines(defines), _text(rig or "", "the rig"))
+    return _core.load_file(_text(os.fspath(path), "the scene path"), _defines(defines), _rig(rig))
 
 
 def load_string(xml: str, base_dir: str | os.PathLike = ".", rig: Optional[str] = None, **defines) -> _core.Scene:
     """Load a scene from an XML string; relative file names resolve in `base_dir`."""
     return _core.load_string(_text(xml, "the scene"), _text(os.fspath(base_dir), "base_dir"), _defines(defines),
-                             _text(rig or "", "the rig"))
+                             _rig(rig))
 
 
 @dataclass
@@ -163,11 +192,17 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
     splits: with "mvpt", the splits of the shared vertex instead of the scene's `mvpath`
     setting (whose default is "auto"): 1 to 64, or "auto" (chosen per render; stats["splits"]
     says which)."""
+    _scene(scene, "render")
+    if state is not None:  # checked before the render, which would otherwise be lost at its end
+        state = _path(state, "state")
+        folder = os.path.dirname(os.path.abspath(state))
+        if not os.path.isdir(folder):
+            raise ValueError(f"state: the folder {shown(folder)} of {shown(state)} does not exist")
     splits_option = _splits_option(splits)
     if not 0 <= int(spp) < 2**31:
         raise ValueError(f"spp must lie in [0, 2^31), got {spp}")
-    if not float(time) >= 0.0:
-        raise ValueError(f"time must be >= 0 seconds, got {time}")
+    if not 0.0 <= float(time) < math.inf:  # (a render of infinite time would never end)
+        raise ValueError(f"time must be a finite number of seconds >= 0, got {time}")
     if not 0 <= int(threads) < 2**31:
         raise ValueError(f"threads must lie in [0, 2^31), got {threads}")
     if not float(poll) > 0.0:
@@ -251,7 +286,10 @@ def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int 
     be merged further, not resumed). With images=False only that state is written (merging
     it with the next state then gives the same bits as merging all at once); `identity` is
     state.scene_identity(scene) if already known (it reads every file of the scene)."""
-    paths = [os.fspath(p) for p in states]
+    _scene(scene, "merge")
+    if isinstance(states, (str, bytes, os.PathLike)):  # one state, not the characters of its path
+        states = [states]
+    paths = [_path(p, "a state to merge") for p in states]
     if not paths:
         raise ValueError("merge needs at least one state file")
     # In the order of their parts (seed, first pass), whatever order they are given in, so

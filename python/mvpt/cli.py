@@ -111,6 +111,11 @@ def _render(scene_path: Path, args, stem: str) -> int:
     if args.passes and args.spp:
         _error("--passes renders COUNT passes of every view; drop --spp")
         return EXIT_USAGE
+    chosen = [scene.views[i] for i in views] if views else scene.views
+    problem = displays.check_displays_for(args, [(v["width"], v["height"]) for v in chosen])
+    if problem:
+        _error(problem)
+        return EXIT_USAGE
     if getattr(args, "ray", None) is not None and (args.passes or args.checkpoint or getattr(args, "resume", None)):
         _error("--ray splits the render into ranges itself; drop --passes, --checkpoint and --resume")
         return EXIT_USAGE

@@ -27,6 +27,23 @@ def _fps(text: str) -> float:
     return v
 
 
+#: The most stops --exposure scales the 8-bit displays by (2^64 is far beyond any radiance).
+MAX_EXPOSURE = 64.0
+#: The most pixels a quilt may have (a 10x10 quilt of 4K views is 0.83 G; this is 2 G, 6 GB in RGB).
+MAX_QUILT_PIXELS = 1 << 31
+
+
+def _exposure(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not abs(v) <= MAX_EXPOSURE:  # (also nan)
+        raise argparse.ArgumentTypeError(f"expected an exposure in stops from {-MAX_EXPOSURE:g} to "
+                                         f"{MAX_EXPOSURE:g}, got '{text}'")
+    return v
+
+
 def add_display_options(p: argparse.ArgumentParser) -> None:
     """Add the display-output options to a render-like subcommand."""
     g = p.add_argument_group("display outputs")
@@ -41,7 +58,8 @@ def add_display_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--gif", action="store_true", help="write <stem>.gif with the views as frames, in scene order")
     g.add_argument("--mp4", action="store_true", help="write <stem>.mp4 (H.264) with the views as frames")
     g.add_argument("--fps", type=_fps, default=12.0, help="frame rate of --gif/--mp4 (default: 12)")
-    g.add_argument("--exposure", type=float, default=0.0, help="exposure in stops for the 8-bit displays (default: 0)")
+    g.add_argument("--exposure", type=_exposure, default=0.0,
+                   help=f"exposure in stops for the 8-bit displays, within ±{MAX_EXPOSURE:g} (default: 0)")
 
 
 def check_display_options(args) -> str | None:
@@ -53,6 +71,34 @@ def check_display_options(args) -> str | None:
             args.quilt = _grid(args.quilt)
         except argparse.ArgumentTypeError as e:
             return f"--quilt: {e}"
+    return None
+
+
+def check_displays_for(args, sizes: list) -> str | None:
+    """A usage error for display options that the views to render cannot meet, or None: checked
+    before rendering, so that no render is lost to them. `sizes`: each view's (width, height)."""
+    n = len(sizes)
+    if getattr(args, "multiview_exr", False) and args.stereo and n != 2:
+        return f"--stereo names two views, left and right; the render has {n}"
+    framed = [name for name, on in (("--quilt", args.quilt), ("--gif", args.gif), ("--mp4", args.mp4)) if on]
+    if framed and len(set(sizes)) > 1:
+        (w0, h0), (w, h) = sizes[0], next(s for s in sizes if s != sizes[0])
+        return f"{framed[0]} needs views of one size; the render has {w0}x{h0} and {w}x{h}"
+    if args.quilt:
+        cols, rows = (None, None) if args.quilt == "auto" else args.quilt
+        try:
+            cols, rows = quilt.layout(n, cols, rows)
+        except ValueError as e:
+            return f"--quilt: {e}"
+        w, h = sizes[0]
+        if cols * rows * w * h > MAX_QUILT_PIXELS:
+            return (f"--quilt: a {cols}x{rows} quilt of {w}x{h} views has {cols * rows * w * h:,} pixels, "
+                    f"more than {MAX_QUILT_PIXELS:,}")
+    if args.mp4:
+        try:
+            movie.check_ffmpeg()
+        except RuntimeError as e:
+            return f"--mp4: {e}"
     return None
 
 

@@ -50,6 +50,19 @@ def ffmpeg_executable() -> str:
         raise RuntimeError("writing MP4 needs ffmpeg: install Debian's 'ffmpeg' or pip install imageio-ffmpeg") from None
 
 
+def check_ffmpeg() -> str:
+    """The ffmpeg binary (ffmpeg_executable) once it has answered `-version`; RuntimeError naming
+    it when it does not run."""
+    exe = ffmpeg_executable()
+    try:
+        ok = subprocess.run([exe, "-version"], capture_output=True, timeout=20).returncode == 0
+    except (OSError, subprocess.SubprocessError):
+        ok = False
+    if not ok:
+        raise RuntimeError(f"writing MP4 needs a working ffmpeg, and '{exe} -version' failed")
+    return exe
+
+
 def write_mp4(frames: list, path, fps: float = 24.0, exposure: float = 0.0, crf: int = 18) -> str:
     """H.264 MP4 of the frames at `fps` (quality `crf`, lower is better); returns the path."""
     if not fps > 0:

@@ -79,6 +79,8 @@ def write_outputs(result, out_dir, stem: str, aovs: bool = False, settings: dict
     mean) and sample_count.Y (multi-view path tracing: native samples, plus contributions.Y,
     the contributions each pixel received). The JSON holds `result.stats`, its settings updated with
     `settings` (e.g. the scene file and -D defines of the command line)."""
+    if not all(hasattr(result, a) for a in ("images", "stats")):
+        raise ValueError(f"write_outputs takes the result of mvpt.render, got {type(result).__name__}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     per_view, json_path = output_paths(out, stem, result.images.keys())

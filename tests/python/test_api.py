@@ -229,10 +229,35 @@ def test_digit_ids_win_over_indices():
                                            (dict(seed=-1), "seed"), (dict(seed=2**32), "seed"),
                                            (dict(spp=2**31), "spp"), (dict(threads=2**31), "threads"),
                                            (dict(passes=(0, 0)), "passes"), (dict(passes=(-1, 4)), "passes"),
-                                           (dict(checkpoint=-1.0), "checkpoint")])
+                                           (dict(checkpoint=-1.0), "checkpoint"),
+                                           (dict(time=float("inf")), "finite"),  # once rendered forever
+                                           (dict(state=b"x.mvpt-state"), "state must be a path"),
+                                           (dict(state="nodir/x.mvpt-state"), "does not exist")])
 def test_bad_render_arguments(small, kwargs, match):
     with pytest.raises(ValueError, match=match):
         mvpt.render(small, **kwargs)
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: mvpt.load_string(123), "must be text"),  # once AttributeError
+    (lambda: mvpt.load_string(None), "must be text"),
+    (lambda: mvpt.load_string(b"<scene/>"), "must be text"),
+    (lambda: mvpt.load_string(scene(views(1)), ".", rig=5), "rig must be text"),
+    (lambda: mvpt.load_string(scene(views(1)), ".", rig=""), "the rig is empty"),
+    (lambda: mvpt.render("scene.xml"), "mvpt.load_file"),
+    (lambda: mvpt.render(None), "mvpt.load_file"),
+    (lambda: mvpt.write_outputs(None, "out", "x"), "result of mvpt.render"),
+])
+def test_wrong_types_are_one_clear_error(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()
+
+
+def test_merge_of_one_path_is_not_its_characters(small, tmp_path):
+    # Once each character of the path was taken for a state file of its own.
+    with pytest.raises(Exception, match="a.mvpt-state") as info:
+        mvpt.merge(small, str(tmp_path / "a.mvpt-state"))
+    assert not isinstance(info.value, (AttributeError, TypeError))
 
 
 def test_scene_info():

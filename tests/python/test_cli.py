@@ -273,6 +273,12 @@ def test_views_by_id_and_index(tmp_path):
     (["--splits", "many"], "--splits"),
     (["-D", "novalue"], "NAME=VALUE"),
     (["--frobnicate"], "unrecognized arguments"),
+    (["--exposure", "nan"], "--exposure"),  # once an all-black quilt
+    (["--gif", "--exposure", "inf"], "--exposure"),
+    (["--gif", "--exposure", "1e308"], "--exposure"),  # once an OverflowError after the render
+    (["--quilt", "100000x100000"], "--quilt"),  # once a MemoryError after the render
+    (["--quilt", "1x1"], "too few"),
+    (["--multiview-exr", "--stereo", "--views", "left"], "--stereo"),  # checked before the render
 ])
 def test_bad_command_line(tmp_path, capsys, args, needle):
     path = _two_view_scene(tmp_path)
@@ -282,6 +288,36 @@ def test_bad_command_line(tmp_path, capsys, args, needle):
     lines = captured.err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("mvpt: error: ") and needle in lines[0], captured.err
     assert captured.out == "" and not out.exists()
+
+
+@pytest.mark.parametrize("rig, needle", [
+    ("", "the rig is empty"),  # once the scene's own sensors, without a word
+    ("   ", "the rig is empty"),
+    ("grid:11529216935854480x11529216935854480,spacing=0.001", "at most 100000 views"),  # once wrapped to 160,000
+    ("grid:cols=1000,rows=1000,spacing=0.001", "at most 100000"),
+])
+def test_bad_rigs(tmp_path, capsys, rig, needle):
+    path = _two_view_scene(tmp_path)
+    assert cli.main(["render", str(path), "-o", str(tmp_path / "out"), "--rig", rig]) == 1
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mvpt: error: ") and needle in lines[0], lines
+
+
+def test_mp4_without_a_working_ffmpeg_is_refused_before_rendering(tmp_path):
+    path = _two_view_scene(tmp_path)
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    fake = bin_dir / "ffmpeg"
+    fake.write_text("#!/bin/sh\nexit 1\n")
+    fake.chmod(0o755)
+    env = dict(ENV, PATH=f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}")
+    out = tmp_path / "out"
+    proc = subprocess.run(CLI + ["render", str(path), "--mp4", "-o", str(out)], capture_output=True, text=True,
+                          timeout=60, env=env)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and "--mp4" in lines[0] and "ffmpeg" in lines[0], proc.stderr
+    assert not out.exists()  # nothing rendered, nothing written
 
 
 def test_missing_arguments_and_files(tmp_path, capsys):

@@ -17,6 +17,8 @@ namespace fs = std::filesystem;
 namespace {
 
 const std::vector<std::string> kRigTypes = {"stereo", "linear", "grid", "orbit", "path"};
+/// The most views a rig makes.
+constexpr int64_t MaxRigViews = 100000;
 
 /// Parameters of one rig type, read with checks; every given parameter must be known.
 class RigParams {
@@ -65,7 +67,7 @@ public:
     int count(const std::string &name) const {
         int64_t v = parse_int(string(name), loc(name), what(name));
         if (v < 1) fail(name, "must be at least 1: a rig must produce at least one view (got " + std::to_string(v) + ")");
-        if (v > 100000) fail(name, "is too large (" + std::to_string(v) + " views)");
+        if (v > MaxRigViews) fail(name, "is too large (" + std::to_string(v) + " views: at most " + std::to_string(MaxRigViews) + ")");
         return int(v);
     }
 
@@ -125,12 +127,17 @@ std::vector<RigView> grid(const RigParams &p, const RigBase &base) {
         int64_t r = parse_int(s.substr(x + 1), p.loc("size"), p.what("size") + " rows");
         if (c < 1 || r < 1)
             p.fail("size", "must be at least 1x1: a rig must produce at least one view (got '" + s + "')");
-        if (c * r > 100000) p.fail("size", "is too large (" + s + ")");
+        // (each factor first: their product may not fit in 64 bits)
+        if (c > MaxRigViews || r > MaxRigViews || c * r > MaxRigViews)
+            p.fail("size", "is too large ('" + s + "': at most " + std::to_string(MaxRigViews) + " views)");
         cols = int(c);
         rows = int(r);
     } else {
         cols = p.count("cols");
         rows = p.count("rows");
+        if (int64_t(cols) * rows > MaxRigViews)
+            p.fail("rows", "is too large (" + std::to_string(int64_t(cols) * rows) + " views: at most " +
+                               std::to_string(MaxRigViews) + ")");
     }
     double spacing = p.length("spacing"), fd = focus_distance(p);
     std::vector<RigView> views;
