@@ -44,12 +44,12 @@ struct MvSplitProbe {
 struct SplitStatistics {
     double a = 0.0, r = 0.0;
     double c0 = 0.0, c1 = 0.0;
+    uint64_t pixels = 0;
     /// The same for the native samples whose first vertex is purely specular, split K ways
     /// (MvConfig::delta_splits): r_d, one path's variance given the sample, and d1, a path's
     /// mean cost per native sample (one path-traced sample each); their a is in a. A native
     /// sample's variance is a + r / B + r_d / K, its cost c0 + B c1 + K d1.
     double r_d = 0.0, d1 = 0.0;
-    uint64_t pixels = 0;
 };
 
 /// The pilot's statistics from the records of every view (pairs of samples at each pixel);
