@@ -252,8 +252,8 @@ bool trace_unshared(const MvContext &ctx, NativeSample &s, bool hit, MvScratch &
     const Sampler stream = s.sampler;
     Spectrum paths[PilotSplits], L(0.f);
     for (int k = 0; k < k_paths; ++k) {
-        Sampler other = k > 0 ? stream.rekeyed(DeltaSplitKey + uint64_t(k)) : stream;
-        const Spectrum lk = ctx.path->trace(scene, s.ray, state, k > 0 ? other : s.sampler, counters, &s.si);
+        Sampler rekeyed = k > 0 ? stream.rekeyed(DeltaSplitKey + uint64_t(k)) : Sampler();
+        const Spectrum lk = ctx.path->trace(scene, s.ray, state, k > 0 ? rekeyed : s.sampler, counters, &s.si);
         if (k < PilotSplits) paths[k] = lk;
         L += lk;
     }
