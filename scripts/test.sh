@@ -7,9 +7,11 @@ cd "$(dirname "$0")/.."
 [ -x .venv/bin/python ] || { echo "run scripts/setup.sh first" >&2; exit 1; }
 # Test-only dependencies (Mitsuba 3 is the independent reference renderer; the OpenEXR
 # bindings read our multi-view EXRs independently; psutil finds Ray's worker processes),
-# then mvpt with its report and Ray extras.
-.venv/bin/pip install -q pytest scipy "mitsuba==3.9.1" "OpenEXR>=3.3" psutil
-.venv/bin/pip install -q ".[reports,ray]"
+# pytest-xdist runs the tests on every core), then mvpt with its report and Ray extras and,
+# in the same build directory as scripts/setup.sh's build, the C++ unit tests.
+.venv/bin/pip install -q pytest pytest-xdist scipy "mitsuba==3.9.1" "OpenEXR>=3.3" psutil \
+    "scikit-build-core>=0.10" "nanobind>=2.0"
+.venv/bin/pip install -q --no-build-isolation -C cmake.define.MVPT_BUILD_TESTS=ON ".[reports,ray]"
 # Headless Chromium (Debian) loads the HTML reports in tests/python/test_report.py; that
 # test fails under CI without it and skips elsewhere.
 if ! command -v chromium >/dev/null 2>&1; then
@@ -18,7 +20,13 @@ if ! command -v chromium >/dev/null 2>&1; then
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends chromium >/dev/null \
         || echo "warning: could not install chromium; the report's browser test will skip" >&2
 fi
-cmake -S . -B build/cpp-tests -G Ninja -DMVPT_BUILD_TESTS=ON >/dev/null
-cmake --build build/cpp-tests
-ctest --test-dir build/cpp-tests --output-on-failure
-.venv/bin/python -m pytest tests/python -q -rs "$@"
+# pyproject.toml's build-dir, build/{wheel_tag}
+tag=$(.venv/bin/python -c 'import sys, sysconfig; v = "cp%d%d" % sys.version_info[:2]; print(f"{v}-{v}-" + sysconfig.get_platform().replace("-", "_").replace(".", "_"))')
+"build/$tag/mvpt_tests" --gtest_brief=1
+# The Python tests on up to four cores (pytest-xdist), then those marked `serial`, which time
+# renders and signals, alone; the ten slowest of each are listed. Exit status 5 (no test
+# selected, e.g. by -k) is no failure.
+jobs=$(nproc); [ "$jobs" -le 4 ] || jobs=4
+run_pytest() { .venv/bin/python -m pytest tests/python -q -rs "$@" || [ $? = 5 ]; }
+run_pytest -n "$jobs" -m "not serial" --durations=10 "$@"
+run_pytest -m serial --durations=10 "$@"

@@ -16,7 +16,7 @@ namespace {
 
 // A floor at y = 0 (box sides at 0), a sphere, a cube, a disk and a cylinder (bounding-box
 // occluders), and a tilted triangle mesh.
-const char *SceneXml = R"(<scene version="3.0.0">
+const char *CullSceneXml = R"(<scene version="3.0.0">
   <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/></transform>
     <bsdf type="diffuse"/></shape>
   <shape type="sphere"><point name="center" x="0.1" y="0.35" z="0"/><float name="radius" value="0.3"/></shape>
@@ -80,7 +80,7 @@ bool make_bundle(const Scene &scene, std::mt19937 &rng, bool in_space, Bundle &b
 // Every bundle the tree declares free is free for Embree, segment by segment, and
 // occluded_segments (which uses the tree) equals one-ray queries.
 TEST(SegmentCull, CulledBundlesAreUnblocked) {
-    auto scene = load_scene_string(SceneXml, ".");
+    auto scene = load_scene_string(CullSceneXml, ".");
     scene->prepare_segment_culling();
     OccluderBvh bvh(scene->device(), scene->shapes());
     std::mt19937 rng(17);

@@ -25,7 +25,9 @@ from small_scenes import slow_scene
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes" / "mv"
 RES = 32          # 2 x 2 regions of 16^2 tiles in each of the 9 views
-GROUPS, PER_GROUP = 16, 32
+# 256 cut passes: the missing scale-up (a mean 4 or 9 times too low) is found with p ~ 1e-29
+# at a level of 2e-5, the thinned passes' missing weights and a mean 2 % low with p < 1e-10.
+GROUPS, PER_GROUP = 16, 16
 
 
 def _cut_runs(xml: str, seeds):
@@ -91,7 +93,7 @@ def test_cut_first_pass_is_unbiased(rfilter):
 THIN = 0.3  # the share of its native samples the thinned last pass takes
 
 
-@pytest.mark.parametrize("rfilter,passes,thinned,runs", [("box", 2, 1, 512), ("gaussian", 2, 1, 512), ("box", 6, 4, 256)])
+@pytest.mark.parametrize("rfilter,passes,thinned,runs", [("box", 2, 1, 256), ("gaussian", 2, 1, 256), ("box", 6, 4, 128)])
 def test_thinned_passes_are_unbiased(rfilter, passes, thinned, runs):
     """Whole passes and `thinned` last passes thinned to 30 % of their native samples, their
     sums scaled by 1/0.3 and weighing 0.3 (docs/multiview-path-tracing.md, "Passes thinned to

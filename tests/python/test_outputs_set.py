@@ -23,6 +23,8 @@ from mvpt import _core
 
 from small_scenes import scene, views
 
+pytestmark = pytest.mark.serial  # kills land at set times: never beside other tests
+
 ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
 CLI = [sys.executable, "-m", "mvpt.cli"]
 N_VIEWS = 40

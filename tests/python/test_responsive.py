@@ -13,6 +13,8 @@ import mvpt
 
 from small_scenes import slow_scene
 
+pytestmark = pytest.mark.serial  # latencies and time budgets are measured: never beside other tests
+
 # 32 views of 96^2 of the closed room: one pass is about a second on two cores.
 VIEWS, RES = 32, 96
 

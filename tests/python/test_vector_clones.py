@@ -14,12 +14,16 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import sys
+import sysconfig
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-BINARY = ROOT / "build" / "cpp-tests" / "mvpt_tests"
+# scripts/test.sh builds the C++ tests in the package's build directory, build/{wheel_tag} (pyproject.toml).
+_PY = "cp%d%d" % sys.version_info[:2]
+BINARY = ROOT / "build" / f"{_PY}-{_PY}-{sysconfig.get_platform().replace('-', '_').replace('.', '_')}" / "mvpt_tests"
 HEADER = re.compile(r"^[0-9a-f]+ <(.*) \[clone \.(arch_x86_64_v[34])\]>:$")
 
 

@@ -1,6 +1,7 @@
 #include "rig_visibility.h"
 
 #include "../core/sampler.h"
+#include "double3.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,10 +14,6 @@
 namespace mvpt {
 
 namespace {
-double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-void cross3(const double *a, const double *b, double *out) {
-    out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
-}
 bool normalize3(double *a) {
     const double l = std::sqrt(dot3(a, a));
     if (!(l > 1e-12) || !std::isfinite(l)) return false;

@@ -7,16 +7,13 @@
 #include <new>
 
 #include "../core/simd.h"
+#include "double3.h"
 #include "../render/shapes/mesh.h"
 #include "../render/shapes/sphere.h"
 
 namespace mvpt {
 
 namespace {
-double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-void cross3(const double *a, const double *b, double *out) {
-    out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 /// Relative margin of the double-precision tests: far above their rounding (~1e-15) and far
 /// below the spawn offset of a visibility ray's origin (~5e-6, interaction.h).

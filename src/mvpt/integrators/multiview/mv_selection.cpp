@@ -7,7 +7,7 @@
 namespace mvpt {
 
 namespace {
-const BsdfContext Ctx;
+const BsdfContext SelectionCtx;
 
 /// min/max ratio of two densities; 0 when both vanish (no evidence the lobes agree).
 float density_ratio(float a, float b) {
@@ -20,13 +20,13 @@ ViewLobe view_lobe(const Bsdf &bsdf, const SurfaceInteraction &si, Vec3f wi) {
     ViewLobe lobe;
     lobe.wi = wi;
     lobe.mirror = Vec3f(-wi.x, -wi.y, wi.z); // reflection about the shading normal
-    lobe.peak = bsdf.pdf(Ctx, si, wi, lobe.mirror);
+    lobe.peak = bsdf.pdf(SelectionCtx, si, wi, lobe.mirror);
     return lobe;
 }
 
 float total_variation_peak(const Bsdf &bsdf, const SurfaceInteraction &si, const ViewLobe &a, const ViewLobe &b) {
-    float q_a = density_ratio(a.peak, bsdf.pdf(Ctx, si, b.wi, a.mirror));
-    float q_b = density_ratio(b.peak, bsdf.pdf(Ctx, si, a.wi, b.mirror));
+    float q_a = density_ratio(a.peak, bsdf.pdf(SelectionCtx, si, b.wi, a.mirror));
+    float q_b = density_ratio(b.peak, bsdf.pdf(SelectionCtx, si, a.wi, b.mirror));
     return 1.f - std::min(q_a, q_b);
 }
 
@@ -41,10 +41,10 @@ float total_variation_mc(const Bsdf &bsdf, const SurfaceInteraction &si, Vec3f w
             float u1 = (float(i) + 0.5f) / float(N);
             Vec2f u2(bits_to_unit_float(owen_scramble(reverse_bits(uint32_t(i) * 0x9e3779b9u), 0x1234567u)),
                      bits_to_unit_float(owen_scramble(reverse_bits(uint32_t(i)), 0x89abcdefu)));
-            auto [bs, w] = bsdf.sample(Ctx, si, wi_p, u1, u2);
+            auto [bs, w] = bsdf.sample(SelectionCtx, si, wi_p, u1, u2);
             if (w.is_black() || !(bs.pdf > 0.f)) continue; // no mass produced by this point
             if (bs.sampled_type & BsdfDelta) { sum += 1.0; continue; }
-            float p = bsdf.pdf(Ctx, si, wi_p, bs.wo), q = bsdf.pdf(Ctx, si, wi_q, bs.wo);
+            float p = bsdf.pdf(SelectionCtx, si, wi_p, bs.wo), q = bsdf.pdf(SelectionCtx, si, wi_q, bs.wo);
             if (p > 0.f) sum += std::max(0.0, 1.0 - double(q) / double(p));
         }
         return sum / N;
