@@ -43,6 +43,16 @@ def _path(p, what: str) -> str:
     return _text(os.fspath(p), what)
 
 
+#: The most worker threads a render may ask for (0: one per core).
+MAX_THREADS = 1024
+
+
+def _threads(threads) -> int:
+    if not 0 <= int(threads) <= MAX_THREADS:
+        raise ValueError(f"threads must lie in [0, {MAX_THREADS}] (0: one per core), got {threads}")
+    return int(threads)
+
+
 def _rig(rig) -> str:
     """A rig specification for the native loader: "" for none; an empty or blank one is an error
     (it would silently render the scene's own sensors)."""
@@ -203,8 +213,7 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"spp must lie in [0, 2^31), got {spp}")
     if not 0.0 <= float(time) < math.inf:  # (a render of infinite time would never end)
         raise ValueError(f"time must be a finite number of seconds >= 0, got {time}")
-    if not 0 <= int(threads) < 2**31:
-        raise ValueError(f"threads must lie in [0, 2^31), got {threads}")
+    _threads(threads)
     if not float(poll) > 0.0:
         raise ValueError(f"poll must be > 0 seconds, got {poll}")
     if seed is not None and not 0 <= int(seed) < 2**32:
@@ -277,7 +286,7 @@ def _splits_option(splits) -> int:
 
 def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int = 0,
           state: Optional[str | os.PathLike] = None, images: bool = True,
-          identity: Optional[dict] = None) -> Optional[RenderResult]:
+          identity: Optional[dict] = None, unfinished: bool = False) -> Optional[RenderResult]:
     """The images of the state files `states`, ranges (or seeds) of one render of `scene`
     (render(passes=...)), as if one process had rendered them all: their accumulators are
     added in the order of their ranges (whatever order they are given in) and developed with the estimator's own arithmetic. States that
@@ -285,8 +294,11 @@ def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int 
     mvpt.StateError naming what differs. `state`: where to write the merged state (which can
     be merged further, not resumed). With images=False only that state is written (merging
     it with the next state then gives the same bits as merging all at once); `identity` is
-    state.scene_identity(scene) if already known (it reads every file of the scene)."""
+    state.scene_identity(scene) if already known (it reads every file of the scene). A range
+    stopped before its end raises mvpt.StateError (resume it first) unless `unfinished`, as
+    for ranges that a time budget stops on purpose (mvpt.distributed)."""
     _scene(scene, "merge")
+    _threads(threads)
     if isinstance(states, (str, bytes, os.PathLike)):  # one state, not the characters of its path
         states = [states]
     paths = [_path(p, "a state to merge") for p in states]
@@ -308,13 +320,33 @@ def merge(scene: _core.Scene, states: Sequence[str | os.PathLike], threads: int 
     if index == list(range(len(ids))):
         index = []
     merged = state_file.merged_header(headers)
+    # The merged state is written beside its place and moved there once the merge is whole.
+    unchecked = None if state is None else os.fspath(state) + ".unchecked"
     job = _core.RenderJob(scene, spp=int(settings["spp"] or 0), time=0.0, threads=int(threads), views=index,
-                          method=settings["method"], state_path=os.fspath(state) if state is not None else "",
-                          state_header=json.dumps(merged))
-    job.merge(paths, images)
+                          method=settings["method"], state_path=unchecked or "", state_header=json.dumps(merged))
+    try:
+        job.merge(paths, images)
+        if not unfinished:
+            _check_ranges_finished(merged["parts"], job.stats()["passes"])
+        if unchecked is not None:
+            os.replace(unchecked, state)
+    finally:
+        if unchecked is not None and os.path.exists(unchecked):
+            os.unlink(unchecked)
     if not images:
         return None
-    return _result(scene, job, index, dict(settings, threads=int(threads), merged=len(paths)))
+    return _result(scene, job, index, dict(settings, passes=None, parts=merged["parts"], threads=int(threads),
+                                           merged=len(paths)))
+
+
+def _check_ranges_finished(parts: list, passes: int) -> None:
+    """A StateError unless states whose parts name their pass counts hold all of those passes
+    (a range interrupted before its end is resumed, not merged)."""
+    counts = [p[2] for p in parts]
+    if None not in counts and passes < sum(counts):
+        raise state_file.StateError(
+            f"the states hold {passes} of the {sum(counts)} passes their ranges name: a range was interrupted; "
+            f"finish it first (mvpt render --resume, or mvpt.render(..., resume=...))")
 
 
 def _result(scene, job, index: list, settings: dict) -> RenderResult:

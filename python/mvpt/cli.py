@@ -19,7 +19,7 @@ from pathlib import Path
 from . import __version__, api, cli_common
 from . import state as state_file
 from ._core import SceneError
-from . import displays, reports_cli, state_cli
+from . import displays, output_lock, reports_cli, state_cli
 from .cli_common import EXIT_ERROR, EXIT_OK, EXIT_USAGE, write_all
 from .cli_common import count as _count, define as _define, error as _error, seconds as _seconds, seed as _seed
 from .cli_common import splits as _splits
@@ -83,7 +83,7 @@ class ProgressBar:
 def _failed(bar: "ProgressBar", e: Exception) -> int:
     """A render that raised: the progress line ended, one error line, the error exit code."""
     bar.finish(done=False)
-    _error(str(e) or type(e).__name__)
+    _error(cli_common.failure_text(e))
     return EXIT_ERROR
 
 
@@ -100,8 +100,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
         return EXIT_USAGE
     try:
         scene = api.load_file(scene_path, rig=args.rig, **defines)
-    except (SceneError, ValueError) as e:  # ValueError: arguments that are not text
-        _error(str(e))
+    except (SceneError, ValueError, RuntimeError, MemoryError) as e:  # ValueError: arguments that are not text
+        _error(cli_common.failure_text(e))
         return EXIT_ERROR
     try:
         views = api.resolve_views(scene, args.views.split(",")) if args.views else None
@@ -119,6 +119,15 @@ def _render(scene_path: Path, args, stem: str) -> int:
     if getattr(args, "ray", None) is not None and (args.passes or args.checkpoint or getattr(args, "resume", None)):
         _error("--ray splits the render into ranges itself; drop --passes, --checkpoint and --resume")
         return EXIT_USAGE
+    try:
+        args.output.mkdir(parents=True, exist_ok=True)
+        lock = output_lock.FolderLock(args.output)
+    except output_lock.FolderBusy as e:
+        _error(str(e))
+        return EXIT_ERROR
+    except OSError as e:
+        _error(f"cannot use the output directory {args.output}: {e.strerror or e}")
+        return EXIT_ERROR
     if not args.quiet:
         n = len(views) if views else len(scene.views)
         budget = [f"passes {args.passes[0]}:{args.passes[1]}" if args.passes else
@@ -126,16 +135,26 @@ def _render(scene_path: Path, args, stem: str) -> int:
         print(f"rendering {n} view{'s' if n != 1 else ''} of {scene_path.name} ({', '.join(budget)}; Ctrl-C stops "
               f"and writes the passes finished so far)", flush=True)
     bar = ProgressBar(enabled=False if args.quiet else None)
-    if getattr(args, "ray", None) is not None:
-        return _render_on_ray(scene_path, args, stem, views, bar)
+    with lock:
+        if getattr(args, "ray", None) is not None:
+            return _render_on_ray(scene_path, args, stem, views, bar)
+        return _render_here(scene, scene_path, args, stem, views, bar, defines)
+
+
+def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "ProgressBar", defines: dict) -> int:
+    """The render of `_render` in this process, its output folder held."""
     state = state_file.state_file(args.output, stem)
     keep_state = args.checkpoint > 0 or args.passes is not None  # a range's state is what merges
     resume = getattr(args, "resume_state", None)
+    # A state already there is another render's (--resume continues it): never overwritten or removed.
+    foreign = not resume and state.exists()
+    if foreign and keep_state:
+        _error(f"{state} holds the state of another render; continue it with `mvpt render --resume "
+               f"{args.output}`, remove it, or choose another -o")
+        return EXIT_ERROR
     try:
-        if not resume:
-            args.output.mkdir(parents=True, exist_ok=True)
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
-                            views=views, progress=bar, method=args.method, state=state,
+                            views=views, progress=bar, method=args.method, state=None if foreign else state,
                             checkpoint=args.checkpoint, resume=resume, state_at_end=keep_state,
                             state_extra={"command": state_cli.command_record(scene_path, args, stem)},
                             passes=args.passes, splits=args.splits)
@@ -146,11 +165,11 @@ def _render(scene_path: Path, args, stem: str) -> int:
     for warning in result.stats.get("warnings", []):
         print(f"mvpt: warning: {warning}", file=sys.stderr)
     if cancelled and result.stats["passes"] == 0:
-        if not resume:
+        if not resume and not foreign:
             state.unlink(missing_ok=True)
         print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
         return cli_common.exit_code()
-    if not cancelled and not keep_state:
+    if not cancelled and not keep_state and not foreign:
         state.unlink(missing_ok=True)  # the render is complete: a state was not asked for
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
     if args.rig:
@@ -162,8 +181,12 @@ def _render(scene_path: Path, args, stem: str) -> int:
         print_summary(result)
         print(f"wrote {len(paths)} files to {args.output}{'/' if not str(args.output).endswith('/') else ''}")
     if cancelled:
-        print(f"mvpt: interrupted; wrote the passes finished so far and their state; continue with: "
-              f"mvpt render --resume {args.output}", file=sys.stderr)
+        if foreign:
+            print(f"mvpt: interrupted; wrote the passes finished so far, without a state to resume from "
+                  f"({state} is another render's)", file=sys.stderr)
+        else:
+            print(f"mvpt: interrupted; wrote the passes finished so far and their state; continue with: "
+                  f"mvpt render --resume {args.output}", file=sys.stderr)
         return cli_common.exit_code()
     return EXIT_OK
 
@@ -201,6 +224,17 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     return EXIT_OK
 
 
+RAY_ONLY = ("workers", "shared_scene", "wheel")
+
+
+def _ray_only_options(args) -> str:
+    """The --ray options given without --ray: an error line, or ''."""
+    stray = [f"--{k.replace('_', '-')}" for k in RAY_ONLY if k in args.given]
+    if stray and getattr(args, "ray", None) is None:
+        return f"{', '.join(stray)} only apply with --ray"
+    return ""
+
+
 def _add_render_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("-D", "--define", action="append", type=_define, metavar="NAME=VALUE",
                    help="override a <default> of the scene (repeatable)")
@@ -211,7 +245,7 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                         "first pass; mvpt cuts its first pass and keeps what it finished, and thins its last pass "
                         "to the time left)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
-    p.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
+    p.add_argument("--threads", type=cli_common.threads, default=0, help="worker threads (default: all cores)")
     p.add_argument("--method", choices=("pt", "mvpt"), default="scene",
                    help="pt: independent path tracing of every view; mvpt: multi-view path tracing "
                         "(default: the scene's integrator, 'mvpath' meaning mvpt)")
@@ -282,6 +316,14 @@ def main(argv=None, keep_handlers: bool = False) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:
         return int(e.code) if isinstance(e.code, int) else EXIT_USAGE
+    if args.command in ("render", "demo"):
+        # The options given on the command line, as opposed to left at their defaults.
+        defaults = vars((p_render if args.command == "render" else p_demo).parse_args([]))
+        args.given = {k for k, v in vars(args).items() if k in defaults and k != "scene" and v != defaults[k]}
+        problem = _ray_only_options(args)
+        if problem:
+            _error(problem)
+            return EXIT_USAGE
     cli_common.reset_stop()
     in_main_thread = threading.current_thread() is threading.main_thread()
     stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)

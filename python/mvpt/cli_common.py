@@ -37,6 +37,18 @@ def exit_code() -> int:
     return 128 + int(stopped_by or signal.SIGINT)
 
 
+def failure_text(e: BaseException) -> str:
+    """The error line's text for an exception out of a load or a render: memory exhausted (a
+    bare std::bad_alloc, threads that could not start) said as such."""
+    text = str(e)
+    if isinstance(e, MemoryError) or text in ("std::bad_alloc", "bad_alloc"):
+        return "out of memory" + (f" ({text})" if text and "bad_alloc" not in text else "") + \
+            " (is a memory limit set, by ulimit -v or a container?)"
+    if "Resource temporarily unavailable" in text:
+        return f"cannot start the worker threads: {text} (a limit on processes or memory?)"
+    return text or type(e).__name__
+
+
 def error(msg: str) -> None:
     print(f"mvpt: error: {msg}", file=sys.stderr)
 
@@ -48,6 +60,15 @@ def count(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer, got '{text}'")
     if not 0 <= v < 2**31:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer below 2^31, got {v}")
+    return v
+
+
+def threads(text: str) -> int:
+    """--threads: 0 (one per core) to api.MAX_THREADS."""
+    from .api import MAX_THREADS
+    v = count(text)
+    if v > MAX_THREADS:
+        raise argparse.ArgumentTypeError(f"at most {MAX_THREADS} threads (0: one per core), got {v}")
     return v
 
 

@@ -110,6 +110,9 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
     view_ids = [ids[i] for i in index] or ids
     total = int(spp) or max(v["spp"] for v in scene.views)
     started_here = not ray.is_initialized()
+    if wheel is not None and not (Path(wheel).is_file() and str(wheel).endswith(".whl")):
+        raise ValueError(f"wheel: '{api.shown(os.fspath(wheel))}' is not a wheel file (.whl); make one with "
+                         f"scripts/build-wheel.sh")
     if wheel is not None and not started_here:
         raise RuntimeError("a wheel for the nodes is given to Ray when it starts: call distributed.render "
                            "before ray.init, or pass runtime_env={'py_modules': [wheel]} to ray.init")
@@ -159,7 +162,8 @@ class _Merger:
                 self.merged = path
             else:
                 out = self.tmp / f"merged_{self.next:010d}{state_file.SUFFIX}"
-                api.merge(self.scene, [self.merged, path], state=out, images=False, identity=self.identity)
+                api.merge(self.scene, [self.merged, path], state=out, images=False, identity=self.identity,
+                          unfinished=True)  # ranges end at the time budget
                 self.merged.unlink(), path.unlink()
                 self.merged = out
             self.next += count
@@ -202,7 +206,7 @@ def _run(ray, task, pack_ref, pack_bytes, scene, scene_file, rig, defines, share
                 ray.cancel(ref, force=True)
         if merger.merged is None:
             raise KeyboardInterrupt if cancelled else RuntimeError("no range finished within the time budget")
-        result = api.merge(scene, [merger.merged], state=keep_state, identity=merger.identity)
+        result = api.merge(scene, [merger.merged], state=keep_state, identity=merger.identity, unfinished=True)
     result.stats["cancelled"] = cancelled
     result.stats["distributed"] = {
         "tasks": len(task_seconds), "workers": workers, "cpus_per_task": cpus,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ._core import SceneError
 from .cli_common import EXIT_ERROR, EXIT_OK
-from .cli_common import count as _count, define as _define, error as _error, seed as _seed
+from .cli_common import count as _count, define as _define, error as _error, seed as _seed, threads as _threads
 
 COMMANDS = ("compare", "bench-equal-time")
 
@@ -59,7 +59,7 @@ def add_commands(sub) -> None:
     b.add_argument("-D", "--define", action="append", type=_define, metavar="NAME=VALUE",
                    help="override a <default> of the scene (repeatable)")
     b.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
-    b.add_argument("--threads", type=_count, default=0, help="worker threads (default: all cores)")
+    b.add_argument("--threads", type=_threads, default=0, help="worker threads (default: all cores)")
     b.add_argument("--views", default=None, metavar="LIST", help="comma-separated view ids or indices")
     b.add_argument("-o", "--output", type=Path, default=Path("bench"), help="report directory (default: bench)")
     b.add_argument("-q", "--quiet", action="store_true", help="no progress lines")

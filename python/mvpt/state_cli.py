@@ -9,7 +9,7 @@ from . import api
 from . import state as state_file
 from ._core import SceneError, StateError
 from .cli_common import EXIT_ERROR, EXIT_OK, EXIT_USAGE, write_all
-from .cli_common import error as _error
+from .cli_common import error as _error, threads as _threads
 from .summary import print_summary
 
 # The options that make a render's image: `--resume` takes them from the state file.
@@ -68,7 +68,10 @@ def _restore(args, record: dict) -> None:
 def resume(args, render) -> int:
     """`mvpt render --resume OUT`: continue the render whose state is in OUT (or is the file OUT)
     with `render(scene path, args, stem)`."""
-    given = [f"--{k.replace('_', '-')}" for k in IMAGE_OPTIONS if getattr(args, k) not in (None, 0, 0.0, "scene", [])]
+    explicit = getattr(args, "given", None)
+    if explicit is None:  # not from cli.main: what differs from the defaults
+        explicit = {k for k in RECORDED_OPTIONS if getattr(args, k) not in (None, 0, 0.0, "scene", [], False)}
+    given = [f"--{k.replace('_', '-')}" for k in IMAGE_OPTIONS if k in explicit]
     if args.scene is not None:
         given.insert(0, "a scene")
     if given:
@@ -80,8 +83,15 @@ def resume(args, render) -> int:
     except StateError as e:
         _error(str(e))
         return EXIT_ERROR
+    if "output" in explicit and Path(args.output).resolve() != path.parent.resolve():
+        _error(f"--resume writes into the folder of its state, {path.parent}; drop -o {args.output}")
+        return EXIT_USAGE
     checkpoint = args.checkpoint
+    # Outputs given now (--aovs, --quilt ...) are added to or replace those of the first run.
+    outputs = {k: getattr(args, k) for k in RECORDED_OPTIONS if k not in IMAGE_OPTIONS and k in explicit}
     _restore(args, record)
+    for k, v in outputs.items():
+        setattr(args, k, v)
     args.output = path.parent
     args.resume_state = path
     # Periodic checkpoints go on unless changed.
@@ -94,7 +104,7 @@ def add_merge_command(sub) -> None:
     p.add_argument("states", nargs="+", type=Path, metavar="STATE",
                    help="state files (<stem>.mvpt-state), or output directories holding one each")
     p.add_argument("-o", "--output", type=Path, required=True, help="output directory of the merged render")
-    p.add_argument("--threads", type=int, default=0, help="worker threads (default: all cores)")
+    p.add_argument("--threads", type=_threads, default=0, help="worker threads (default: all cores)")
     p.add_argument("-q", "--quiet", action="store_true", help="no summary")
 
 

@@ -23,6 +23,8 @@ from mvpt import state as state_file
 
 from small_scenes import slow_scene
 
+pytestmark = pytest.mark.serial  # signals arrive at set times: never beside other tests
+
 ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
 CLI = [sys.executable, "-m", "mvpt.cli"]
 SCENES = Path(__file__).resolve().parents[1] / "scenes" / "mv"
@@ -151,6 +153,11 @@ def _corrupt(path: Path, how: str):
     elif how == "flipped":
         data[len(data) // 2] ^= 0x10
         path.write_bytes(bytes(data))
+    elif how == "header":  # a digit of the JSON header changed: still valid JSON, only the checksum tells
+        start = 8 + 4 + 8
+        i = next(i for i in range(start, len(data)) if chr(data[i]).isdigit())
+        data[i] = ord("7") if data[i] != ord("7") else ord("3")
+        path.write_bytes(bytes(data))
     elif how == "appended":
         path.write_bytes(bytes(data) + b"\0")
     else:
@@ -158,6 +165,7 @@ def _corrupt(path: Path, how: str):
 
 
 @pytest.mark.parametrize("how,message", [("truncated", "is truncated"), ("flipped", "is corrupt"),
+                                         ("header", "is corrupt"),
                                          ("appended", "is corrupt"), ("garbage", "is not an mvpt state file")])
 def test_corrupt_state_is_refused(tmp_path, capsys, how, message):
     scene_path = tmp_path / "room.xml"
@@ -181,14 +189,24 @@ def test_resume_takes_no_image_options(tmp_path, capsys):
     assert "holds no render states" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
-def test_cli_signal_then_resume(tmp_path, sig):
-    path = tmp_path / "slow.xml"
+SIGNALLED = ["--spp", "400", "--seed", "3", "--method", "mvpt", "--aovs", "-q"]
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """The scene of test_cli_signal_then_resume and its render never stopped."""
+    path = tmp_path_factory.mktemp("signalled") / "slow.xml"
     path.write_text(slow_scene(3, res=32))
-    args = ["--spp", "400", "--seed", "3", "--method", "mvpt", "--aovs", "-q"]
-    whole = tmp_path / "whole"
-    assert subprocess.run(CLI + ["render", str(path), *args, "-o", str(whole)], env=ENV).returncode == 0
+    whole = path.parent / "whole"
+    assert subprocess.run(CLI + ["render", str(path), *SIGNALLED, "-o", str(whole)], env=ENV).returncode == 0
     assert not (whole / "slow.mvpt-state").exists()  # a finished render keeps no state unless asked
+    return path, whole
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_cli_signal_then_resume(tmp_path, sig, uninterrupted):
+    path, whole = uninterrupted
+    args = SIGNALLED
     out = tmp_path / "out"
     proc = subprocess.Popen(CLI + ["render", str(path), *args, "--checkpoint", "0.2", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,

@@ -266,6 +266,8 @@ def test_views_by_id_and_index(tmp_path):
     (["--threads", "-3"], "--threads"),
     (["--spp", str(2**31)], "below 2^31"),  # once a traceback from the native module
     (["--threads", str(2**40)], "below 2^31"),
+    (["--threads", "100000"], "at most 1024 threads"),  # once refused for the films' memory
+    (["--workers", "2"], "only apply with --ray"),
     (["--passes", "0:0"], "FIRST:COUNT"),
     (["--passes", f"{2**31 - 1}:2"], "FIRST:COUNT"),
     (["--seed", "-1"], "--seed"),
@@ -351,3 +353,35 @@ def test_python_dash_m_mvpt_and_version():
     proc = subprocess.run([sys.executable, "-m", "mvpt", "--version"], capture_output=True, text=True,
                           timeout=60, env=ENV)
     assert proc.returncode == 0 and proc.stdout.strip() == f"mvpt {mvpt.__version__}"
+
+
+@pytest.mark.parametrize("mib", [200, 300, 350, 700, 1200])
+def test_memory_limits_give_one_line(tmp_path, mib):
+    """Under an address-space limit (`ulimit -v`) a render works or ends with one error line and
+    exit code 1: never a crash (Embree's allocations were unchecked), a bare std::bad_alloc or a
+    traceback. The preflight counts the limit too."""
+    import resource
+    path = tmp_path / "box.xml"
+    path.write_text(scene(sensor(res=16)))
+    limit = mib << 20
+    proc = subprocess.run(CLI + ["render", str(path), "-o", str(tmp_path / "out"), "-q", "--threads", "1"],
+                          capture_output=True, text=True, timeout=120, env=ENV,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+    assert proc.returncode in (0, 1), (proc.returncode, proc.stderr[-2000:])
+    if proc.returncode == 1:
+        lines = proc.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("mvpt: error: "), proc.stderr[-2000:]
+        assert "bad_alloc" not in lines[0] and ("memory" in lines[0] or "limit" in lines[0]), lines
+
+
+def test_preflight_counts_the_address_space_limit(tmp_path):
+    """A film that fits the machine but not `ulimit -v` is refused before it is allocated, naming the limit."""
+    import resource
+    path = tmp_path / "big.xml"
+    path.write_text(scene(sensor(res=8192)))  # about 2 GiB of films
+    limit = 1536 << 20
+    proc = subprocess.run(CLI + ["render", str(path), "-o", str(tmp_path / "out"), "-q", "--spp", "1"],
+                          capture_output=True, text=True, timeout=120, env=ENV,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+    assert proc.returncode == 1, proc.stderr[-2000:]
+    assert "the address-space limit (ulimit -v) leaves" in proc.stderr, proc.stderr[-2000:]

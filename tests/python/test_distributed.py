@@ -22,6 +22,8 @@ from mvpt import cli, distributed
 
 from small_scenes import slow_scene
 
+pytestmark = pytest.mark.serial  # local Ray clusters start and stop: never beside other tests
+
 
 @pytest.fixture(scope="module")
 def cluster():
@@ -112,6 +114,14 @@ def test_cli_ray(cluster, scene_file, tmp_path):
     img = mvpt._core.read_image(str(out / "room_v1.exr"))
     assert np.array_equal(img, _local(scene_file, tmp_path, "mvpt", [(0, 8), (8, 8)], seed=2).images["v1"])
     assert cli.main(["render", str(scene_file), "--ray", "--passes", "0:4", "-o", str(out)]) == 2
+
+
+def test_cli_ray_refuses_a_missing_wheel(scene_file, tmp_path, capsys):
+    """Checked before Ray starts, as one line (not Ray's RuntimeEnvSetupError)."""
+    assert cli.main(["render", str(scene_file), "--spp", "1", "--ray", "--wheel", str(tmp_path / "nothere.whl"),
+                     "-q", "-o", str(tmp_path / "out")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nothere.whl' is not a wheel file" in err[0], err
 
 
 def test_time_budget_covers_the_cluster(cluster, scene_file):

@@ -319,6 +319,29 @@ def test_sigma_a_and_sigma_t_together_is_an_error():
     _error(fog_scene(homogeneous('<float name="sigma_a" value="1"/><float name="sigma_t" value="2"/>')), "either sigma_t")
 
 
+@pytest.mark.parametrize("params,match", [
+    ('<float name="sigma_a" value="-0.5"/><float name="sigma_s" value="1"/>', r"sigma_a must lie in \[0, inf\]"),
+    ('<float name="sigma_a" value="2"/><float name="sigma_s" value="-1"/>', r"sigma_s must lie in \[0, inf\]"),
+    ('<float name="sigma_t" value="1"/><float name="albedo" value="-0.5"/>', r"albedo must lie in \[0, 1\]"),
+    ('<float name="sigma_t" value="1"/><rgb name="albedo" value="0.5, 1.2, 0.5"/>', r"albedo must lie in \[0, 1\].*to 1.2")])
+def test_coefficients_out_of_range(params, match):
+    """An albedo outside [0, 1] or a negative absorption or scattering coefficient (which
+    sigma_a + sigma_s >= 0 alone lets through) is refused, naming the parameter."""
+    _error(fog_scene(homogeneous(params)), match)
+
+
+@pytest.mark.parametrize("name,grid,match", [("sigma_t", -0.1, r"sigma_t must lie in \[0, inf\]"),
+                                             ("albedo", 1.5, r"albedo must lie in \[0, 1\]")])
+def test_grid_coefficients_out_of_range(tmp_path, name, grid, match):
+    g = blob_grid(4)
+    g.flat[5] = grid
+    vol = write_vol(tmp_path / "g.vol", g)
+    other = '<float name="albedo" value="0.5"/>' if name == "sigma_t" else '<float name="sigma_t" value="1"/>'
+    medium = ("heterogeneous", f'<volume type="gridvolume" name="{name}"><string name="filename" value="{vol}"/>'
+              f'</volume>{other}')
+    _error(fog_scene(medium), match)
+
+
 def test_hg_asymmetry_out_of_range():
     _error(fog_scene(homogeneous("", '<phase type="hg"><float name="g" value="1"/></phase>')), r"\(-1, 1\)")
 

@@ -122,3 +122,29 @@ def test_cli_ranges_and_merge(tmp_path, capsys):
     assert "share samples" in capsys.readouterr().err
     assert cli.main(["render", str(path), "--passes", "0:4", "--spp", "4"]) == 2
     assert cli.main(["render", str(path), "--passes", "4"]) == 2
+
+
+def test_merge_refuses_an_interrupted_range(tmp_path):
+    """A range stopped before its end (here 0:4 whole and 4:400 after some passes) is resumed,
+    not merged: the merge names the passes missing and writes no state."""
+    scene = mvpt.load_string(slow_scene(2, res=16))
+    (a,) = _ranges(scene, tmp_path, "mvpt", [(0, 4)])
+    b = tmp_path / "b.mvpt-state"
+    calls = []
+
+    def stop_soon(progress):
+        calls.append(progress)
+        if len(calls) == 10:
+            raise KeyboardInterrupt
+
+    cut = mvpt.render(scene, seed=1, method="mvpt", passes=(4, 396), state=b, progress=stop_soon, poll=0.001)
+    assert cut.stats["cancelled"] and 0 < cut.stats["passes"] < 396
+    merged = tmp_path / "m.mvpt-state"
+    with pytest.raises(mvpt.StateError, match=rf"hold {4 + cut.stats['passes']} of the 400 passes .* interrupted"):
+        mvpt.merge(scene, [a, b], state=merged)
+    assert not merged.exists() and not list(tmp_path.glob("m.mvpt-state*"))
+    done = mvpt.render(scene, seed=1, method="mvpt", passes=(4, 396), state=b, resume=b)
+    assert not done.stats["cancelled"]
+    whole = mvpt.merge(scene, [a, b], state=merged)
+    assert whole.stats["passes"] == 400 and merged.exists()
+    assert whole.stats["settings"]["passes"] is None and whole.stats["settings"]["parts"] == [[1, 0, 4], [1, 4, 396]]

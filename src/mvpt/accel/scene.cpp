@@ -1,6 +1,7 @@
 #include "scene.h"
 
 #include "ray_packet.h"
+#include "../render/embree_errors.h"
 
 #include <algorithm>
 #include <cstring>
@@ -9,15 +10,16 @@
 namespace mvpt {
 
 namespace {
+/// Embree's own report; an allocation that failed is reported once, by embree_check.
 void embree_error(void *, RTCError code, const char *str) {
-    std::fprintf(stderr, "mvpt: Embree error %d: %s\n", int(code), str ? str : "");
+    if (code != RTC_ERROR_OUT_OF_MEMORY) std::fprintf(stderr, "mvpt: Embree error %d: %s\n", int(code), str ? str : "");
 }
 } // namespace
 
 Scene::Scene() {
-    m_device = rtcNewDevice(nullptr);
+    m_device = embree_checked(rtcNewDevice(nullptr), nullptr, "its device");
     rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
-    m_scene = rtcNewScene(m_device);
+    m_scene = embree_checked(rtcNewScene(m_device), m_device, "the scene");
     rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
 }
 
@@ -56,6 +58,7 @@ void Scene::build(SceneParts parts) {
         if (shape->emitter) m_lights.push_back(shape->emitter);
     }
     rtcCommitScene(m_scene);
+    embree_check(m_device, "the scene's bounding volume hierarchy");
     for (auto &shape : m_shapes) m_has_media |= shape->is_medium_transition();
     for (auto &cam : m_cameras) m_has_media |= cam->medium != nullptr;
     if (m_has_media && (m_integrator->name() == "path" || m_integrator->name() == "mvpath"))

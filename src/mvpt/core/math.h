@@ -102,6 +102,7 @@ struct Color3f {
     Color3f &operator*=(float s) { r *= s; g *= s; b *= s; return *this; }
     bool is_black() const { return r == 0.f && g == 0.f && b == 0.f; }
     float max_value() const { return std::max(r, std::max(g, b)); }
+    float min_value() const { return std::min(r, std::min(g, b)); }
     float mean() const { return (r + g + b) * (1.f / 3.f); }
     /// Rec. 709 luminance.
     float luminance() const { return 0.212671f * r + 0.715160f * g + 0.072169f * b; }

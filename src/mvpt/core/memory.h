@@ -1,12 +1,21 @@
 // What the operating system says about memory: this process's resident size and how much
-// more it can have (Linux /proc; 0 where unknown).
+// more it can have (Linux /proc, getrlimit and the cgroup's files; 0 where unknown).
 #pragma once
 
 namespace mvpt {
 
 /// Bytes this process holds in physical memory now.
 double resident_bytes();
-/// Bytes of memory available for new allocations without swapping (MemAvailable).
-double available_bytes();
+
+/// How much more memory this process can have, and what sets that bound.
+struct MemoryRoom {
+    double bytes = 0.0;  ///< 0: unknown
+    const char *limit = "the machine";  ///< "the machine", "the address-space limit (ulimit -v)", ...
+};
+
+/// The least of: the machine's memory available without swapping (MemAvailable), what the
+/// address-space limit (RLIMIT_AS, `ulimit -v`) leaves and what the cgroup's limit
+/// (memory.max, a container's) leaves.
+MemoryRoom available_memory();
 
 } // namespace mvpt

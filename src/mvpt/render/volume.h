@@ -18,6 +18,8 @@ public:
     virtual Spectrum eval(Point3f p) const = 0;
     /// The largest value over every point and channel.
     virtual float max_value() const = 0;
+    /// The smallest value over every point and channel.
+    virtual float min_value() const = 0;
     /// Where the volume can be non-zero (unbounded for a constant).
     virtual BoundingBox bounds() const = 0;
     /// 1 or 3.
@@ -32,5 +34,9 @@ std::shared_ptr<Volume> constant_volume(Spectrum value);
 /// The volume parameter `name`: a nested or referenced `<volume name="...">`, or a constant
 /// given as `<float>`, `<rgb>` or `<spectrum>` (read as `use`), or `def` when absent.
 std::shared_ptr<Volume> get_volume(const Properties &props, const std::string &name, Color3f def, SpectrumUse use);
+
+/// Fails the parameter `name` unless every value of `v` lies in [lo, hi] (`what` says why).
+void check_volume_range(const Properties &props, const std::string &name, const Volume &v, float lo, float hi,
+                        const char *what);
 
 } // namespace mvpt

@@ -1,5 +1,6 @@
 #include "render_state.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -131,6 +132,33 @@ void StateReader::finish() {
     if (std::fgetc(m_file) != EOF) throw StateError("the state file '" + m_path + "' is corrupt (data after its end)");
 }
 
-std::string read_state_header(const std::string &path) { return StateReader(path).header(); }
+void StateReader::verify() {
+    const long start = std::ftell(m_file);
+    if (start < 0 || std::fseek(m_file, 0, SEEK_END) != 0) throw StateError("cannot read the state file '" + m_path + "'");
+    uint64_t left = uint64_t(std::ftell(m_file) - start);
+    std::fseek(m_file, start, SEEK_SET);
+    std::vector<unsigned char> data;
+    while (left > sizeof(uint64_t)) {  // blocks of (count, size, count * size bytes), then the checksum
+        uint64_t n = 0;
+        uint32_t s = 0;
+        if (left < sizeof(n) + sizeof(s) + sizeof(uint64_t))
+            throw StateError("the state file '" + m_path + "' is corrupt (its blocks do not fill it)");
+        read(&n, sizeof(n));
+        read(&s, sizeof(s));
+        left -= sizeof(n) + sizeof(s);
+        if (s == 0 ? n != 0 : n > left / s) throw StateError("the state file '" + m_path + "' is truncated");
+        data.resize(n * s);
+        read(data.data(), data.size());
+        left -= data.size();
+        m_hash = hash_bytes(hash_bytes(m_hash, &n, sizeof(n)), data.data(), data.size());
+    }
+    finish();
+}
+
+std::string read_state_header(const std::string &path) {
+    StateReader reader(path);
+    reader.verify();
+    return reader.header();
+}
 
 } // namespace mvpt

@@ -70,6 +70,9 @@ public:
     }
     /// Checks the checksum and that nothing follows it.
     void finish();
+    /// Reads every block to the end and checks the checksum, without using them: what the
+    /// header says is trusted only after this.
+    void verify();
 
 private:
     void block(void *data, size_t size, size_t count);

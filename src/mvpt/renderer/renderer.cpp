@@ -65,12 +65,13 @@ Renderer::Renderer(const Scene &scene, RenderOptions opts) : m_scene(scene), m_o
     // Refuse films that cannot fit in memory instead of letting the allocation (or the OOM
     // killer) fail mid-render.
     m_stats.estimated_bytes = estimate_peak_bytes();
-    const double resident = resident_bytes(), available = available_bytes();
-    if (available > 0.0 && m_stats.estimated_bytes - resident > available)
+    const double resident = resident_bytes();
+    const MemoryRoom room = available_memory();
+    if (room.bytes > 0.0 && m_stats.estimated_bytes - resident > room.bytes)
         throw std::runtime_error("the films of the " + std::to_string(m_views.size()) + " views need about " +
                                  std::to_string(int64_t((m_stats.estimated_bytes - resident) / (1 << 20))) +
-                                 " MiB but the machine has " + std::to_string(int64_t(available / (1 << 20))) +
-                                 " MiB of memory available");
+                                 " MiB but " + room.limit + " leaves " + std::to_string(int64_t(room.bytes / (1 << 20))) +
+                                 " MiB");
     if (m_multiview) return; // multi-view path tracing makes its films when it prepares (prepare_multiview)
     make_films([&](size_t slot) {
         const FilmDesc &f = cams[m_views[slot]]->film;

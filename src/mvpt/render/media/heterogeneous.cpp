@@ -25,6 +25,8 @@ public:
         if (!(m_scale >= 0.f) || !std::isfinite(m_scale)) props.fail("scale", "scale must be finite and >= 0");
         m_sigma_t = get_volume(props, "sigma_t", Color3f(1.f), SpectrumUse::Unbounded);
         m_albedo = get_volume(props, "albedo", Color3f(0.75f), SpectrumUse::Reflectance);
+        check_volume_range(props, "sigma_t", *m_sigma_t, 0.f, Infinity, "an extinction coefficient");
+        check_volume_range(props, "albedo", *m_albedo, 0.f, 1.f, "the scattering share of extinction");
         m_majorant = m_sigma_t->max_value() * m_scale;
         if (!std::isfinite(m_majorant) || m_majorant < 0.f) props.fail("sigma_t", "the extinction must be finite and >= 0");
         m_bounds = m_sigma_t->bounds();

@@ -23,6 +23,8 @@ public:
                                           " with them");
             Color3f a = props.get_color("sigma_a", Color3f(0.f), SpectrumUse::Unbounded);
             Color3f s = props.get_color("sigma_s", Color3f(0.f), SpectrumUse::Unbounded);
+            check_volume_range(props, "sigma_a", *constant_volume(a), 0.f, Infinity, "an absorption coefficient");
+            check_volume_range(props, "sigma_s", *constant_volume(s), 0.f, Infinity, "a scattering coefficient");
             sigma_t = a + s;
             Color3f albedo;
             for (int c = 0; c < 3; ++c) albedo[c] = sigma_t[c] > 0.f ? s[c] / sigma_t[c] : 0.f;
@@ -31,6 +33,7 @@ public:
             if (!get_volume(props, "sigma_t", Color3f(1.f), SpectrumUse::Unbounded)->constant(sigma_t))
                 props.fail("sigma_t", "a homogeneous medium needs a constant sigma_t: use a 'heterogeneous' medium for a grid");
             m_albedo = get_volume(props, "albedo", Color3f(0.75f), SpectrumUse::Reflectance);
+            check_volume_range(props, "albedo", *m_albedo, 0.f, 1.f, "the scattering share of extinction");
         }
         for (int c = 0; c < 3; ++c)
             if (!(sigma_t[c] >= 0.f) || !std::isfinite(sigma_t[c] * scale))

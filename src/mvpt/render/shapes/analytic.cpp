@@ -1,5 +1,7 @@
 #include "analytic.h"
 
+#include "../embree_errors.h"
+
 #include <embree3/rtcore_ray.h>
 
 #include <vector>
@@ -69,7 +71,7 @@ void AnalyticShape::intersect_t_n(const RTCRayN *rays, unsigned n, const int *va
 }
 
 unsigned AnalyticShape::attach(RTCDevice device, RTCScene scene, const MotionTime &) {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    RTCGeometry g = embree_checked(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER), device, "a shape");
     rtcSetGeometryUserPrimitiveCount(g, 1);
     rtcSetGeometryUserData(g, this);
     rtcSetGeometryBoundsFunction(g, bounds_callback, nullptr);
@@ -78,6 +80,7 @@ unsigned AnalyticShape::attach(RTCDevice device, RTCScene scene, const MotionTim
     rtcCommitGeometry(g);
     unsigned id = rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
+    embree_check(device, "a shape");
     return id;
 }
 

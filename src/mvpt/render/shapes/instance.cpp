@@ -1,5 +1,6 @@
 #include "instance.h"
 
+#include "../embree_errors.h"
 #include "../light.h"
 
 #include <embree3/rtcore_quaternion.h>
@@ -21,7 +22,7 @@ ShapeGroup::~ShapeGroup() {
 RTCScene ShapeGroup::embree_scene(RTCDevice device) {
     std::lock_guard<std::mutex> lock(m_build_mutex);
     if (m_scene) return m_scene;
-    m_scene = rtcNewScene(device);
+    m_scene = embree_checked(rtcNewScene(device), device, "an instanced group");
     rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
     for (auto &s : m_shapes) {
         unsigned gid = s->attach(device, m_scene, MotionTime{}); // members never move on their own
@@ -29,6 +30,7 @@ RTCScene ShapeGroup::embree_scene(RTCDevice device) {
         m_by_geom[gid] = s.get();
     }
     rtcCommitScene(m_scene);
+    embree_check(device, "an instanced group's bounding volume hierarchy");
     return m_scene;
 }
 
@@ -115,7 +117,7 @@ bool Instance::time_range(float &begin, float &end) const {
 unsigned Instance::attach(RTCDevice device, RTCScene scene, const MotionTime &motion) {
     m_motion = motion;
     RTCScene sub = m_group->embree_scene(device);
-    m_geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+    m_geom = embree_checked(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE), device, "an instance");
     rtcSetGeometryInstancedScene(m_geom, sub);
     if (!m_to_world.is_animated()) {
         float xfm[12];

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 #include "../bsdf.h"
+#include "../embree_errors.h"
 #include "../light.h"
 
 namespace mvpt {
@@ -125,17 +126,20 @@ std::vector<Normal3f> compute_vertex_normals(const MeshData &mesh) {
 }
 
 unsigned TriangleMesh::attach(RTCDevice device, RTCScene scene, const MotionTime &) {
-    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCGeometry g = embree_checked(rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE), device, "a mesh");
+    struct Release { RTCGeometry g; ~Release() { rtcReleaseGeometry(g); } } owner{g};
     // Embree reads 16 bytes per vertex: pad the buffer by one float.
     auto *v = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                                m_data.positions.size());
+    embree_check(device, "a mesh's vertices", m_data.positions.empty() ? g : (void *)v);  // (none: no buffer)
     std::memcpy(v, m_data.positions.data(), m_data.positions.size() * sizeof(Point3f));
     auto *idx = (uint32_t *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
                                                     m_data.triangle_count());
+    embree_check(device, "a mesh's triangles", m_data.indices.empty() ? g : (void *)idx);
     std::memcpy(idx, m_data.indices.data(), m_data.indices.size() * sizeof(uint32_t));
     rtcCommitGeometry(g);
     unsigned id = rtcAttachGeometry(scene, g);
-    rtcReleaseGeometry(g);
+    embree_check(device, "a mesh");
     return id;
 }
 

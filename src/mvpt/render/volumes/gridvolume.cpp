@@ -35,7 +35,7 @@ public:
             to_world = to_world * Transform::translate(Vec3f(m_grid.box_min)) * Transform::scale(extent);
         }
         m_to_local = to_world.inverse();
-        for (float v : m_grid.values) m_max = std::max(m_max, v);
+        for (float v : m_grid.values) m_max = std::max(m_max, v), m_min = std::min(m_min, v);
         for (int i = 0; i < 8; ++i)
             m_bounds.expand(to_world.point(Point3f(float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1))));
     }
@@ -58,6 +58,7 @@ public:
         return r;
     }
     float max_value() const override { return m_max; }
+    float min_value() const override { return m_min; }
     BoundingBox bounds() const override { return m_bounds; }
     int channels() const override { return m_grid.channels; }
 
@@ -87,7 +88,7 @@ private:
     Transform m_to_local;
     bool m_trilinear = true;
     Wrap m_wrap = Wrap::Clamp;
-    float m_max = 0.f;
+    float m_max = 0.f, m_min = 0.f;  // the bounds of its values and of 0 (outside the grid)
     BoundingBox m_bounds;
 };
 
