@@ -6,7 +6,7 @@
 #   bash fuzz/run.sh [SECONDS] [TARGET ...]   a hunt: SECONDS (default 60) per target, a random
 #                                             seed, the corpus in build/fuzz/corpus/ kept and grown
 #   bash fuzz/run.sh --fixed [TARGET ...]     what CI runs: a fixed seed and a fixed number of
-#                                             executions per target (about 25 s each) from the
+#                                             executions per target (about 15 s each) from the
 #                                             seeds alone (nearly the same inputs on every run)
 # A longer hunt: bash fuzz/run.sh 3600 fuzz_obj   (docs/testing.md, "Fuzzing").
 set -euo pipefail
@@ -15,9 +15,9 @@ fixed=0
 if [ "${1:-}" = --fixed ]; then fixed=1; shift; fi
 seconds=60
 if [ $fixed = 0 ] && [ $# -gt 0 ]; then seconds=$1; shift; fi
-# Executions per target in --fixed runs: about 25 s of each on one core of a 2-core machine.
-declare -A fixed_runs=([fuzz_scene_xml]=80000 [fuzz_obj]=25000 [fuzz_ply]=40000 [fuzz_serialized]=70000
-                       [fuzz_image]=20000 [fuzz_json]=250000 [fuzz_vol]=90000)
+# Executions per target in --fixed runs: about 15 s of each on one core of a 2-core machine.
+declare -A fixed_runs=([fuzz_scene_xml]=50000 [fuzz_obj]=15000 [fuzz_ply]=25000 [fuzz_serialized]=40000
+                       [fuzz_image]=12000 [fuzz_json]=150000 [fuzz_vol]=50000)
 command -v clang++ >/dev/null || { echo "fuzz/run.sh needs clang++ (apt-get install clang libclang-rt-14-dev)" >&2; exit 2; }
 cmake -S . -B build/fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DMVPT_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build/fuzz >/dev/null
