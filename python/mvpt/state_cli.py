@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from . import api
@@ -35,7 +36,21 @@ def command_record(scene_path: Path, args, stem: str) -> dict:
     """The command line of a render as its state file keeps it, for `--resume` and `merge`."""
     record = {k: getattr(args, k, None) for k in RECORDED_OPTIONS}
     record["define"] = [list(d) for d in (args.define or [])]
-    return dict(record, scene=str(Path(scene_path).resolve()), stem=stem, checkpoint=args.checkpoint)
+    scene = Path(scene_path).resolve()
+    # Also relative to the output folder, where the state lives: a project folder moved as a
+    # whole still resumes.
+    beside = os.path.relpath(scene, Path(args.output).resolve())
+    return dict(record, scene=str(scene), scene_from_state=beside, stem=stem, checkpoint=args.checkpoint)
+
+
+def _scene_of(record: dict, state: Path) -> Path:
+    """The scene a state's record names: its absolute path, or where it lies relative to the
+    state when that path is gone (the folders were moved together)."""
+    scene = Path(record["scene"])
+    beside = record.get("scene_from_state")
+    if not scene.exists() and isinstance(beside, str) and (state.parent / beside).exists():
+        return state.parent / beside
+    return scene
 
 
 def find_state(path: Path) -> Path:
@@ -96,7 +111,7 @@ def resume(args, render) -> int:
     args.resume_state = path
     # Periodic checkpoints go on unless changed.
     args.checkpoint = checkpoint or float(record.get("checkpoint") or 0.0)
-    return render(Path(record["scene"]), args, record["stem"])
+    return render(_scene_of(record, path), args, record["stem"])
 
 
 def add_merge_command(sub) -> None:
@@ -114,7 +129,8 @@ def merge(args) -> int:
     try:
         paths = [find_state(p) for p in args.states]
         record = _record(paths[0])
-        scene = api.load_file(record["scene"], rig=record.get("rig"), **dict(tuple(d) for d in record.get("define") or []))
+        scene = api.load_file(_scene_of(record, paths[0]), rig=record.get("rig"),
+                              **dict(tuple(d) for d in record.get("define") or []))
         args.output.mkdir(parents=True, exist_ok=True)
         result = api.merge(scene, paths, threads=max(0, args.threads),
                            state=state_file.state_file(args.output, record["stem"]))

@@ -116,3 +116,16 @@ def test_ray_options_need_ray(tmp_path, capsys, option):
     err = _err_lines(capsys)
     assert len(err) == 1 and f"{option[0]} only apply with --ray" in err[0], err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_moved_project_resumes(tmp_path):
+    """The state names its scene also relative to its own folder: a project folder moved as a
+    whole (scene and output inside it) still resumes, and merges."""
+    project = tmp_path / "project"
+    project.mkdir()
+    scene, out = _scene(project), project / "out"
+    assert cli.main(["render", str(scene), "--spp", "2", "--checkpoint", "100", "-q", "-o", str(out)]) == 0
+    moved = tmp_path / "moved"
+    project.rename(moved)
+    assert cli.main(["render", "--resume", str(moved / "out"), "-q"]) == 0
+    assert cli.main(["merge", str(moved / "out"), "-q", "-o", str(moved / "merged")]) == 0
