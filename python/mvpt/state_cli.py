@@ -83,9 +83,7 @@ def _restore(args, record: dict) -> None:
 def resume(args, render) -> int:
     """`mvpt render --resume OUT`: continue the render whose state is in OUT (or is the file OUT)
     with `render(scene path, args, stem)`."""
-    explicit = getattr(args, "given", None)
-    if explicit is None:  # not from cli.main: what differs from the defaults
-        explicit = {k for k in RECORDED_OPTIONS if getattr(args, k) not in (None, 0, 0.0, "scene", [], False)}
+    explicit = args.given  # the options on the command line (cli.main)
     given = [f"--{k.replace('_', '-')}" for k in IMAGE_OPTIONS if k in explicit]
     if args.scene is not None:
         given.insert(0, "a scene")
