@@ -364,13 +364,13 @@ def _result(scene, job, index: list, settings: dict) -> RenderResult:
     return result
 
 
-def _warnings(raw: dict, results: list) -> list:
-    """The renderer's warnings, and one when every view came out black although the scene has
-    an emitter (the cameras see nothing lit)."""
+def _warnings(scene, raw: dict, results: list) -> list:
+    """What the scene lost while it was read, the renderer's warnings, and one when every view
+    came out black although the scene has an emitter (the cameras see nothing lit)."""
     out = list(raw["warnings"])
     if not out and raw["passes"] > 0 and results and not any(r["image"].any() for r in results):
         out.append("every view is black: no light reaches the cameras (do they look at the scene?)")
-    return out
+    return list(scene.warnings) + out
 
 
 def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict:
@@ -414,7 +414,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "integrator": scene.integrator,
         "method": raw["method"],
         "notes": list(scene.notes) + list(raw["notes"]),
-        "warnings": _warnings(raw, results),
+        "warnings": _warnings(scene, raw, results),
         "views": views,
     } | ({"estimator": raw["estimator"], "splits": raw["splits"], "delta_splits": raw["delta_splits"],
           "multiview": dict(raw["multiview"])}

@@ -276,6 +276,7 @@ void bind_scene(nb::module_ &m) {
             return files;
         }, "The files the scene was read from (XML, meshes, textures, ...), absolute.")
         .def_prop_ro("notes", &Scene::notes, "Notes on how the scene was read (a Mitsuba 0.6 file upgraded).")
+        .def_prop_ro("warnings", &Scene::warnings, "What the scene lost while it was read (a mesh's degenerate triangles).")
         .def_prop_ro("defines", &Scene::defines, "The <default> overrides the scene was loaded with.")
         .def_prop_ro("rig", &Scene::rig, "The rig option the scene was loaded with (empty: none).")
         // Camera projection API (design doc §2-§4), for tests and tools: view is a scene index.

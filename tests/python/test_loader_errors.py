@@ -167,10 +167,20 @@ CASES = {
        for i, face in enumerate(faces)},
     "corrupt_obj_binary": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="bin.obj"/>\n    </shape>\n'),
                                '<string name="filename"', r"bin\.obj", files={"bin.obj": bytes(range(256)) * 8}),
-    # tinyobjloader reads 'nan' as 0 (silently); an overflowing exponent still reaches the mesh check.
-    "obj_inf_vertex": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="inf.obj"/>\n    </shape>\n'),
-                           '<shape type="obj">', r"inf\.obj.*not finite",
-                           files={"inf.obj": "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"}),
+    # tinyobjloader reads what is no number as 0 silently: the OBJ reader checks the numbers
+    # itself and names their line and column in the OBJ file.
+    **{f"obj_vertex_{name}": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="v.obj"/>\n'
+                                             '    </shape>\n'), at, message, in_file="v.obj",
+                                  files={"v.obj": "v 0 0 0\n" + line + "\nv 0 1 0\nf 1 2 3\n"})
+       for name, line, at, message in (
+           ("inf", "v 1e999 0 0", "1e999", r"'1e999' is not a finite number in float range \(in a vertex position"),
+           ("beyond_float", "v 1 1e39 0", "1e39", r"'1e39' is not a finite number in float range"),
+           ("nan", "v nan 0 0", "nan", r"'nan' is not a finite number"),
+           ("word", "v 1 zero 0", "zero", r"'zero' is not a number \(in a vertex position"),
+           ("too_few", "v 1 0", "v 1 0", r"'v' needs 3 numbers, got 2"))},
+    "obj_normal_word": Case(scene(body='    <shape type="obj">\n        <string name="filename" value="n.obj"/>\n    </shape>\n'),
+                            "up", r"'up' is not a number \(in a vertex normal", in_file="n.obj",
+                            files={"n.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 up\nf 1//1 2//1 3//1\n"}),
     "corrupt_texture": Case(_with_shape('<bsdf type="diffuse">\n            <texture type="bitmap" name="reflectance">\n'
                                         '                <string name="filename" value="bad.png"/>\n'
                                         '            </texture>\n        </bsdf>'),

@@ -37,6 +37,7 @@ void Scene::build(SceneParts parts) {
     m_integrator = std::move(parts.integrator);
     m_source_files = std::move(parts.source_files);
     m_notes = std::move(parts.notes);
+    m_warnings = std::move(parts.warnings);
     for (const auto &light : m_lights)
         if (light->is_environment()) m_environment = light.get();
 

@@ -32,6 +32,8 @@ struct SceneParts {
     std::shared_ptr<Integrator> integrator;
     std::vector<std::filesystem::path> source_files;
     std::vector<std::string> notes;
+    /// Data the scene lost while it was read (a mesh's degenerate triangles), said once each.
+    std::vector<std::string> warnings;
 };
 
 class Scene {
@@ -81,6 +83,7 @@ public:
     const std::vector<std::filesystem::path> &source_files() const { return m_source_files; }
     /// Notes on how the scene was read (a Mitsuba 0.6 file upgraded, and what that changed).
     const std::vector<std::string> &notes() const { return m_notes; }
+    const std::vector<std::string> &warnings() const { return m_warnings; }
     /// How the scene was loaded: the <default> overrides and the rig option.
     const std::map<std::string, std::string> &defines() const { return m_defines; }
     const std::string &rig() const { return m_rig; }
@@ -125,7 +128,7 @@ private:
     bool m_animated = false;
     bool m_has_media = false;
     std::vector<std::filesystem::path> m_source_files;
-    std::vector<std::string> m_notes;
+    std::vector<std::string> m_notes, m_warnings;
     std::map<std::string, std::string> m_defines;
     std::string m_rig;
 };

@@ -1,5 +1,7 @@
 #include "plugin.h"
 
+#include <algorithm>
+
 #include <map>
 
 namespace mvpt {
@@ -27,6 +29,18 @@ std::vector<std::string> PluginRegistry::types(const std::string &kind) {
         if (k.first == kind) r.push_back(k.second);
     return r;
 }
+
+namespace {
+
+void add_once(std::vector<std::string> *list, const std::string &text) {
+    if (list && std::find(list->begin(), list->end(), text) == list->end()) list->push_back(text);
+}
+
+} // namespace
+
+void LoadContext::warn(const std::string &text) const { add_once(warnings, text); }
+
+void LoadContext::note(const std::string &text) const { add_once(notes, text); }
 
 std::filesystem::path LoadContext::resolve(const std::string &name, const FileLoc &loc) const {
     namespace fs = std::filesystem;

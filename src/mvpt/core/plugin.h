@@ -18,8 +18,14 @@ struct LoadContext {
     std::vector<std::filesystem::path> search_dirs;
     /// Where resolve() records the files it finds (for a scene's identity), if set.
     std::vector<std::filesystem::path> *files = nullptr;
+    /// Where warn() and note() record what the user should know about the data read (a mesh
+    /// that lost faces; one with zero-area triangles), if set.
+    std::vector<std::string> *warnings = nullptr, *notes = nullptr;
     /// Absolute path of an existing file, or a SceneError at `loc`.
     std::filesystem::path resolve(const std::string &name, const FileLoc &loc) const;
+    /// Records `text` once (a repeated text, e.g. from an animated shape's keyframes, is kept once).
+    void warn(const std::string &text) const;
+    void note(const std::string &text) const;
 };
 
 using PluginFactory = std::function<std::shared_ptr<Object>(const Properties &, const LoadContext &)>;

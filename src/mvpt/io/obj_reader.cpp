@@ -6,7 +6,14 @@
 
 #include <tiny_obj_loader.h>
 
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
 #include <map>
+#include <sstream>
+#include <string_view>
 #include <tuple>
 
 namespace mvpt {
@@ -69,6 +76,78 @@ private:
     std::map<std::tuple<int, int, int>, uint32_t> m_remap;
 };
 
+/// Where the numbers of a `v`, `vn` or `vt` line went wrong, found by check_obj_numbers.
+struct ObjBadValues {
+    std::vector<size_t> normals, uvs; ///< 0-based indices of those with a number beyond float range
+};
+
+/// The value of one number as tinyobjloader reads it, or false when `token` is no number at
+/// all (tinyobjloader would read 0 silently); beyond float range gives an infinity.
+bool parse_obj_number(std::string_view token, double &value) {
+    if (token.starts_with('+')) token.remove_prefix(1);
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if (end != token.data() + token.size()) return false;
+    if (ec == std::errc::result_out_of_range) value = std::strtod(std::string(token).c_str(), nullptr);
+    else if (ec != std::errc()) return false;
+    if (std::abs(value) > double(std::numeric_limits<float>::max())) value = std::numeric_limits<double>::infinity();
+    return true;
+}
+
+/// The numbers of the file's `v`, `vn` and `vt` lines checked before tinyobjloader reads
+/// them: a word that is no number, too few coordinates, or a vertex position that is not a
+/// finite float is an error at its line; a normal or texture coordinate beyond float range is
+/// listed in `bad` (the mesh replaces it and says so).
+void check_obj_numbers(const std::string &text, const std::filesystem::path &path, const FileLoc &from,
+                       ObjBadValues &bad) {
+    const char *space = " \t\r\f\v";
+    size_t pos = 0, normals = 0, uvs = 0;
+    for (int line = 1; pos < text.size(); ++line) {
+        size_t end = std::min(text.find('\n', pos), text.size());
+        std::string_view rest(text.data() + pos, end - pos);
+        const size_t line_start = pos;
+        pos = end + 1;
+        rest = rest.substr(0, rest.find('#'));
+        auto word = [&]() {
+            const size_t b = std::min(rest.find_first_not_of(space), rest.size());
+            rest.remove_prefix(b);
+            const size_t e = std::min(rest.find_first_of(space), rest.size());
+            std::string_view w = rest.substr(0, e);
+            rest.remove_prefix(e);
+            return w;
+        };
+        const std::string_view key = word();
+        const int kind = key == "v" ? 0 : key == "vn" ? 1 : key == "vt" ? 2 : -1;
+        if (kind < 0) continue;
+        static const char *what[] = {"a vertex position", "a vertex normal", "a texture coordinate"};
+        auto fail = [&](std::string_view at, const std::string &msg) {
+            const int col = int(at.data() - (text.data() + line_start)) + 1;
+            throw SceneError(FileLoc{path.string(), line, col}, msg + " (in " + what[kind] + "; the mesh of " + from.str() + ")");
+        };
+        int count = 0;
+        bool finite = true;
+        for (std::string_view w = word(); !w.empty(); w = word(), ++count) {
+            double v;
+            if (!parse_obj_number(w, v)) fail(w, "'" + std::string(w) + "' is not a number");
+            if (!std::isfinite(v) && kind == 0) fail(w, "'" + std::string(w) + "' is not a finite number in float range");
+            finite = finite && std::isfinite(v);
+        }
+        const int needed = kind == 2 ? 1 : 3;
+        if (count < needed)
+            fail(key, "'" + std::string(key) + "' needs " + std::to_string(needed) + " numbers, got " + std::to_string(count));
+        if (!finite) (kind == 1 ? bad.normals : bad.uvs).push_back(kind == 1 ? normals : uvs);
+        normals += kind == 1, uvs += kind == 2;
+    }
+}
+
+/// The file's text, or a SceneError at `loc`.
+std::string read_text(const std::filesystem::path &path, const FileLoc &loc) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    if (!f && !f.eof()) throw SceneError(loc, "cannot read OBJ file '" + path.string() + "'");
+    return ss.str();
+}
+
 } // namespace
 
 MeshData read_obj(const std::filesystem::path &path, const FileLoc &loc) {
@@ -76,14 +155,24 @@ MeshData read_obj(const std::filesystem::path &path, const FileLoc &loc) {
     cfg.triangulate = false;
     cfg.vertex_color = false;
     cfg.mtl_search_path = ""; // materials come from the scene file
+    const std::string text = read_text(path, loc);
+    ObjBadValues bad;
+    check_obj_numbers(text, path, loc, bad);
     tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(path.string(), cfg)) {
+    if (!reader.ParseFromString(text, "", cfg)) {
         std::string err = reader.Error();
         while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
         throw SceneError(loc, "cannot read OBJ file '" + path.string() + "': " + (err.empty() ? "parse error" : err));
     }
+    // Out-of-range values become NaN, so that the mesh finds and reports them (tinyobjloader's are arbitrary).
+    tinyobj::attrib_t attrib = reader.GetAttrib();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (size_t i : bad.normals)
+        if (3 * i + 2 < attrib.normals.size()) attrib.normals[3 * i] = nan;
+    for (size_t i : bad.uvs)
+        if (2 * i + 1 < attrib.texcoords.size()) attrib.texcoords[2 * i] = nan;
     MeshData mesh;
-    ObjVertices vertices(reader.GetAttrib(), path, loc, mesh);
+    ObjVertices vertices(attrib, path, loc, mesh);
     size_t face = 0; // 1-based, counted over the file's faces, for messages
     std::vector<uint32_t> poly;
     for (const auto &shape : reader.GetShapes()) {

@@ -11,6 +11,7 @@ SceneParts scene_parts(const SceneTree &tree) {
     SceneParts parts;
     parts.source_files = tree.source_files;
     parts.notes = tree.notes;
+    parts.warnings = tree.warnings;
     bool environment = false;
     for (const ChildObject &c : props.children()) {
         c.queried = true;

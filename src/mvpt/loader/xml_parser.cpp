@@ -445,6 +445,10 @@ public:
     bool referenced(const std::string &id) const { return m_referenced.count(id) != 0; }
     /// The data files the factories resolved, in order.
     const std::vector<fs::path> &files() const { return m_files; }
+    /// The warnings the factories recorded, in order.
+    const std::vector<std::string> &warnings() const { return m_warnings; }
+    /// The notes the factories recorded, in order.
+    const std::vector<std::string> &data_notes() const { return m_data_notes; }
 
 private:
     /// Where files named by `node` are looked for: its file's directory, <path> dirs, the scene's.
@@ -454,6 +458,7 @@ private:
         for (auto &d : m_path_dirs) ctx.search_dirs.push_back(d);
         if (node.dir != m_scene_dir) ctx.search_dirs.push_back(m_scene_dir);
         ctx.files = &m_files;
+        ctx.warnings = &m_warnings, ctx.notes = &m_data_notes;
         return ctx;
     }
 
@@ -469,6 +474,7 @@ private:
     std::set<std::string> m_referenced;
     std::map<const XmlNode *, std::shared_ptr<Object>> m_cache;
     mutable std::vector<fs::path> m_files; ///< data files the factories resolved
+    mutable std::vector<std::string> m_warnings, m_data_notes; ///< what the factories warned of, noted
 };
 
 } // namespace
@@ -507,6 +513,8 @@ SceneTree instantiate_scene(const XmlNode &root, const fs::path &scene_dir) {
         if (!c.id.empty() && inst.referenced(c.id)) tree.referenced_ids.insert(c.id);
     tree.source_files = root.source_files;
     tree.notes = root.notes;
+    tree.warnings = inst.warnings();
+    tree.notes.insert(tree.notes.end(), inst.data_notes().begin(), inst.data_notes().end());
     for (const fs::path &f : inst.files())
         if (std::find(tree.source_files.begin(), tree.source_files.end(), f) == tree.source_files.end())
             tree.source_files.push_back(f);

@@ -69,6 +69,8 @@ struct SceneTree {
     std::vector<std::filesystem::path> source_files;
     /// Notes for the user on how the scene was read (XmlNode::notes).
     std::vector<std::string> notes;
+    /// Warnings about the data read (LoadContext::warn).
+    std::vector<std::string> warnings;
 };
 
 /// Instantiate every object below the root node.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include "../bsdf.h"
 #include "../embree_errors.h"
 #include "../light.h"
@@ -17,6 +18,7 @@ TriangleMesh::TriangleMesh(MeshData data, const Properties &props, const Transfo
     if (face_normals) m_data.normals.clear();
     check_and_transform(props, to_world, what);
     if (m_data.normals.empty() && !face_normals) m_data.normals = compute_vertex_normals(m_data);
+    else if (m_issues.bad_normals > 0) replace_bad_normals();
     build_area_table();
     build_face_normals();
     build_constant_frames();
@@ -39,16 +41,63 @@ void TriangleMesh::check_and_transform(const Properties &props, const Transform 
                                std::to_string(entries * size_t(a.dim)));
     }
 
-    for (auto &p : m_data.positions) {
-        if (!all_finite(p)) props.fail("", what + ": a vertex position is not finite");
+    for (size_t i = 0; i < nv; ++i) {
+        Point3f &p = m_data.positions[i];
+        if (!all_finite(p))
+            props.fail("", what + ": vertex " + std::to_string(i + 1) + " of " + std::to_string(nv) +
+                               " has a position that is not a finite number");
         p = to_world.point(p);
         m_bounds.expand(p);
     }
     for (auto &n : m_data.normals) {
         Normal3f wn = to_world.normal(n);
         float l = norm(wn);
-        n = (l > 0.f && std::isfinite(l)) ? wn / l : Normal3f(0.f);
+        if (!std::isfinite(l)) {
+            ++m_issues.bad_normals;
+            n = Normal3f(std::numeric_limits<float>::quiet_NaN()); // marked for replace_bad_normals
+        } else {
+            n = l > 0.f ? wn / l : Normal3f(0.f);
+        }
     }
+    for (auto &uv : m_data.uvs)
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = Vec2f(0.f, 0.f), ++m_issues.bad_uvs;
+}
+
+void TriangleMesh::replace_bad_normals() {
+    const std::vector<Normal3f> computed = compute_vertex_normals(m_data);
+    for (size_t i = 0; i < m_data.normals.size(); ++i)
+        if (!all_finite(m_data.normals[i])) m_data.normals[i] = computed[i];
+}
+
+namespace {
+
+/// "n of m <noun> <verb>", the verb agreeing with n.
+std::string n_of(size_t n, size_t of, const char *noun, const char *one, const char *many) {
+    return std::to_string(n) + " of " + std::to_string(of) + " " + noun + (n == 1 ? one : many);
+}
+
+} // namespace
+
+std::string TriangleMesh::data_warning(const std::string &what) const {
+    std::vector<std::string> parts;
+    if (m_issues.overflow > 0)
+        parts.push_back(n_of(m_issues.overflow, m_data.triangle_count(), "triangles", " has", " have") +
+                        " an area beyond float range (is to_world too large?) and cannot be hit");
+    if (m_issues.bad_normals > 0)
+        parts.push_back(n_of(m_issues.bad_normals, m_data.normals.size(), "vertex normals", " is", " are") +
+                        " not finite, computed from the faces instead");
+    if (m_issues.bad_uvs > 0)
+        parts.push_back(n_of(m_issues.bad_uvs, m_data.uvs.size(), "texture coordinates", " is", " are") +
+                        " not finite, set to (0, 0)");
+    std::string text;
+    for (const std::string &p : parts) text += (text.empty() ? what + ": " : "; ") + p;
+    return text;
+}
+
+std::string TriangleMesh::data_note(const std::string &what) const {
+    if (m_issues.degenerate == 0) return {};
+    return what + ": " + n_of(m_issues.degenerate, m_data.triangle_count(), "triangles", " has", " have") +
+           " no area (collinear or repeated vertices): they cannot be hit and carry no light";
 }
 
 void TriangleMesh::build_area_table() {
@@ -57,6 +106,8 @@ void TriangleMesh::build_area_table() {
         const Point3f &p0 = m_data.positions[m_data.indices[3 * i]], &p1 = m_data.positions[m_data.indices[3 * i + 1]],
                       &p2 = m_data.positions[m_data.indices[3 * i + 2]];
         areas[i] = 0.5f * norm(cross(p1 - p0, p2 - p0));
+        if (!(areas[i] > 0.f)) areas[i] = 0.f, ++m_issues.degenerate;
+        else if (!std::isfinite(areas[i])) areas[i] = 0.f, ++m_issues.overflow;
         m_area += areas[i];
     }
     m_area_distr.build(areas);

@@ -31,6 +31,12 @@ public:
     Color3f eval_attribute(const std::string &name, const SurfaceInteraction &si) const override;
 
     const MeshData &data() const { return m_data; }
+    /// What the mesh lost or had replaced (triangles whose area overflows, non-finite normals
+    /// or uvs), in one sentence that starts with `what`; empty when nothing.
+    std::string data_warning(const std::string &what) const;
+    /// Its triangles of zero area, harmless (nothing to hit, no light) and common in exported
+    /// meshes, as a note; empty when none.
+    std::string data_note(const std::string &what) const;
     /// True, with the parallelogram and its area density, when sample_area maps u to
     /// origin + u.x e1 + u.y e2 with the constant normal n (see m_is_parallelogram).
     bool parallelogram(Point3f &origin, Vec3f &e1, Vec3f &e2, Normal3f &n, float &inv_area) const {
@@ -50,6 +56,11 @@ private:
     void sample_point(Vec2f u, ShapeSample &s) const;
 
     MeshData m_data;
+    /// Counts for data_warning and data_note: triangles of zero or overflowing area, vertex
+    /// normals and texture coordinates that were not finite.
+    struct DataIssues {
+        size_t degenerate = 0, overflow = 0, bad_normals = 0, bad_uvs = 0;
+    } m_issues;
     bool m_flip_normals = false;
     float m_area = 0.f, m_inv_area = 0.f;
     /// Per-triangle precomputed data (hit and emitter sampling are per-path hot spots).
@@ -75,8 +86,11 @@ private:
     Normal3f m_quad_normal;
     /// Sets the members above when the mesh is such a parallelogram.
     void detect_parallelogram();
-    /// The file's counts and indices checked, positions and normals into world space.
+    /// The file's counts and indices checked, positions and normals into world space
+    /// (non-finite normals marked NaN, non-finite uvs zeroed, both counted in m_issues).
     void check_and_transform(const Properties &props, const Transform &to_world, const std::string &what);
+    /// Vertex normals marked by check_and_transform, replaced by the faces' (compute_vertex_normals).
+    void replace_bad_normals();
     /// The triangles' areas, the total and the distribution that picks a triangle by area.
     void build_area_table();
     /// Face normals, and which triangles' vertex normals are all equal (flat).

@@ -6,10 +6,16 @@ namespace mvpt {
 
 namespace {
 
-/// A mesh shape from `data`, static or (with an animated to_world) motion-blurred.
-std::shared_ptr<Object> make_mesh(MeshData data, const Properties &props, const std::string &what) {
+/// A mesh shape from `data`, static or (with an animated to_world) motion-blurred; what it
+/// lost to bad data is a warning in `ctx` (its zero-area triangles a note), naming the shape's
+/// place in the scene file.
+std::shared_ptr<Object> make_mesh(MeshData data, const Properties &props, const std::string &what,
+                                  const LoadContext &ctx) {
     return make_maybe_animated(props, [&](const Transform &to_world) {
-        return std::make_shared<TriangleMesh>(std::move(data), props, to_world, what);
+        auto mesh = std::make_shared<TriangleMesh>(std::move(data), props, to_world, what);
+        if (std::string w = mesh->data_warning(what); !w.empty()) ctx.warn(props.loc().str() + ": " + w);
+        if (std::string n = mesh->data_note(what); !n.empty()) ctx.note(props.loc().str() + ": " + n);
+        return mesh;
     });
 }
 
@@ -20,14 +26,14 @@ std::shared_ptr<Object> make_obj(const Properties &props, const LoadContext &ctx
     // Mitsuba flips v by default, for consistency with Mitsuba 0.6.
     if (props.get_bool("flip_tex_coords", true))
         for (Vec2f &uv : data.uvs) uv.y = 1.f - uv.y;
-    return make_mesh(std::move(data), props, "OBJ mesh '" + file + "'");
+    return make_mesh(std::move(data), props, "OBJ mesh '" + file + "'", ctx);
 }
 
 std::shared_ptr<Object> make_ply(const Properties &props, const LoadContext &ctx) {
     std::string file = props.get_string("filename");
     auto path = ctx.resolve(file, props.loc_of("filename"));
     MeshData data = read_ply(path, props.loc_of("filename"));
-    return make_mesh(std::move(data), props, "PLY mesh '" + file + "'");
+    return make_mesh(std::move(data), props, "PLY mesh '" + file + "'", ctx);
 }
 
 std::shared_ptr<Object> make_serialized(const Properties &props, const LoadContext &ctx) {
@@ -36,7 +42,7 @@ std::shared_ptr<Object> make_serialized(const Properties &props, const LoadConte
     int64_t index = props.get_int("shape_index", 0);
     if (index < 0 || index > INT32_MAX) props.fail("shape_index", "shape_index must be a non-negative integer");
     MeshData data = read_serialized(path, int(index), props.loc_of("filename"));
-    return make_mesh(std::move(data), props, "serialized mesh '" + file + "'@" + std::to_string(index));
+    return make_mesh(std::move(data), props, "serialized mesh '" + file + "'@" + std::to_string(index), ctx);
 }
 
 /// Mitsuba's rectangle: [-1, 1]^2 in the z = 0 plane, normal +z.
@@ -79,7 +85,8 @@ std::shared_ptr<Object> make_rectangle(const Properties &props, const LoadContex
 }
 
 std::shared_ptr<Object> make_cube(const Properties &props, const LoadContext &) {
-    return make_mesh(cube_data(), props, "cube");
+    // A cube flattened by its to_world (a common two-sided panel) loses its sides by design: no warning.
+    return make_mesh(cube_data(), props, "cube", LoadContext{});
 }
 
 } // namespace
