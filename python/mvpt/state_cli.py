@@ -58,10 +58,23 @@ def find_state(path: Path) -> Path:
     if not path.is_dir():
         return path
     found = sorted(path.glob(f"*{state_file.SUFFIX}"))
-    if len(found) != 1:
-        raise StateError(f"{path} holds {'no' if not found else len(found)} render states ({state_file.SUFFIX})"
-                         + (": name one" if found else ""))
+    if not found:
+        raise StateError(f"{path} holds no render state ({state_file.SUFFIX})")
+    if len(found) > 1:
+        # Renders of several scenes may share a folder (their stems differ): name each, with its scene.
+        raise StateError(f"{path} holds {len(found)} render states, {_described(found)}: name the one to use, "
+                         f"e.g. {found[0]}")
     return found[0]
+
+
+def _described(states: list) -> str:
+    """'a.mvpt-state (of a.xml), b.mvpt-state (of b.xml)': each state with the scene it renders."""
+    def scene(p: Path) -> str:
+        try:
+            return f" (of {Path(_record(p)['scene']).name})"
+        except (StateError, OSError, TypeError, KeyError):
+            return ""
+    return ", ".join(f"{p.name}{scene(p)}" for p in states)
 
 
 def _record(path: Path) -> dict:

@@ -186,7 +186,7 @@ def test_resume_takes_no_image_options(tmp_path, capsys):
     assert cli.main(["render", "--resume", str(tmp_path), "--spp", "4"]) == 2
     assert "--resume continues a render with its own scene and settings; drop --spp" in capsys.readouterr().err
     assert cli.main(["render", "--resume", str(tmp_path)]) == 1
-    assert "holds no render states" in capsys.readouterr().err
+    assert "holds no render state (.mvpt-state)" in capsys.readouterr().err
 
 
 SIGNALLED = ["--spp", "400", "--seed", "3", "--method", "mvpt", "--aovs", "-q"]

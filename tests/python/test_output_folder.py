@@ -129,3 +129,21 @@ def test_a_moved_project_resumes(tmp_path):
     project.rename(moved)
     assert cli.main(["render", "--resume", str(moved / "out"), "-q"]) == 0
     assert cli.main(["merge", str(moved / "out"), "-q", "-o", str(moved / "merged")]) == 0
+
+
+def test_a_folder_of_several_states_names_them(tmp_path, capsys):
+    """Renders of two scenes with states in one folder (a state copied in from elsewhere, or two
+    stems): `--resume` of the folder names each state with its scene; each resumes by name."""
+    scene, out = _scene(tmp_path), tmp_path / "out"
+    other = tmp_path / "hall.xml"
+    other.write_text(scene.read_text())
+    for s in (scene, other):
+        assert cli.main(["render", str(s), "--spp", "2", "--checkpoint", "100", "-q", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert cli.main(["render", "--resume", str(out), "-q"]) == 1
+    err = _err_lines(capsys)
+    assert len(err) == 1, err
+    assert "holds 2 render states, hall.mvpt-state (of hall.xml), room.mvpt-state (of room.xml)" in err[0], err
+    assert f"e.g. {out / 'hall.mvpt-state'}" in err[0], err
+    for stem in ("hall", "room"):
+        assert cli.main(["render", "--resume", str(out / f"{stem}{state_file.SUFFIX}"), "-q"]) == 0
