@@ -175,6 +175,34 @@ void Film::load(StateReader &in) {
     holding = in.get<uint32_t>() != 0;
 }
 
+namespace {
+
+template <typename T> bool all_finite_values(const std::vector<T> &v) {
+    return std::all_of(v.begin(), v.end(), [](T x) { return std::isfinite(double(x)); });
+}
+
+} // namespace
+
+void Film::check_loaded(int passes, int max_native) const {
+    // A state's checksum guards against damage, not against a file made up to pass it: what it
+    // asks of the render must be what `passes` passes can have produced.
+    auto refuse = [](const std::string &what) { throw StateError("the state is not one a render wrote: " + what); };
+    if (!all_finite_values(sum) || !all_finite_values(m2)) refuse("a pixel's sums are not finite");
+    if (!(short_weight >= 0.0 && short_weight <= double(passes))) refuse("its passes' weights are out of range");
+    if (!multiview()) return;
+    if (!all_finite_values(w_sum) || !all_finite_values(lw) || !all_finite_values(e) || !all_finite_values(w) ||
+        !all_finite_values(e_sum) || !all_finite_values(e_sq) || !all_finite_values(s_sq) || !(level >= 0.0) ||
+        !std::isfinite(level))
+        refuse("a pixel's multi-view sums are not finite");
+    if (std::any_of(count.begin(), count.end(), [&](uint32_t k) { return k > uint32_t(passes); }))
+        refuse("a pixel holds more passes than the state has");
+    if (std::any_of(map.begin(), map.end(), [&](uint16_t n) { return n > max_native; }))
+        refuse("its sample map asks for more than " + std::to_string(max_native) + " samples in a pixel");
+    const uint64_t most = uint64_t(passes) * uint64_t(std::max(max_native, 1));
+    if (std::any_of(native.begin(), native.end(), [&](uint32_t n) { return n > most; }))
+        refuse("a pixel has taken more samples than its passes can take");
+}
+
 void Film::merge(const Film &o) {
     for (size_t p = 0; p < pixels(); ++p) {
         // Chan et al.'s combination, with the two films' total weights.

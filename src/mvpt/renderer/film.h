@@ -115,6 +115,9 @@ struct Film {
     /// Every accumulator into a state file, and back (a StateError if the file's do not fit).
     void save(StateWriter &out) const;
     void load(StateReader &in);
+    /// A StateError unless what load read is what `passes` passes can have produced: sums
+    /// finite, at most `passes` estimates, a sample map of at most `max_native` per pixel.
+    void check_loaded(int passes, int max_native) const;
     /// Adds the accumulators of `other` (the same view, disjoint passes): sums add, the
     /// squared deviations combine with the difference of the means (Chan et al.).
     void merge(const Film &other);

@@ -93,6 +93,7 @@ void Renderer::read_state(const std::string &path) {
         uint64_t dropped = 0;
         if (m_multiview) m_mv_stats_before[s] = in.get<MvViewStats>(), dropped = in.get<uint64_t>();
         m_films[s].load(in);
+        m_films[s].check_loaded(m_first_pass, m_multiview ? m_mv.cfg.adaptive_max : 1); // (path tracing's splats: 1 a pass)
         m_films[s].nonfinite += dropped;
         if (m_multiview) m_mv.native_map[s] = m_films[s].map.data();
     }
