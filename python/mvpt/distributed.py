@@ -7,9 +7,11 @@ ran again. Ray is optional: `pip install "mvpt[ray]"`."""
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import io
 import math
 import os
+import socket
 import sys
 import tarfile
 import tempfile
@@ -30,6 +32,28 @@ def _ray():
     except ImportError:
         raise RuntimeError('distributed rendering needs Ray: pip install "mvpt[ray]"') from None
     return ray
+
+
+def check_address(address: Optional[str]) -> None:
+    """A RuntimeError at once, in one line, when `address` names a cluster that cannot be
+    reached or a client that is not installed, where ray.init would retry for a minute with
+    pages of logs. None and "auto" are left to Ray (a local instance, the cluster of this node)."""
+    if address is None or address == "auto":
+        return
+    client = address.startswith("ray://")
+    if client and importlib.util.find_spec("grpc") is None:
+        raise RuntimeError(f"--ray {address}: a ray:// address needs Ray's client (grpcio): "
+                           f'pip install "mvpt[ray]" (which installs "ray[client]")')
+    where = address[len("ray://"):] if client else address
+    host, _, port = where.rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise RuntimeError(f"--ray {address}: expected HOST:PORT, ray://HOST:PORT or auto")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=5).close()
+    except OSError as e:
+        why = e.strerror or str(e) or type(e).__name__
+        raise RuntimeError(f"--ray {address}: cannot reach a Ray cluster there ({why}); is `ray start --head` "
+                           f"running on {host}?") from None
 
 
 def pack_scene(scene) -> tuple:
@@ -103,6 +127,8 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
     states, in their order; stats["distributed"] has the tasks, their seconds and the bytes that
     crossed the network. splits: as api.render's (every range chooses the same under "auto")."""
     ray = _ray()
+    if not ray.is_initialized():
+        check_address(address)
     defines = {str(k): str(v) for k, v in (defines or {}).items()}
     scene = api.load_file(scene_path, rig=rig, **defines)
     index = api.resolve_views(scene, views)

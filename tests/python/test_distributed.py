@@ -4,9 +4,11 @@ merge of the same ranges bit for bit, also when a worker process is killed mid-t
 the range again); the scene travels packed through the object store; the CLI's --ray."""
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
@@ -21,6 +23,8 @@ import mvpt
 from mvpt import cli, distributed
 
 from small_scenes import slow_scene
+
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
 
 pytestmark = pytest.mark.serial  # local Ray clusters start and stop: never beside other tests
 
@@ -122,6 +126,22 @@ def test_cli_ray_refuses_a_missing_wheel(scene_file, tmp_path, capsys):
                      "-q", "-o", str(tmp_path / "out")]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "nothere.whl' is not a wheel file" in err[0], err
+
+
+@pytest.mark.parametrize("address,message", [
+    ("127.0.0.1:1", "cannot reach a Ray cluster there"),
+    ("ray://127.0.0.1:1", "cannot reach a Ray cluster there" if importlib.util.find_spec("grpc") else
+     "a ray:// address needs Ray's client"),
+    ("head", "expected HOST:PORT, ray://HOST:PORT or auto"),
+])
+def test_an_unreachable_cluster_is_one_line_at_once(scene_file, tmp_path, address, message):
+    """Not Ray's minute of retries and pages of logs: the address is tried first (a fresh
+    process, as a user's: Ray is not started in it)."""
+    run = subprocess.run([sys.executable, "-m", "mvpt.cli", "render", str(scene_file), "--spp", "1", "--ray", address,
+                          "-q", "-o", str(tmp_path / "out")], capture_output=True, text=True, timeout=50, env=ENV)
+    err = run.stderr.strip().splitlines()
+    assert run.returncode == 1 and len(err) == 1, run.stderr[-2000:]
+    assert f"--ray {address}: {message}" in err[0], err
 
 
 def test_time_budget_covers_the_cluster(cluster, scene_file):
