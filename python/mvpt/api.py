@@ -370,6 +370,8 @@ def _warnings(scene, raw: dict, results: list) -> list:
     out = list(raw["warnings"])
     if not out and raw["passes"] > 0 and results and not any(r["image"].any() for r in results):
         out.append("every view is black: no light reaches the cameras (do they look at the scene?)")
+    if raw["state_error"]:
+        out.append(f"{raw['state_error']}: the render went on without its state")
     return list(scene.warnings) + out
 
 
@@ -415,6 +417,7 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "method": raw["method"],
         "notes": list(scene.notes) + list(raw["notes"]),
         "warnings": _warnings(scene, raw, results),
+        "state_error": raw["state_error"] or None,
         "views": views,
     } | ({"estimator": raw["estimator"], "splits": raw["splits"], "delta_splits": raw["delta_splits"],
           "multiview": dict(raw["multiview"])}

@@ -162,8 +162,10 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
+    state_error = result.stats.get("state_error")
     for warning in result.stats.get("warnings", []):
-        print(f"mvpt: warning: {warning}", file=sys.stderr)
+        if not (state_error and warning.startswith(state_error)):  # said once, as the error below
+            print(f"mvpt: warning: {warning}", file=sys.stderr)
     if cancelled and result.stats["passes"] == 0:
         if not resume and not foreign:
             state.unlink(missing_ok=True)
@@ -180,6 +182,12 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
     if not args.quiet:
         print_summary(result)
         print(f"wrote {len(paths)} files to {args.output}{'/' if not str(args.output).endswith('/') else ''}")
+    if state_error:
+        # The images are whole; only the state is missing.
+        older = f", and {state.name} is an earlier checkpoint's" if state.exists() else ", without a state to resume from"
+        _error(f"{state_error}; the images{' of the passes finished so far' if cancelled else ''} were written "
+               f"to {args.output}{older}")
+        return cli_common.exit_code() if cancelled else EXIT_ERROR
     if cancelled:
         if foreign:
             print(f"mvpt: interrupted; wrote the passes finished so far, without a state to resume from "

@@ -188,6 +188,7 @@ public:
         for (const std::string &n : s.notes) notes.append(n);
         d["notes"] = notes;
         d["warnings"] = nb::list(nb::cast(s.warnings));
+        d["state_error"] = s.state_error;
         if (s.nonfinite_view >= 0) {
             nb::dict f;
             f["view"] = s.nonfinite_view; f["x"] = s.nonfinite_x; f["y"] = s.nonfinite_y; f["sample"] = s.nonfinite_sample;

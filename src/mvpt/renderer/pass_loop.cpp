@@ -58,12 +58,23 @@ void Renderer::run_passes(PassSchedule &schedule, const std::atomic<bool> &cance
             report_progress(progress, q + 1, seconds(), m_stats.samples, schedule.fraction_after(q));
         }
         pass = end;
-        if (checkpoint_due(seconds(), last_checkpoint)) schedule.save(pass, seconds(), last_pass);
+        if (m_stats.state_error.empty() && checkpoint_due(seconds(), last_checkpoint))
+            save_state(schedule, pass, seconds(), last_pass);
     }
     m_stats.seconds = seconds();
     m_stats.max_chunk_seconds = timing.longest;
     if (!m_opts.state_path.empty() && (m_stats.cancelled || m_opts.state_at_end))
-        schedule.save(pass, m_stats.seconds, last_pass);
+        save_state(schedule, pass, m_stats.seconds, last_pass);
+}
+
+void Renderer::save_state(PassSchedule &schedule, int pass, double elapsed, double last_pass) {
+    // A state that cannot be written (a full disk, a file-size limit) does not cost the render
+    // its images: it goes on without checkpoints and says why (RenderStats::state_error).
+    try {
+        schedule.save(pass, elapsed, last_pass);
+    } catch (const std::runtime_error &e) {
+        if (m_stats.state_error.empty()) m_stats.state_error = e.what();
+    }
 }
 
 void Renderer::report_progress(const ProgressFn &progress, int pass, double elapsed, uint64_t samples,

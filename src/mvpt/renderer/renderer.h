@@ -129,6 +129,9 @@ struct RenderStats {
     /// Things that make the images useless (a scene that cannot produce light).
     std::vector<std::string> warnings;
     MvViewStats mv; ///< multi-view statistics summed over views
+    /// Why the state file could not be written (at a checkpoint or at the end), else empty:
+    /// the render went on without it.
+    std::string state_error;
 };
 
 struct RenderProgress {
@@ -173,6 +176,8 @@ private:
     /// Steps of passes as `schedule` makes them, until the sample target, the time budget or
     /// a cancel request.
     void run_passes(PassSchedule &schedule, const std::atomic<bool> &cancel, const ProgressFn &progress);
+    /// schedule.save, a failure to write kept in m_stats.state_error instead of thrown.
+    void save_state(PassSchedule &schedule, int pass, double elapsed, double last_pass);
     /// Calls `progress` (when set) with the pass, the seconds elapsed, the samples so far and
     /// `fraction` of the sample target, raised to the share of the time budget spent.
     void report_progress(const ProgressFn &progress, int pass, double elapsed,
