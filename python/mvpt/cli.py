@@ -104,6 +104,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
         _error(cli_common.failure_text(e))
         return EXIT_ERROR
     try:
+        if args.views is not None and not args.views.strip():
+            raise ValueError("the list is empty: give view ids or indices such as 'left,right' or '0,2', or drop --views")
         views = api.resolve_views(scene, args.views.split(",")) if args.views else None
     except ValueError as e:
         _error(f"--views: {e}")
@@ -126,7 +128,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
         _error(str(e))
         return EXIT_ERROR
     except OSError as e:
-        _error(f"cannot use the output directory {args.output}: {e.strerror or e}")
+        why = "it is not a directory" if args.output.exists() and not args.output.is_dir() else e.strerror or e
+        _error(f"cannot use the output directory {args.output}: {why}")
         return EXIT_ERROR
     if not args.quiet:
         n = len(views) if views else len(scene.views)

@@ -22,9 +22,13 @@ def _fps(text: str) -> float:
         v = float(text)
     except ValueError:
         v = float("nan")
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"expected frames per second > 0, got '{text}'")
+    if not 0 < v <= MAX_FPS:
+        raise argparse.ArgumentTypeError(f"expected frames per second > 0 and at most {MAX_FPS:g}, got '{text}'")
     return v
+
+
+#: The highest frame rate of --gif/--mp4 (a GIF's frames last at least a millisecond).
+MAX_FPS = 1000.0
 
 
 #: The most stops --exposure scales the 8-bit displays by (2^64 is far beyond any radiance).

@@ -260,6 +260,9 @@ def test_views_by_id_and_index(tmp_path):
 @pytest.mark.parametrize("args, needle", [
     (["--views", "nope"], "unknown view 'nope'"),
     (["--views", "5"], "out of range"),
+    (["--views", ""], "--views: the list is empty"),  # once every view, without a word
+    (["--gif", "--fps", "1e9"], "at most 1000"),
+    (["--gif", "--fps", "inf"], "at most 1000"),
     (["--spp", "-1"], "--spp"),
     (["--spp", "many"], "--spp"),
     (["--time", "-1"], "--time"),
@@ -385,3 +388,12 @@ def test_preflight_counts_the_address_space_limit(tmp_path):
                           preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
     assert proc.returncode == 1, proc.stderr[-2000:]
     assert "the address-space limit (ulimit -v) leaves" in proc.stderr, proc.stderr[-2000:]
+
+
+def test_output_that_is_a_file(tmp_path, capsys):
+    path = _two_view_scene(tmp_path)
+    target = tmp_path / "taken"
+    target.write_text("a file")
+    assert cli.main(["render", str(path), "-o", str(target), "--spp", "1", "-q"]) == 1
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [f"mvpt: error: cannot use the output directory {target}: it is not a directory"], lines
