@@ -65,7 +65,12 @@ private:
         const long long shown = index >= 0 ? index + 1LL : index; // as written (1-based), or the resolved relative index
         throw SceneError(m_loc, "OBJ file '" + m_path.string() + "': face " + std::to_string(face) + " uses " + what +
                                     " index " + std::to_string(shown) + " but the file has " + std::to_string(count) +
-                                    " " + what + (count == 1 ? "" : "s"));
+                                    " " + (count == 1 ? std::string(what) : plural(what)));
+    }
+
+    /// "vertices", "normals", "texture coordinates".
+    static std::string plural(const char *what) {
+        return std::string(what) == "vertex" ? "vertices" : std::string(what) + "s";
     }
 
     const tinyobj::attrib_t &m_attrib;
