@@ -34,6 +34,10 @@ template <typename T> inline T select_bits(bool mask, T a, T b) {
 }
 inline float select(bool mask, float a, float b) { return select_bits(mask, a, b); }
 inline double select(bool mask, double a, double b) { return select_bits(mask, a, b); }
+/// std::max(a, b) and std::min(a, b) as selects (the same result for every input, NaN
+/// included), for code that one lane runs and the vector kernels run on many.
+[[gnu::always_inline]] inline float max_of(float a, float b) { return select(a < b, b, a); }
+[[gnu::always_inline]] inline float min_of(float a, float b) { return select(b < a, b, a); }
 /// sqrt(max(x, 0)) with the maximum as a bit select (std::max's result for every input, NaN
 /// included), so that loops using it vectorise.
 inline float safe_sqrt(float x) { return std::sqrt(select(x < 0.f, 0.f, x)); }

@@ -47,7 +47,11 @@ inline Vec3f square_to_cosine_hemisphere(Vec2f u) {
     float z = safe_sqrt(1.f - p.x * p.x - p.y * p.y);
     return {p.x, p.y, z};
 }
-inline float square_to_cosine_hemisphere_pdf(Vec3f v) { return select(v.z > 0.f, v.z * InvPi, 0.f); }
+/// The cosine-weighted hemisphere's density at a direction whose cosine is cos_theta.
+[[gnu::always_inline]] inline float cosine_hemisphere_pdf(float cos_theta) {
+    return select(cos_theta > 0.f, cos_theta * InvPi, 0.f);
+}
+inline float square_to_cosine_hemisphere_pdf(Vec3f v) { return cosine_hemisphere_pdf(v.z); }
 
 inline Vec3f square_to_uniform_sphere(Vec2f u) {
     float z = 1.f - 2.f * u.y;

@@ -12,6 +12,14 @@ class Instance;
 inline constexpr float RayEpsilon = 89.f * 0x1p-24f;
 inline constexpr float ShadowEpsilon = 10.f * RayEpsilon;
 
+/// How far along the geometric normal n a ray from p leaves the surface, signed to the side
+/// of d: (1 + max |p_i|) RayEpsilon, Mitsuba's offset (one lane; the kernels run it on many).
+[[gnu::always_inline]] inline float ray_offset(Point3f p, Normal3f n, Vec3f d) {
+    // max_of keeps the first of equal values, as std::max({...}); all are non-negative here.
+    const float m = max_of(max_of(std::abs(p.x), std::abs(p.y)), std::abs(p.z));
+    return std::copysign((1.f + m) * RayEpsilon, n.x * d.x + n.y * d.y + n.z * d.z);
+}
+
 struct SurfaceInteraction {
     Point3f p;
     float t = Infinity;
@@ -38,10 +46,7 @@ struct SurfaceInteraction {
     Vec3f to_world(Vec3f v) const { return sh_frame.to_world(v); }
 
     /// Origin moved off the surface along the geometric normal, on the side of `d`.
-    Point3f offset_p(Vec3f d) const {
-        float mag = (1.f + std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)})) * RayEpsilon;
-        return p + n * std::copysign(mag, dot(n, d));
-    }
+    Point3f offset_p(Vec3f d) const { return p + n * ray_offset(p, n, d); }
     Ray spawn_ray(Vec3f d) const { return Ray{offset_p(d), d, 0.f, Infinity, time}; }
     /// Shadow ray towards `target` that stops just short of it.
     Ray spawn_ray_to(Point3f target) const {

@@ -1,5 +1,6 @@
-// Lane helpers shared by the wavefront's vector kernels (path_kernels*.cpp): branch-free
-// forms of std::max / std::min and SurfaceInteraction::offset_p, bit-identical to the scalar code.
+// Lane helpers shared by the wavefront's vector kernels (path_kernels*.cpp): the ends of their
+// BSDF-sampling and next-event steps and sphere emitter sampling, written with the scalar
+// code's own branch-free steps (ray_offset, rr_survival, mis_power), bit-identical to it.
 #pragma once
 
 #include <cmath>
@@ -9,20 +10,14 @@
 #include "../../render/interaction.h"
 #include "../../render/shapes/sphere_cone.h"
 #include "path_kernels.h"
+#include "path_steps.h"
 
 namespace mvpt::kernel {
 
-/// std::max(a, b) and std::min(a, b) as selects (same result for every input, NaN included).
-[[gnu::always_inline]] inline float max_of(float a, float b) { return select(a < b, b, a); }
-[[gnu::always_inline]] inline float min_of(float a, float b) { return select(b < a, b, a); }
-
-/// SurfaceInteraction::offset_p's offset along the geometric normal g, on the side of d.
+/// SurfaceInteraction::offset_p's offset of lane values (ray_offset).
 [[gnu::always_inline]] inline float offset_along(float px, float py, float pz, float gx, float gy, float gz, float dx,
                                                 float dy, float dz) {
-    // std::max({|x|, |y|, |z|}) keeps the first of equal values; all are non-negative here.
-    float m = max_of(max_of(std::abs(px), std::abs(py)), std::abs(pz));
-    float mag = (1.f + m) * RayEpsilon;
-    return std::copysign(mag, gx * dx + gy * dy + gz * dz);
+    return ray_offset(Point3f(px, py, pz), Normal3f(gx, gy, gz), Vec3f(dx, dy, dz));
 }
 
 /// The end of a BSDF-sampling kernel, li's steps after Bsdf::sample: the next ray
@@ -51,7 +46,7 @@ template <size_t S0, size_t P0, size_t B0, size_t O0>
     float br = col(B0) * wr, bg = col(B0 + 1) * wg, bb = col(B0 + 2) * wb;
     float t_max = max_of(br, max_of(bg, bb));
     const float eta = col(B0 + 3);
-    float q = min_of(t_max * eta * eta, 0.95f); // rr_survival (path_steps.h), branch-free
+    float q = rr_survival(t_max, eta);
     bool rr_on = col(B0 + 5) > 0.f;
     float inv_q = 1.f / q;
     col(B0) = select(rr_on, br * inv_q, br);
@@ -72,10 +67,7 @@ template <size_t P0, size_t L0, size_t W0, size_t B0, size_t O0>
 [[gnu::always_inline]] inline void nee_contribution_and_shadow_ray(float *c, size_t s, size_t i, float fr, float fg,
                                                                    float fb, float pdf, bool ok, float light_count) {
     auto col = [c, s, i](size_t k) -> float & { return c[k * s + i]; };
-    // MIS: power heuristic (mis_power in path.h).
-    float a = col(L0 + 7) / light_count, a2 = a * a, b2 = pdf * pdf;
-    float mis = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
-    float w = select(col(L0 + 8) > 0.f, 1.f, mis);
+    float w = select(col(L0 + 8) > 0.f, 1.f, mis_power(col(L0 + 7) / light_count, pdf));
     col(O0 + 7) = ((col(B0) * fr) * (col(W0) * light_count)) * w;
     col(O0 + 8) = ((col(B0 + 1) * fg) * (col(W0 + 1) * light_count)) * w;
     col(O0 + 9) = ((col(B0 + 2) * fb) * (col(W0 + 2) * light_count)) * w;

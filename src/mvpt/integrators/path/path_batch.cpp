@@ -6,6 +6,7 @@
 // (tests/cpp/test_path_batch.cpp checks this). trace_batch starts the paths from given
 // states instead: multi-view path tracing's suffixes, bit-identical to `trace`.
 #include "path.h"
+#include "../../render/shapes/sphere_cone.h"
 #include "lane_gather.h"
 #include "path_kernels.h"
 #include "path_steps.h"
@@ -190,7 +191,7 @@ struct EmitterTables {
                                                     e.flip_normals ? 1.f : 0.f, e.radiance.r, e.radiance.g,
                                                     e.radiance.b};
             for (size_t r = 0; r < SphereTable::Params; ++r) spheres.at(r, ns) = row[r];
-            float radius_adj = e.radius * (e.flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
+            float radius_adj = cone_test_radius(e.radius, e.flip_normals);
             sphere_radius_adj2[ns] = radius_adj * radius_adj;
             buf.sphere_of_light[l] = int(ns++);
         }

@@ -47,7 +47,7 @@ MVPT_MULTI_ISA void lambert_nee_kernel_impl(float *c, size_t s, size_t n, float 
         float scale = InvPi * cos_o;
         float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
         bool ok = f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
-        float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
+        float pdf = warp::cosine_hemisphere_pdf(cos_o);
         nee_contribution_and_shadow_ray<Px, Ldx, Wr, Br, Ox>(c, s, i, fr, fg, fb, pdf, ok, light_count);
     }
 }
@@ -74,9 +74,8 @@ namespace {
     float scale = InvPi * cos_o;
     float fr = c[Rr * s + i] * scale, fg = c[Rg * s + i] * scale, fb = c[Rb * s + i] * scale;
     bool ok = sampled & f_ok & !((fr == 0.f) & (fg == 0.f) & (fb == 0.f));
-    float pdf = select(cos_o > 0.f, cos_o * InvPi, 0.f);
-    float a = lpdf / light_count, a2 = a * a, b2 = pdf * pdf;
-    float w = select((a2 + b2) > 0.f, a2 / (a2 + b2), 0.f);
+    float pdf = warp::cosine_hemisphere_pdf(cos_o);
+    float w = mis_power(lpdf / light_count, pdf);
     c[Cr * s + i] = ((c[Br * s + i] * fr) * (wr * light_count)) * w;
     c[Cg * s + i] = ((c[Bg * s + i] * fg) * (wg * light_count)) * w;
     c[Cb * s + i] = ((c[Bb * s + i] * fb) * (wb * light_count)) * w;

@@ -3,9 +3,8 @@
 // Russian roulette. Written once, for the reference path tracer (PathIntegrator::trace) and
 // the wavefront's vertices that no vector kernel takes (path_batch.cpp); the kernels are
 // pinned to them bit for bit by tests/cpp/test_path_batch*.cpp. Russian roulette's survival
-// probability (rr_survival) also serves the volumetric path tracer and multi-view path
-// tracing's shared bounce; the kernels write it with their branch-free min_of (calling it from
-// them changed the kernels' code and cost the Cornell box 15-20 % in one-thread A/B runs).
+// probability (rr_survival, branch-free) also serves the kernels, the volumetric path tracer
+// and multi-view path tracing's shared bounce.
 #pragma once
 
 #include "path.h"
@@ -20,7 +19,7 @@ namespace mvpt {
 
 /// Russian roulette's survival probability for a path whose throughput's largest channel is
 /// t_max and whose refractions so far scaled radiance by eta: min(t_max eta^2, 0.95).
-[[gnu::always_inline]] inline float rr_survival(float t_max, float eta) { return std::min(t_max * eta * eta, 0.95f); }
+[[gnu::always_inline]] inline float rr_survival(float t_max, float eta) { return min_of(t_max * eta * eta, 0.95f); }
 
 /// Next-event estimation at `si` for the emitter sample (ls, weight = L/pdf) of a light chosen
 /// uniformly among `n_lights`: the contribution throughput * f * weight * n_lights * w_MIS

@@ -133,7 +133,7 @@ public:
         const float radius = float(m_radius);
         Vec3f dc = m_center - ref;
         float dc2 = squared_norm(dc);
-        float radius_adj = radius * (m_flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
+        float radius_adj = cone_test_radius(radius, m_flip_normals);
         // Filled in place (one named result): returning a copied pair is slower.
         std::pair<ShapeSample, float> result;
         ShapeSample &s = result.first;

@@ -5,8 +5,16 @@
 
 #include "../../core/math.h"
 #include "../../core/warp.h"
+#include "../interaction.h"
 
 namespace mvpt {
+
+/// The radius below which a point's distance from the centre counts as inside the sphere,
+/// where it samples by area, not by cone: the radius moved by RayEpsilon away from the side
+/// the normals face (outwards with flip_normals), so that points on the surface count inside.
+[[gnu::always_inline]] inline float cone_test_radius(float radius, bool flip_normals) {
+    return radius * (flip_normals ? (1.f + RayEpsilon) : (1.f - RayEpsilon));
+}
 
 struct SphereConeSample {
     Vec3f dir;     ///< from the centre to the sampled point (its outward normal)
