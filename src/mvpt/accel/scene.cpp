@@ -60,8 +60,12 @@ void Scene::build(SceneParts parts) {
     }
     rtcCommitScene(m_scene);
     embree_check(m_device, "the scene's bounding volume hierarchy");
-    for (auto &shape : m_shapes) m_has_media |= shape->is_medium_transition();
-    for (auto &cam : m_cameras) m_has_media |= cam->medium != nullptr;
+    auto add_medium = [&](const Medium *m) {
+        if (m && std::find(m_media.begin(), m_media.end(), m) == m_media.end()) m_media.push_back(m);
+    };
+    for (auto &shape : m_shapes) add_medium(shape->interior.get()), add_medium(shape->exterior.get());
+    for (auto &cam : m_cameras) add_medium(cam->medium.get());
+    m_has_media = !m_media.empty();
     if (m_has_media && (m_integrator->name() == "path" || m_integrator->name() == "mvpath"))
         m_notes.push_back("the scene has participating media, which the '" + m_integrator->name() +
                           "' integrator ignores (as Mitsuba 3's 'path' does): use 'volpath' to render them (with "

@@ -94,6 +94,8 @@ public:
     const BoundingBox &bounds() const { return m_bounds; }
     /// True when a shape bounds a participating medium or a sensor sits in one.
     bool has_media() const { return m_has_media; }
+    /// Those media, each once.
+    const std::vector<const Medium *> &media() const { return m_media; }
     /// True when some shape moves (animated transforms): then time matters to every ray.
     bool is_animated() const { return m_animated; }
     RTCDevice device() const { return m_device; }
@@ -127,6 +129,7 @@ private:
     /// Some shape moves (otherwise Embree's ray time is irrelevant and left at 0).
     bool m_animated = false;
     bool m_has_media = false;
+    std::vector<const Medium *> m_media;
     std::vector<std::filesystem::path> m_source_files;
     std::vector<std::string> m_notes, m_warnings;
     std::map<std::string, std::string> m_defines;

@@ -61,6 +61,10 @@ public:
         return Spectrum(0.f);
     }
 
+    /// Free flights and transmittance estimates given up so far (their walks took too many
+    /// steps; weight 0), over every render: the renderer warns of those of its own run.
+    virtual uint64_t flights_given_up() const { return 0; }
+
     const PhaseFunction &phase() const { return *m_phase; }
     /// Mitsuba's `sample_emitters`: next-event estimation at scattering points in this medium.
     bool sample_emitters() const { return m_sample_emitters; }

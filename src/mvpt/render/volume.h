@@ -5,12 +5,21 @@
 #include "../core/math.h"
 #include "../core/spectrum_rgb.h"
 #include "../core/properties.h"
+#include "majorant_grid.h"
 #include "shape.h"
 
 #include <memory>
 #include <string>
 
 namespace mvpt {
+
+/// Bounds of a volume over a region: `hi` is at least the value of every point and channel
+/// there, `lo` at most the mean of the channels at every point (infinite `hi`: none known).
+/// `tight`: they are the extremes over the region (a region's parts have none looser).
+struct ValueBounds {
+    float lo = 0.f, hi = Infinity;
+    bool tight = false;
+};
 
 class Volume : public Object {
 public:
@@ -24,6 +33,16 @@ public:
     virtual BoundingBox bounds() const = 0;
     /// 1 or 3.
     virtual int channels() const = 0;
+    /// Upper bounds of the value by region, for tracking against local majorants; the
+    /// default: max_value() everywhere.
+    virtual MajorantGrid majorant_grid() const { return MajorantGrid::uniform(max_value()); }
+    /// Bounds of the value on the segment between world points `a` and `b`; the default knows
+    /// none. Where `refines_bounds`, they tighten as the segment shrinks.
+    virtual ValueBounds segment_bounds(Point3f a, Point3f b) const {
+        (void)a, (void)b;
+        return {};
+    }
+    virtual bool refines_bounds() const { return false; }
     /// True, with the value, for a constant volume.
     virtual bool constant(Spectrum &value) const { (void)value; return false; }
 };

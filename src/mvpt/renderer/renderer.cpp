@@ -9,6 +9,7 @@
 #include "../integrators/multiview/mvpath.h"
 #include "../render/camera.h"
 #include "../render/filter.h"
+#include "../render/medium.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -141,23 +142,40 @@ void Renderer::make_films(const std::function<Film(size_t)> &make) {
     });
 }
 
+namespace {
+
+/// The free flights the scene's media have given up so far (Medium::flights_given_up).
+uint64_t flights_given_up(const Scene &scene) {
+    uint64_t n = 0;
+    for (const Medium *m : scene.media()) n += m->flights_given_up();
+    return n;
+}
+
+} // namespace
+
 void Renderer::render(const std::atomic<bool> &cancel, const ProgressFn &progress) {
     m_render_start = std::chrono::steady_clock::now();
     m_stats.threads = m_opts.threads > 0 ? m_opts.threads : tbb::this_task_arena::max_concurrency();
+    const uint64_t given_up_before = flights_given_up(m_scene);
     tbb::task_arena arena(m_stats.threads);
     if (m_multiview) {
         render_multiview(arena, cancel, progress);
-        return;
+    } else {
+        if (!m_opts.resume_path.empty()) read_state(m_opts.resume_path);
+        PathPasses schedule(*this, arena);
+        run_passes(schedule, cancel, progress);
+        m_stats.counters = schedule.counters();
+        schedule.finish();
+        arena.execute([&] {
+            release_held(); // (splatting: no second pass came)
+            develop();
+        });
     }
-    if (!m_opts.resume_path.empty()) read_state(m_opts.resume_path);
-    PathPasses schedule(*this, arena);
-    run_passes(schedule, cancel, progress);
-    m_stats.counters = schedule.counters();
-    schedule.finish();
-    arena.execute([&] {
-        release_held(); // (splatting: no second pass came)
-        develop();
-    });
+    // (Counted on the media: a render running at the same time on the same scene adds its own.)
+    if (const uint64_t n = flights_given_up(m_scene) - given_up_before)
+        m_stats.warnings.push_back("heterogeneous media gave up " + std::to_string(n) +
+                                   " free flights or transmittance estimates after 2^22 tentative collisions "
+                                   "each (weight 0): the image is darker where they were");
 }
 
 void Renderer::develop() {

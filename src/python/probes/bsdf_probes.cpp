@@ -4,11 +4,11 @@
 #include "mvpt/integrators/multiview/mv_mixture.h"
 #include "mvpt/integrators/multiview/mv_selection.h"
 #include "mvpt/render/bsdf.h"
-#include "mvpt/render/medium.h"
 #include "mvpt/render/phase.h"
 #include "mvpt/loader/xml_parser.h"
 
 #include "arrays.h"
+#include "object_xml.h"
 #include "scene_errors.h"
 
 #include <nanobind/nanobind.h>
@@ -24,21 +24,21 @@ namespace nb = nanobind;
 using namespace nb::literals;
 using namespace mvpt;
 
-namespace {
-
-using mvpt_py::OutArray;
-using mvpt_py::scene_errors_as_value_errors;
-using mvpt_py::out_array;
-using mvpt_py::Vec3Array;
-
-/// Instantiate the one top-level object of `kind` declared in a scene snippet.
-std::shared_ptr<Object> object_from_xml(const std::string &xml, const std::string &kind, const std::string &base_dir) {
+std::shared_ptr<Object> mvpt_py::object_from_xml(const std::string &xml, const std::string &kind, const std::string &base_dir) {
     XmlNode root = parse_scene_string("<scene version=\"3.0.0\">" + xml + "</scene>", base_dir, {});
     SceneTree tree = instantiate_scene(root, base_dir);
     for (auto &c : tree.props.children())
         if (c.kind == kind) return c.object;
     throw std::invalid_argument("the XML snippet declares no " + kind);
 }
+
+namespace {
+
+using mvpt_py::object_from_xml;
+using mvpt_py::OutArray;
+using mvpt_py::scene_errors_as_value_errors;
+using mvpt_py::out_array;
+using mvpt_py::Vec3Array;
 
 struct BsdfProbe {
     std::shared_ptr<Bsdf> bsdf;
@@ -226,40 +226,9 @@ struct PhaseProbe {
     }
 };
 
-/// A medium from a `<medium>` snippet: its forced-scattering draws along the +z axis.
-struct MediumProbe {
-    std::shared_ptr<Medium> medium;
-
-    explicit MediumProbe(const std::string &xml) {
-        medium = std::static_pointer_cast<Medium>(
-            scene_errors_as_value_errors([&] { return object_from_xml(xml, "medium", "."); }));
-    }
-
-    /// n draws of sample_within over [0, t_end): rows (t, weight r, g, b); t = inf where no
-    /// scattering was drawn. Raises where the medium cannot force scattering.
-    OutArray sample_within(float t_end, size_t n, uint32_t seed) {
-        OutArray out = out_array(n, 4);
-        Sampler s(SamplerKind::Independent, seed);
-        const Ray ray{Point3f(0.f), Vec3f(0.f, 0.f, 1.f), 0.f, t_end, 0.f};
-        for (size_t i = 0; i < n; ++i) {
-            s.start(0, 0, 0, uint32_t(i));
-            MediumSample ms;
-            if (!medium->sample_within(ray, t_end, s.next_1d(), ms))
-                throw std::invalid_argument("this medium cannot force scattering");
-            float *row = out.data() + 4 * i;
-            row[0] = ms.scattered ? ms.t : INFINITY;
-            for (int c = 0; c < 3; ++c) row[1 + c] = ms.scattered ? ms.weight[c] : 0.f;
-        }
-        return out;
-    }
-};
-
 } // namespace
 
 void bind_probes(nb::module_ &m) {
-    nb::class_<MediumProbe>(m, "MediumProbe")
-        .def(nb::init<const std::string &>(), "xml"_a)
-        .def("sample_within", &MediumProbe::sample_within, "t_end"_a, "n"_a, "seed"_a = 0);
     nb::class_<PhaseProbe>(m, "PhaseProbe")
         .def(nb::init<const std::string &>(), "xml"_a)
         .def("sample", &PhaseProbe::sample, "wx"_a, "wy"_a, "wz"_a, "n"_a, "seed"_a = 0)

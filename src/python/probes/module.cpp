@@ -12,6 +12,7 @@ void bind_light_probes(nb::module_ &m);
 void bind_spectrum(nb::module_ &m);
 void bind_segment_probes(nb::module_ &m);
 void bind_render_probes(nb::module_ &m);
+void bind_medium_probes(nb::module_ &m);
 
 NB_MODULE(_probes, m) {
     m.doc() = "mvpt test probes"; // bad input: ValueError (scene_errors.h)
@@ -20,4 +21,5 @@ NB_MODULE(_probes, m) {
     bind_spectrum(m);
     bind_segment_probes(m);
     bind_render_probes(m);
+    bind_medium_probes(m);
 }
