@@ -7,8 +7,29 @@
 """
 __version__ = "0.1.0"
 
-from ._core import SceneError, Scene, StateError
-from .api import load_file, load_string, merge, render, RenderResult
-from .output import write_outputs
+__all__ = ["SceneError", "StateError", "Scene", "load_file", "load_string", "load_scene", "render", "merge", "RenderResult",
+           "write_outputs"]
 
-__all__ = ["SceneError", "StateError", "Scene", "load_file", "load_string", "render", "merge", "RenderResult", "write_outputs"]
+# Where each name comes from, imported on first use: `import mvpt` alone loads nothing, so the
+# `mvpt` program (program.py) handles signals before NumPy and the native core load.
+_FROM = {"SceneError": "_core", "Scene": "_core", "StateError": "_core", "load_file": "api", "load_string": "api",
+         "load_scene": "api", "merge": "api", "render": "api", "RenderResult": "api", "write_outputs": "output"}
+
+
+def __getattr__(name: str):
+    import importlib
+    if name in _FROM:
+        value = getattr(importlib.import_module(f".{_FROM[name]}", __name__), name)
+    else:  # a module of the package (mvpt._core, mvpt.api) not imported yet
+        try:
+            value = importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as e:
+            if e.name != f"{__name__}.{name}":
+                raise
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

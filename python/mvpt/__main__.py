@@ -1,6 +1,6 @@
 """`python -m mvpt ...` runs the command line (same as the `mvpt` entry point)."""
 import sys
 
-from .cli import command
+from .program import run
 
-sys.exit(command())
+sys.exit(run())

@@ -98,14 +98,48 @@ def load_file(path: str | os.PathLike, rig: Optional[str] = None, **defines) -> 
     "path:keys.json,frames=100,fps=24,shutter=0.5"; the CLI's --rig) replaces the scene's
     sensors by the views generated from its first sensor (README, "Camera rigs and shots").
     Raises mvpt.SceneError (a ValueError) naming file:line:col on bad input; the error
-    also has the attributes file, line, column and message."""
-    return _core.load_file(_text(os.fspath(path), "the scene path"), _defines(defines), _rig(rig))
+    also has the attributes file, line, column and message. The load runs natively with the
+    GIL released: Ctrl-C (KeyboardInterrupt) stops it within a fraction of a second."""
+    return load_scene(path, rig, defines)
 
 
 def load_string(xml: str, base_dir: str | os.PathLike = ".", rig: Optional[str] = None, **defines) -> _core.Scene:
     """Load a scene from an XML string; relative file names resolve in `base_dir`."""
-    return _core.load_string(_text(xml, "the scene"), _text(os.fspath(base_dir), "base_dir"), _defines(defines),
-                             _rig(rig))
+    job = _core.LoadJob(_text(xml, "the scene"), False, _text(os.fspath(base_dir), "base_dir"), _defines(defines),
+                        _rig(rig))
+    return _loaded(job, None)
+
+
+def load_scene(path: str | os.PathLike, rig: Optional[str] = None, defines: Optional[dict] = None,
+               every_view_rendered: bool = False, stop: Optional[Callable[[], bool]] = None) -> _core.Scene:
+    """load_file with its options as arguments (no define can be named like them).
+
+    every_view_rendered: the caller renders all the views at once (the command line without
+    --views): a rig whose views' images cannot all be in memory is refused (mvpt.SceneError)
+    before its views are made, where the render's own check would refuse it after a load of
+    seconds and GiB. stop: polled while the scene loads; once it returns True the load stops
+    and KeyboardInterrupt is raised."""
+    job = _core.LoadJob(_text(os.fspath(path), "the scene path"), True, ".", _defines(defines or {}), _rig(rig),
+                        bool(every_view_rendered))
+    return _loaded(job, stop)
+
+
+def _loaded(job, stop) -> _core.Scene:
+    """The scene of a load job, waited for a twentieth of a second at a time with the GIL
+    released, so that signal handlers run: KeyboardInterrupt (from one, or from `stop`)
+    cancels the load and is raised once the load has stopped."""
+    job.start()
+    try:
+        while not job.wait(0.05):
+            if stop is not None and stop():
+                raise KeyboardInterrupt
+    except BaseException:
+        with _interrupts_ignored():
+            job.cancel()
+            while not job.wait(0.05):
+                pass
+        raise
+    return job.scene()
 
 
 @dataclass

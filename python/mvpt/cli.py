@@ -4,19 +4,19 @@ Exit codes: 0 done, 1 bad scene or unwritable output, 2 bad command line, 130 in
 by Ctrl-C (143 by SIGTERM, 129 by SIGHUP); an interrupted render stops within about half a
 second and writes the samples finished so far, with "cancelled" in the JSON, and its state
 (<stem>.mvpt-state), from which `mvpt render --resume OUT` continues it (nothing when no pass
-had finished)."""
+had finished). A signal at any other point, from the program's start to its end (the load,
+the writing of the outputs, the exit), gives the same code where the command succeeded
+(docs/outputs-and-reports.md, "Signals")."""
 from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
-import threading
 import time
 from importlib import resources
 from pathlib import Path
 
-from . import __version__, api, cli_common
+from . import __version__, api, cli_common, stop_signals
 from . import state as state_file
 from ._core import SceneError
 from . import displays, output_lock, reports_cli, state_cli
@@ -88,6 +88,8 @@ def _failed(bar: "ProgressBar", e: Exception) -> int:
 
 
 def _render(scene_path: Path, args, stem: str) -> int:
+    # A signal stops the render where it polls for one: the load, the passes (stop_signals).
+    stop_signals.interruptible = False
     try:
         api._text(str(args.output), "the output directory")
     except ValueError as e:
@@ -99,7 +101,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
         _error(problem)
         return EXIT_USAGE
     try:
-        scene = api.load_file(scene_path, rig=args.rig, **defines)
+        scene = api.load_scene(scene_path, args.rig, defines, every_view_rendered=not args.views,
+                               stop=stop_signals.stop_requested)
     except (SceneError, ValueError, RuntimeError, MemoryError) as e:  # ValueError: arguments that are not text
         _error(cli_common.failure_text(e))
         return EXIT_ERROR
@@ -155,9 +158,17 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         _error(f"{state} holds the state of another render; continue it with `mvpt render --resume "
                f"{args.output}`, remove it, or choose another -o")
         return EXIT_ERROR
+    if stop_signals.stop_requested():
+        raise KeyboardInterrupt  # (before anything was rendered)
+
+    def progress(p: dict) -> None:
+        if stop_signals.stop_requested():
+            raise KeyboardInterrupt  # api.render cancels the render and returns what it finished
+        bar(p)
+
     try:
         result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
-                            views=views, progress=bar, method=args.method, state=None if foreign else state,
+                            views=views, progress=progress, method=args.method, state=None if foreign else state,
                             checkpoint=args.checkpoint, resume=resume, state_at_end=keep_state,
                             state_extra={"command": state_cli.command_record(scene_path, args, stem)},
                             passes=args.passes, splits=args.splits)
@@ -173,7 +184,7 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         if not resume and not foreign:
             state.unlink(missing_ok=True)
         print("mvpt: interrupted before the first pass finished; nothing written", file=sys.stderr)
-        return cli_common.exit_code()
+        return stop_signals.exit_code()
     if not cancelled and not keep_state and not foreign:
         state.unlink(missing_ok=True)  # the render is complete: a state was not asked for
     settings = {"scene": str(scene_path), "defines": defines, "output": str(args.output)}
@@ -198,13 +209,16 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         else:
             print(f"mvpt: interrupted; wrote the passes finished so far and their state; continue with: "
                   f"mvpt render --resume {args.output}", file=sys.stderr)
-        return cli_common.exit_code()
-    return EXIT_OK
+        return stop_signals.exit_code()
+    if stop_signals.stop_requested():
+        print(f"mvpt: {stop_signals.stopped_by.name} came as the render ended; its outputs are complete", file=sys.stderr)
+    return stop_signals.final_code(EXIT_OK)
 
 
 def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     """`mvpt render --ray [ADDRESS] --workers N` (docs/distributed.md)."""
     from . import distributed
+    stop_signals.interruptible = True  # (distributed.render stops on KeyboardInterrupt)
     try:
         result = distributed.render(scene_path, spp=args.spp, time=args.time, seed=args.seed, method=args.method,
                                     views=views, rig=args.rig, defines=dict(args.define or []),
@@ -214,9 +228,11 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     except KeyboardInterrupt:
         bar.finish(done=False)
         print("mvpt: interrupted before the first range finished; nothing written", file=sys.stderr)
-        return cli_common.exit_code()
+        return stop_signals.exit_code()
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
         return _failed(bar, e)
+    finally:
+        stop_signals.interruptible = False
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
     settings = {"scene": str(scene_path), "defines": dict(args.define or []), "output": str(args.output),
@@ -231,8 +247,8 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
               f"wrote {len(paths)} files to {args.output}")
     if cancelled:
         print("mvpt: interrupted; wrote the ranges finished so far", file=sys.stderr)
-        return cli_common.exit_code()
-    return EXIT_OK
+        return stop_signals.exit_code()
+    return stop_signals.final_code(EXIT_OK)
 
 
 RAY_ONLY = ("workers", "shared_scene", "wheel")
@@ -296,19 +312,34 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
 
 
 def command() -> int:
-    """The `mvpt` program (`mvpt`, `python -m mvpt`): main() with its signal handlers kept, and
-    Ctrl-C ignored once it has returned (its outputs written; people press Ctrl-C twice):
-    Python's shutdown restores the default handler, which would kill the process with its
-    work done and its exit status lost."""
-    code = main(keep_handlers=True)
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-    return code
+    """The `mvpt` program (`mvpt`, `python -m mvpt`): main() with its signal handlers kept to the
+    end of the process (stop_signals.end): Python's shutdown would restore their default
+    action, which kills the process with its work done and its exit status lost. A signal that
+    came at any point gives its exit code (128 + its number) where the command succeeded."""
+    return stop_signals.end(main(keep_handlers=True))
 
 
 def main(argv=None, keep_handlers: bool = False) -> int:
     """The command line as a function: its signal handlers are restored when it returns (unless
-    `keep_handlers`: the process ends with it)."""
+    `keep_handlers`: the process ends with it). Exit codes: see the module's docstring."""
+    previous = stop_signals.install()
+    try:
+        if stop_signals.stop_requested():
+            raise KeyboardInterrupt  # (it came while the program started: program.py)
+        return stop_signals.final_code(_command(argv))
+    except KeyboardInterrupt:
+        print("\nmvpt: interrupted", file=sys.stderr)
+        return stop_signals.exit_code()
+    finally:
+        # From here on (the work is done) a signal is only recorded: it must not raise into the
+        # restoring loop.
+        stop_signals.interruptible = False
+        if not keep_handlers:
+            stop_signals.restore(previous)
+
+
+def _command(argv) -> int:
+    """The command of `argv`, parsed and run."""
     parser = _Parser(prog="mvpt", description="Render many views of one scene (Mitsuba 3 XML).")
     parser.add_argument("--version", action="version", version=f"mvpt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -335,32 +366,19 @@ def main(argv=None, keep_handlers: bool = False) -> int:
         if problem:
             _error(problem)
             return EXIT_USAGE
-    cli_common.reset_stop()
-    in_main_thread = threading.current_thread() is threading.main_thread()
-    stops = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-    previous = {s: signal.signal(s, cli_common.on_signal) for s in stops} if in_main_thread else {}
-    try:
-        if args.command == "render":
-            if args.resume is not None:
-                return state_cli.resume(args, _render)
-            if args.scene is None:
-                _error("render: the scene is required (or --resume OUT)")
-                return EXIT_USAGE
-            return _render(args.scene, args, args.scene.stem)
-        if args.command in reports_cli.COMMANDS:
-            return reports_cli.run(args)
-        if args.command == "merge":
-            return state_cli.merge(args)
-        with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
-            return _render(demo, args, "demo")
-    except KeyboardInterrupt:
-        print("\nmvpt: interrupted", file=sys.stderr)
-        return cli_common.exit_code()
-    finally:
-        # A signal from here on (the work is done) must not raise into the restoring loop.
-        cli_common.finishing = True
-        for s, handler in ({} if keep_handlers else previous).items():
-            signal.signal(s, handler if handler is not None else signal.SIG_DFL)
+    if args.command == "render":
+        if args.resume is not None:
+            return state_cli.resume(args, _render)
+        if args.scene is None:
+            _error("render: the scene is required (or --resume OUT)")
+            return EXIT_USAGE
+        return _render(args.scene, args, args.scene.stem)
+    if args.command in reports_cli.COMMANDS:
+        return reports_cli.run(args)
+    if args.command == "merge":
+        return state_cli.merge(args)
+    with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
+        return _render(demo, args, "demo")
 
 
 if __name__ == "__main__":

@@ -1,40 +1,15 @@
-"""What the command line's subcommands share: exit codes, the error line, argument types, the
-signal that stopped a render, and writing a render's outputs as one set."""
+"""What the command line's subcommands share: exit codes, the error line, argument types, and
+writing a render's outputs as one set."""
 from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
-import threading
 
-from . import displays
+from . import displays, stop_signals
 from .output import staged_outputs, write_outputs
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-
-# The signal that stopped the render (SIGINT, SIGTERM or SIGHUP): the exit code is 128 + its
-# number; None until one came.
-stopped_by = None
-# True once the command's work is over and it is restoring the signal handlers: a signal then
-# stops nothing (and must not raise into that code).
-finishing = False
-
-
-def on_signal(signum, frame):
-    """Ctrl-C, SIGTERM (batch schedulers, `kill`) and SIGHUP (a closed terminal) stop the render
-    with the outputs of the passes finished and a state to resume from. Only the first stops it:
-    later ones (people press Ctrl-C twice) must not abandon what it is saving."""
-    global stopped_by
-    if stopped_by is None and not finishing:
-        stopped_by = signal.Signals(signum)
-        raise KeyboardInterrupt
-    print(f"\nmvpt: {signal.Signals(signum).name}: finishing what was started", file=sys.stderr)
-
-
-def exit_code() -> int:
-    """The exit code of a render stopped by a signal (Ctrl-C when none was recorded)."""
-    return 128 + int(stopped_by or signal.SIGINT)
 
 
 def failure_text(e: BaseException) -> str:
@@ -112,38 +87,18 @@ def define(text: str) -> tuple:
 def write_all(result, args, stem: str, settings: dict):
     """The per-view files, the JSON and the displays asked for in args.output, as one set
     (output.staged_outputs); their paths, or None after printing the error. Ctrl-C, SIGTERM and
-    SIGHUP while writing do not interrupt it: they are reported, and the exit code says so."""
-    global stopped_by
-    deferred = []
-
-    def finish_first(signum, frame):
-        if not deferred:
-            print(f"\nmvpt: {signal.Signals(signum).name}: finishing writing the outputs", file=sys.stderr)
-        deferred.append(signum)
-
-    in_main = threading.current_thread() is threading.main_thread()
-    previous = {s: signal.signal(s, finish_first) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)} \
-        if in_main else {}
-    staging = None
-    try:
-        with staged_outputs(args.output) as (staging, paths):
-            paths += write_outputs(result, staging, stem, aovs=bool(args.aovs), settings=settings)
-            if displays.wants_displays(args):
-                paths += displays.write_displays(result, args, staging, stem)
-    except (OSError, RuntimeError, ValueError, ImportError) as e:
-        error(str(e).replace(f"{staging}/", f"{args.output}/") if staging else str(e))
-        return None
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-    if deferred:
-        stopped_by = stopped_by or signal.Signals(deferred[0])
-        print(f"mvpt: wrote the outputs ({len(paths)} files to {args.output})", file=sys.stderr)
-        raise KeyboardInterrupt
+    SIGHUP while writing do not interrupt it: they are reported, and the exit code says so
+    (stop_signals.finishing)."""
+    staging, before = None, stop_signals.stopped_by
+    with stop_signals.finishing("writing the outputs"):
+        try:
+            with staged_outputs(args.output) as (staging, paths):
+                paths += write_outputs(result, staging, stem, aovs=bool(args.aovs), settings=settings)
+                if displays.wants_displays(args):
+                    paths += displays.write_displays(result, args, staging, stem)
+        except (OSError, RuntimeError, ValueError, ImportError) as e:
+            error(str(e).replace(f"{staging}/", f"{args.output}/") if staging else str(e))
+            return None
+        if stop_signals.stopped_by is not before:  # (the line after "finishing writing the outputs")
+            print(f"mvpt: wrote the outputs ({len(paths)} files to {args.output})", file=sys.stderr)
     return paths
-
-
-def reset_stop() -> None:
-    """Forget the signal of an earlier command (main() runs more than once in one process)."""
-    global stopped_by, finishing
-    stopped_by, finishing = None, False

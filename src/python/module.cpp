@@ -5,6 +5,8 @@
 #include "mvpt/renderer/render_state.h"
 #include "mvpt/renderer/renderer.h"
 #include "mvpt/loader/load_scene.h"
+#include "load_job.h"
+#include "signals_at_exit.h"
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -304,6 +306,20 @@ void bind_scene(nb::module_ &m) {
                             const std::string &rig) {
         return std::shared_ptr<Scene>(load_scene_string(xml, base_dir, defines, rig));
     }, "xml"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{}, "rig"_a = "");
+    // The same loads on a thread of their own (load_job.h): start(), wait(timeout), cancel(), scene().
+    nb::class_<mvpt_py::LoadJob>(m, "LoadJob")
+        .def("__init__", [](mvpt_py::LoadJob *self, const std::string &source, bool is_file, const std::string &base_dir,
+                            const std::map<std::string, std::string> &defines, const std::string &rig, bool every_view_rendered) {
+            mvpt_py::LoadJob::Load load = [=]() {
+                return is_file ? load_scene_file(source, defines, rig) : load_scene_string(source, base_dir, defines, rig);
+            };
+            new (self) mvpt_py::LoadJob(std::move(load), every_view_rendered);
+        }, "source"_a, "is_file"_a, "base_dir"_a = ".", "defines"_a = std::map<std::string, std::string>{}, "rig"_a = "",
+           "every_view_rendered"_a = false)
+        .def("start", &mvpt_py::LoadJob::start)
+        .def("wait", &mvpt_py::LoadJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
+        .def("cancel", &mvpt_py::LoadJob::cancel)
+        .def("scene", &mvpt_py::LoadJob::scene);
 }
 
 /// A render in native threads, its state files and merges.
@@ -394,6 +410,7 @@ void bind_images(nb::module_ &m) {
 NB_MODULE(_core, m) {
     m.doc() = "mvpt native core";
     bind_errors(m);
+    mvpt_py::bind_signals_at_exit(m);
     bind_scene(m);
     bind_render(m);
     bind_images(m);

@@ -1,12 +1,17 @@
 // Camera rigs and shots (loader/rig.h, loader/camera_path.h): the poses and frusta of every
 // rig type, the shared focal plane of off-axis grids, per-frame shutters of path rigs, the
-// --rig option, and one clear error for each kind of bad input.
+// --rig option, one clear error for each kind of bad input, and the control of a load
+// (loader/load_control.h): a cancel flag stops it between elements and between the views a rig
+// makes; a rig whose views' images cannot fit is refused before its views are made when every
+// view is to be rendered, and loads otherwise.
 #include "mvpt/render/camera.h"
 #include "mvpt/loader/camera_path.h"
+#include "mvpt/loader/load_control.h"
 #include "mvpt/loader/load_scene.h"
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -348,4 +353,46 @@ TEST(RigErrors, BadTypeParameterOrStructure) {
                               "</mvpt:rig><mvpt:rig type=\"stereo\">" + BaseSensor + "</mvpt:rig></scene>", ".");
     });
     EXPECT_NE(e.find("duplicate id 'left'"), std::string::npos) << e;
+}
+
+namespace {
+
+std::string scene_with_film(int width, int height) {
+    return "<scene version=\"3.0.0\" xmlns:mvpt=\"urn:mvpt\"><sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/>"
+           "<film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(width) +
+           "\"/><integer name=\"height\" value=\"" + std::to_string(height) + "\"/></film></sensor></scene>";
+}
+
+} // namespace
+
+TEST(LoadControl, ACancelledLoadStops) {
+    std::atomic<bool> cancel{true};
+    LoadControlScope scope({&cancel, false});
+    EXPECT_THROW(load_scene_string(scene_with_film(8, 8), "."), LoadCancelled);
+    EXPECT_THROW(load_scene_string(scene_with_film(8, 8), ".", {}, "grid:3x3,spacing=0.1"), LoadCancelled);
+}
+
+TEST(LoadControl, TheScopeEnds) {
+    std::atomic<bool> cancel{true};
+    { LoadControlScope scope({&cancel, true}); }
+    EXPECT_EQ(load_control().cancel, nullptr);
+    EXPECT_FALSE(load_control().every_view_rendered);
+    EXPECT_EQ(load_scene_string(scene_with_film(8, 8), ".")->cameras().size(), 1u);
+}
+
+TEST(LoadControl, ARigThatCannotFitIsRefusedWhenEveryViewIsRendered) {
+    // 4 views of 2^32 pixels: 550 GB of images at the least (nothing is allocated by the load).
+    const std::string xml = scene_with_film(65536, 65536);
+    EXPECT_EQ(load_scene_string(xml, ".", {}, "grid:2x2,spacing=0.1")->cameras().size(), 4u);
+    LoadControlScope scope({nullptr, true});
+    try {
+        load_scene_string(xml, ".", {}, "grid:2x2,spacing=0.1");
+        FAIL() << "not refused";
+    } catch (const SceneError &e) {
+        EXPECT_NE(std::string(e.what()).find("the rig's 4 views need at least"), std::string::npos) << e.what();
+    }
+    // A crop window counts as the view's pixels: 4 views of 8 x 8 fit.
+    const std::string cropped = scene_with_film(65536, 65536).replace(
+        xml.find("</film>"), 7, "<integer name=\"crop_width\" value=\"8\"/><integer name=\"crop_height\" value=\"8\"/></film>");
+    EXPECT_EQ(load_scene_string(cropped, ".", {}, "grid:2x2,spacing=0.1")->cameras().size(), 4u);
 }

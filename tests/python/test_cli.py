@@ -397,3 +397,38 @@ def test_output_that_is_a_file(tmp_path, capsys):
     assert cli.main(["render", str(path), "-o", str(target), "--spp", "1", "-q"]) == 1
     lines = capsys.readouterr().err.splitlines()
     assert lines == [f"mvpt: error: cannot use the output directory {target}: it is not a directory"], lines
+
+
+# The command line, reporting its peak resident memory (MiB) on its last line of stderr.
+_CLI_WITH_PEAK = ("import resource, sys\nfrom mvpt import cli\ncode = cli.main(sys.argv[1:])\n"
+                  "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss >> 10, file=sys.stderr)\nsys.exit(code)\n")
+
+
+def _render_under_limit(args: list, gib: int) -> tuple:
+    import resource
+    limit = gib << 30
+    proc = subprocess.run([sys.executable, "-c", _CLI_WITH_PEAK, "render"] + args + ["-q"], capture_output=True,
+                          text=True, timeout=120, env=ENV,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+    *lines, peak = proc.stderr.strip().splitlines()
+    return proc.returncode, lines, float(peak)
+
+
+def test_an_impossible_rig_is_refused_before_its_views_are_made(tmp_path):
+    """A rig whose views' images cannot all be in memory was refused by the render's preflight
+    only after its load (90000 views of 512^2: 34-75 s and 1.5 GB); it is refused before its
+    views are made, unless --views renders only some of them."""
+    path = tmp_path / "base.xml"
+    path.write_text(scene(sensor(res=512)))
+    rc, lines, peak = _render_under_limit([str(path), "--rig", "grid:300x300,spacing=0.001", "-o", str(tmp_path / "a")], 4)
+    assert rc == 1 and len(lines) == 1, lines
+    assert lines[0].startswith("mvpt: error: --rig grid:300x300,spacing=0.001: the rig's 90000 views need at least "), lines
+    assert "MiB of memory for their images, but the address-space limit (ulimit -v) leaves" in lines[0], lines
+    assert peak < 400, peak  # (the views made: about 800 MiB)
+    path.write_text(scene(sensor(res=256)))
+    small = [str(path), "--rig", "grid:40x40,spacing=0.001", "--spp", "1"]  # 3.2 GiB of images
+    rc, lines, _ = _render_under_limit(small + ["-o", str(tmp_path / "b")], 2)
+    assert rc == 1 and "the rig's 1600 views need at least" in lines[0], lines
+    rc, lines, _ = _render_under_limit(small + ["--views", "r0c0", "-o", str(tmp_path / "c")], 2)
+    assert rc == 0 and lines == [], lines
+    assert (tmp_path / "c" / "base_r0c0.exr").exists()

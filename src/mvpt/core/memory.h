@@ -4,6 +4,10 @@
 
 namespace mvpt {
 
+/// The least memory a rendered view-pixel takes, whatever the method: its developed image,
+/// variance and sample count (and the count's float copy for Python).
+constexpr double MinBytesPerRenderedPixel = 6 * sizeof(float) + sizeof(unsigned) + sizeof(float);
+
 /// Bytes this process holds in physical memory now.
 double resident_bytes();
 

@@ -1,8 +1,11 @@
 #include "load_scene.h"
 
 #include "../core/plugin.h"
+#include "load_control.h"
 #include "rig.h"
 #include "xml_parser.h"
+
+#include <unordered_set>
 
 namespace mvpt {
 
@@ -13,6 +16,7 @@ SceneParts scene_parts(const SceneTree &tree) {
     parts.notes = tree.notes;
     parts.warnings = tree.warnings;
     bool environment = false;
+    std::unordered_set<std::string> camera_ids; // (a rig makes up to 100000 sensors: no pairwise check)
     for (const ChildObject &c : props.children()) {
         c.queried = true;
         const bool owned_elsewhere = !c.id.empty() && tree.referenced_ids.count(c.id);
@@ -37,8 +41,7 @@ SceneParts scene_parts(const SceneTree &tree) {
         } else if (c.kind == "sensor") {
             auto cam = std::static_pointer_cast<Camera>(c.object);
             if (cam->id.empty()) cam->id = std::to_string(parts.cameras.size());
-            for (auto &other : parts.cameras)
-                if (other->id == cam->id) throw SceneError(c.loc, "two sensors have the id '" + cam->id + "'");
+            if (!camera_ids.insert(cam->id).second) throw SceneError(c.loc, "two sensors have the id '" + cam->id + "'");
             parts.cameras.push_back(cam);
         } else if (c.kind == "integrator") {
             if (parts.integrator) throw SceneError(c.loc, "the scene has more than one <integrator>");
@@ -65,8 +68,10 @@ std::unique_ptr<Scene> load(XmlNode root, const std::filesystem::path &base_dir,
                             const std::map<std::string, std::string> &defines, const std::string &rig) {
     if (!rig.empty()) apply_rig_option(root, rig);
     const SceneTree tree = instantiate_scene(root, std::filesystem::absolute(base_dir));
+    SceneParts parts = scene_parts(tree);
+    check_load_cancelled();
     auto scene = std::make_unique<Scene>();
-    scene->build(scene_parts(tree));
+    scene->build(std::move(parts));
     scene->set_load_options(defines, rig);
     return scene;
 }

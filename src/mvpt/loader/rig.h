@@ -58,6 +58,7 @@ struct RigBase {
     Transform to_world;             ///< camera-to-world (static)
     float tan_x = 1.f, tan_y = 1.f; ///< tangents of the half fields of view
     float ppo_x = 0.f, ppo_y = 0.f; ///< the base's own principal point offset
+    double pixels = 0.0;            ///< pixels of a view (the film's crop window)
 };
 
 /// One generated view.

@@ -15,7 +15,9 @@
 
 #include <algorithm>
 
+#include "../core/memory.h"
 #include "../render/cameras/field_of_view.h"
+#include "load_control.h"
 #include "parse_values.h"
 
 #include <cstdio>
@@ -64,6 +66,7 @@ RigBase rig_base(const XmlNode &sensor, const std::string &where, const XmlNode 
     RigBase base;
     Properties props("sensor", *type, sensor.loc);
     int width = 768, height = 576; // hdrfilm's defaults
+    int64_t crop[4] = {0, 0, -1, -1}; // offset x, y; width, height (-1: to the film's edge)
     for (const XmlNode &c : sensor.children) {
         const std::string *name = c.attr("name");
         if (name && *name == "to_world") {
@@ -88,6 +91,9 @@ RigBase rig_base(const XmlNode &sensor, const std::string &where, const XmlNode 
                 if (f.tag != "integer" || !fname || !value) continue;
                 if (*fname == "width") width = int(parse_int(*value, f.attr_loc("value"), "film width"));
                 if (*fname == "height") height = int(parse_int(*value, f.attr_loc("value"), "film height"));
+                const char *crops[4] = {"crop_offset_x", "crop_offset_y", "crop_width", "crop_height"};
+                for (int i = 0; i < 4; ++i)
+                    if (*fname == crops[i]) crop[i] = parse_int(*value, f.attr_loc("value"), crops[i]);
             }
         }
     }
@@ -95,7 +101,24 @@ RigBase rig_base(const XmlNode &sensor, const std::string &where, const XmlNode 
     read_field_of_view(props, width, height, &base.tan_x, &base.tan_y);
     base.ppo_x = props.get_float("principal_point_offset_x", 0.f);
     base.ppo_y = props.get_float("principal_point_offset_y", 0.f);
+    // The crop window's pixels, clamped to the film (the film checks the window itself when made).
+    const int64_t cw = crop[2] >= 0 ? crop[2] : width - crop[0], ch = crop[3] >= 0 ? crop[3] : height - crop[1];
+    base.pixels = double(std::clamp<int64_t>(cw, 0, width)) * double(std::clamp<int64_t>(ch, 0, height));
     return base;
+}
+
+/// Refuses, before its views are made, a rig whose views' images cannot all be in memory at
+/// once when the caller renders every view (the renderer's preflight, renderer.cpp, would
+/// refuse it only after the load, which for 10^5 views takes seconds and GiB).
+void check_rig_fits(size_t views, const RigBase &base, const RigSpec &spec) {
+    if (!load_control().every_view_rendered) return;
+    const double need = double(views) * base.pixels * MinBytesPerRenderedPixel;
+    const MemoryRoom room = available_memory();
+    if (room.bytes > 0.0 && need > room.bytes)
+        throw SceneError(spec.loc, spec.prefix() + "the rig's " + std::to_string(views) + " views need at least " +
+                                       std::to_string(int64_t(need / (1 << 20))) + " MiB of memory for their images, but " +
+                                       room.limit + " leaves " + std::to_string(int64_t(room.bytes / (1 << 20))) +
+                                       " MiB (make fewer views or smaller films)");
 }
 
 /// Removes the `id` of every element declared inside `node` (not of a <ref>, whose id names what
@@ -172,9 +195,14 @@ std::vector<XmlNode> expand_rig_element(const XmlNode &rig, const XmlNode &scene
         base = &c;
     }
     if (!base) throw SceneError(rig.loc, spec.where + " needs a <sensor> inside it: the base camera of the rig");
+    const RigBase base_view = rig_base(*base, spec.where, scene);
+    const std::vector<RigView> views = generate_rig(spec, base_view, search_dirs, files);
+    check_rig_fits(views.size(), base_view, spec);
     std::vector<XmlNode> out;
-    for (const RigView &v : generate_rig(spec, rig_base(*base, spec.where, scene), search_dirs, files))
+    for (const RigView &v : views) {
+        check_load_cancelled();
         out.push_back(view_sensor(*base, v, rig, out.empty()));
+    }
     return out;
 }
 
@@ -188,9 +216,14 @@ void apply_rig_option(XmlNode &root, const std::string &text) {
     std::vector<fs::path> dirs = {fs::current_path(), root.dir};
     for (auto &d : root.search_dirs) dirs.push_back(d);
     const XmlNode base = root.children[first];
+    const RigBase base_view = rig_base(base, "--rig", root);
+    const std::vector<RigView> poses = generate_rig(spec, base_view, dirs, &root.source_files);
+    check_rig_fits(poses.size(), base_view, spec);
     std::vector<XmlNode> views;
-    for (const RigView &v : generate_rig(spec, rig_base(base, "--rig", root), dirs, &root.source_files))
+    for (const RigView &v : poses) {
+        check_load_cancelled();
         views.push_back(view_sensor(base, v, base, views.empty()));
+    }
     std::vector<XmlNode> children;
     for (size_t i = 0; i < root.children.size(); ++i) {
         if (i == first)

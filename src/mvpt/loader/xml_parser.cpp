@@ -1,6 +1,7 @@
 #include "xml_parser.h"
 
 #include "legacy_upgrade.h"
+#include "load_control.h"
 #include "parse_values.h"
 #include "../core/plugin.h"
 #include "rig.h"
@@ -399,6 +400,7 @@ public:
             if (!cached->second) throw SceneError(node.loc, "object refers to itself through <ref>");
             return cached->second;
         }
+        check_load_cancelled();
         m_cache[&node] = nullptr; // marks "in progress" for cycle detection
         const std::string &type = *node.attr("type");
         Properties props(node.tag, type, node.loc);

@@ -94,7 +94,7 @@ double Renderer::estimate_peak_bytes() const {
     // (Each view's film is freed once its images are made, so the images never coexist with
     // all the films; then Python takes the images over without copies, converting the sample
     // counts to floats.)
-    const double developed = 6 * sizeof(float) + sizeof(uint32_t) + sizeof(float);
+    const double developed = MinBytesPerRenderedPixel;
     double per_pixel = std::max(double(Film::bytes_per_pixel(false, MvEstimator::Balance, false)), developed);
     double per_thread = 1 << 19;
     if (m_multiview) {
