@@ -201,7 +201,7 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         older = f", and {state.name} is an earlier checkpoint's" if state.exists() else ", without a state to resume from"
         _error(f"{state_error}; the images{' of the passes finished so far' if cancelled else ''} were written "
                f"to {args.output}{older}")
-        return cli_common.exit_code() if cancelled else EXIT_ERROR
+        return stop_signals.exit_code() if cancelled else EXIT_ERROR
     if cancelled:
         if foreign:
             print(f"mvpt: interrupted; wrote the passes finished so far, without a state to resume from "
