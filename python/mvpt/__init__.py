@@ -4,16 +4,18 @@
     result = mvpt.render(scene, spp=64, seed=1)
     result.images["0"]      # float32 (H, W, 3) linear RGB of the view with id "0"
     result.stats            # timing, ray counts, per-view statistics
+    scene = mvpt.load_blend("shot.blend")           # a Blender scene (needs mvpt[blender])
 """
 __version__ = "0.1.0"
 
 __all__ = ["SceneError", "StateError", "Scene", "load_file", "load_string", "load_scene", "render", "merge", "RenderResult",
-           "write_outputs"]
+           "write_outputs", "load_blend"]
 
 # Where each name comes from, imported on first use: `import mvpt` alone loads nothing, so the
 # `mvpt` program (program.py) handles signals before NumPy and the native core load.
 _FROM = {"SceneError": "_core", "Scene": "_core", "StateError": "_core", "load_file": "api", "load_string": "api",
-         "load_scene": "api", "merge": "api", "render": "api", "RenderResult": "api", "write_outputs": "output"}
+         "load_scene": "api", "merge": "api", "render": "api", "RenderResult": "api", "write_outputs": "output",
+         "load_blend": "blender.load"}
 
 
 def __getattr__(name: str):

@@ -100,9 +100,15 @@ def _render(scene_path: Path, args, stem: str) -> int:
     if problem:
         _error(problem)
         return EXIT_USAGE
+    blend = scene_path.suffix.lower() == ".blend"
+    if blend and getattr(args, "ray", None) is not None:
+        _error("--ray renders XML scenes: convert the .blend first (mvpt render scene.blend --xml-dir DIR), "
+               "then render DIR's XML file")
+        return EXIT_USAGE
     try:
-        scene = api.load_scene(scene_path, args.rig, defines, every_view_rendered=not args.views,
-                               stop=stop_signals.stop_requested)
+        scene = _load_blend(scene_path, args, defines) if blend else \
+            api.load_scene(scene_path, args.rig, defines, every_view_rendered=not args.views,
+                           stop=stop_signals.stop_requested)
     except (SceneError, ValueError, RuntimeError, MemoryError) as e:  # ValueError: arguments that are not text
         _error(cli_common.failure_text(e))
         return EXIT_ERROR
@@ -145,6 +151,21 @@ def _render(scene_path: Path, args, stem: str) -> int:
         if getattr(args, "ray", None) is not None:
             return _render_on_ray(scene_path, args, stem, views, bar)
         return _render_here(scene, scene_path, args, stem, views, bar, defines)
+
+
+def _load_blend(scene_path: Path, args, defines: dict):
+    """A .blend scene, converted (into --xml-dir, kept, or a temporary folder); each conversion
+    warning printed as one line."""
+    import warnings
+    from .blender.load import load_blend
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = load_blend(scene_path, folder=getattr(args, "xml_dir", None), rig=args.rig, **defines)
+    for w in caught:
+        print(f"mvpt: warning: {w.message}", file=sys.stderr)
+    if getattr(args, "xml_dir", None) is not None and not args.quiet:
+        print(f"converted {scene_path.name} into {args.xml_dir}/{scene_path.stem}.xml", flush=True)
+    return scene
 
 
 def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "ProgressBar", defines: dict) -> int:
@@ -344,7 +365,10 @@ def _command(argv) -> int:
     parser.add_argument("--version", action="version", version=f"mvpt {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     p_render = sub.add_parser("render", help="render every view of a scene")
-    p_render.add_argument("scene", type=Path, nargs="?", help="the scene (Mitsuba 3 XML)")
+    p_render.add_argument("scene", type=Path, nargs="?", help="the scene (Mitsuba 3 XML, or a .blend file)")
+    p_render.add_argument("--xml-dir", type=Path, default=None, metavar="DIR",
+                          help="for a .blend scene: write the converted Mitsuba 3 scene (XML and PLY meshes) "
+                               "into DIR and keep it (default: a temporary folder)")
     p_render.add_argument("--resume", metavar="OUT", default=None,
                           help="continue the interrupted render whose state is in the output directory OUT "
                                "(or the state file OUT), with its scene and settings; the images equal those of "

@@ -1,0 +1,149 @@
+"""The scene camera and render settings as a Mitsuba 3 sensor and integrator.
+
+Blender's camera looks down its local -Z with +Y up and +X to the right; Mitsuba's looks
+down +Z with +Y up and +X to the left, so to_world is the camera's matrix times a half turn
+about Y. The field of view follows the sensor fit: Auto spans the sensor width over the
+larger image side (fov_axis "larger"), Horizontal the width over x, Vertical the height over
+y, with fov = 2 atan(sensor / (2 lens)). Shift (in units of the larger image side) becomes
+Mitsuba's principal point offset (in units of the image's width and height). Depth of field:
+a thin lens of aperture radius lens / (2 f-stop) focused at the focus distance (or object).
+Resolution x percentage, Cycles' samples, bounces and pixel filter: docs/blender.md, "What
+converts"."""
+from __future__ import annotations
+
+import math
+
+from .report import Report
+from .xml_writer import Element, plugin
+
+HALF_TURN_Y = ((-1, 0, 0, 0), (0, 1, 0, 0), (0, 0, -1, 0), (0, 0, 0, 1))
+
+# Standard deviation of Cycles' Blackman-Harris window of width 1 px (its four-term window over
+# [-w/2, w/2]), integrated numerically: a Gaussian of this deviation stands in for it.
+BLACKMAN_HARRIS_STDDEV = 0.1385
+
+
+def _matmul(a, b):
+    return tuple(tuple(sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)) for i in range(4))
+
+
+def resolution(scene) -> tuple[int, int]:
+    r = scene.render
+    scale = r.resolution_percentage / 100.0
+    return max(1, int(r.resolution_x * scale)), max(1, int(r.resolution_y * scale))
+
+
+def _fov(cam, width: int, height: int) -> tuple[float, str]:
+    fit = cam.sensor_fit
+    if fit == "VERTICAL":
+        return 2 * math.degrees(math.atan(cam.sensor_height / (2 * cam.lens))), "y"
+    fov = 2 * math.degrees(math.atan(cam.sensor_width / (2 * cam.lens)))
+    return fov, ("x" if fit == "HORIZONTAL" else "larger")
+
+
+def _shift(cam, width: int, height: int) -> tuple[float, float]:
+    """Blender's shift (fractions of the larger side; +x moves the view right, +y up) as
+    Mitsuba's principal point offsets (fractions of width and height, added to the film
+    position, whose y runs down the image)."""
+    side = max(width, height)
+    return cam.shift_x * side / width, -cam.shift_y * side / height
+
+
+def sensor(scene, report: Report, spp: int) -> Element:
+    """The <sensor> of the scene's camera, with its film and sampler."""
+    obj = scene.camera
+    width, height = resolution(scene)
+    if obj is None or obj.type != "CAMERA":
+        raise ValueError("the scene has no camera")
+    cam = obj.data
+    where = f"camera '{obj.name}'"
+    if cam.type != "PERSP":
+        report.warn(f"{where}: {cam.type} cameras cannot be converted; rendered as a perspective camera")
+    if scene.render.pixel_aspect_x != scene.render.pixel_aspect_y:
+        report.warn(f"{where}: a pixel aspect ratio other than 1 is not converted")
+    dof = cam.dof.use_dof and cam.dof.aperture_fstop > 0
+    s = plugin("sensor", "thinlens" if dof else "perspective", "camera")
+    fov, axis = _fov(cam, width, height)
+    s.float("fov", fov).string("fov_axis", axis)
+    s.float("near_clip", cam.clip_start).float("far_clip", cam.clip_end)
+    ppx, ppy = _shift(cam, width, height)
+    if ppx or ppy:
+        s.float("principal_point_offset_x", ppx).float("principal_point_offset_y", ppy)
+    if dof:
+        _thin_lens(s, obj, cam, report, where)
+    s.matrix("to_world", _matmul(_rigid(obj.matrix_world), HALF_TURN_Y))
+    sampler = s.add(plugin("sampler", "independent"))
+    sampler.add(Element("integer", name="sample_count", value="$spp"))
+    sampler.integer("seed", scene.cycles.seed if hasattr(scene, "cycles") else 0)
+    film = s.add(plugin("film", "hdrfilm"))
+    film.add(Element("integer", name="width", value="$width"))
+    film.add(Element("integer", name="height", value="$height"))
+    film.add(_filter(scene, report))
+    return s
+
+
+def _rigid(matrix):
+    """The camera's world matrix without scale (Blender ignores a camera's scale)."""
+    m = [list(row) for row in matrix]
+    for j in range(3):
+        n = math.sqrt(sum(m[i][j] ** 2 for i in range(3))) or 1.0
+        for i in range(3):
+            m[i][j] /= n
+    return m
+
+
+def _thin_lens(s: Element, obj, cam, report: Report, where: str) -> None:
+    dof = cam.dof
+    distance = dof.focus_distance
+    if dof.focus_object is not None:
+        to_target = dof.focus_object.matrix_world.translation - obj.matrix_world.translation
+        forward = -obj.matrix_world.col[2].xyz.normalized()
+        distance = max(to_target.dot(forward), 1e-4)
+    if dof.aperture_blades > 0:
+        report.warn(f"{where}: its {dof.aperture_blades}-bladed aperture is rendered round")
+    if dof.aperture_ratio != 1:
+        report.warn(f"{where}: its anamorphic aperture ratio {dof.aperture_ratio:g} is rendered round")
+    s.float("aperture_radius", cam.lens * 1e-3 / (2 * dof.aperture_fstop)).float("focus_distance", distance)
+
+
+def _filter(scene, report: Report) -> Element:
+    cycles = getattr(scene, "cycles", None)
+    kind = cycles.pixel_filter_type if cycles is not None else "BLACKMAN_HARRIS"
+    width = cycles.filter_width if cycles is not None else 1.5
+    if kind == "BOX":
+        if width != 1:
+            report.note(f"the box pixel filter of width {width:g} px is one pixel wide (Mitsuba's box)")
+        return plugin("rfilter", "box")
+    stddev = width * BLACKMAN_HARRIS_STDDEV if kind == "BLACKMAN_HARRIS" else width / 6
+    report.note(f"the pixel filter {kind} of width {width:g} px is a gaussian of standard deviation "
+                f"{stddev:.3g} px")
+    return plugin("rfilter", "gaussian").float("stddev", stddev)
+
+
+def integrator(scene, report: Report) -> Element:
+    """Mitsuba's path integrator with Cycles' bounce limit: Cycles' `max_bounces` counts the
+    bounces after the first hit, Mitsuba's `max_depth` the path's segments, so
+    max_depth = max_bounces + 2 (docs/blender.md)."""
+    cycles = getattr(scene, "cycles", None)
+    bounces = cycles.max_bounces if cycles is not None else 12
+    if cycles is not None:
+        limits = {k: getattr(cycles, k + "_bounces") for k in ("diffuse", "glossy", "transmission")}
+        lower = {k: v for k, v in limits.items() if v < bounces}
+        if lower:
+            report.note("Cycles' per-kind bounce limits (" + ", ".join(f"{k} {v}" for k, v in lower.items())
+                        + f") are not converted: every path may bounce {bounces} times")
+        if cycles.sample_clamp_direct > 0 or cycles.sample_clamp_indirect > 0:
+            report.note("Cycles' sample clamping is not converted (mvpt does not clamp: no bias, more noise)")
+    i = plugin("integrator", "path")
+    i.add(Element("integer", name="max_depth", value="$max_depth"))
+    return i
+
+
+def max_depth(scene) -> int:
+    cycles = getattr(scene, "cycles", None)
+    return (cycles.max_bounces if cycles is not None else 12) + 2
+
+
+def samples(scene) -> int:
+    cycles = getattr(scene, "cycles", None)
+    return int(cycles.samples) if cycles is not None else 128

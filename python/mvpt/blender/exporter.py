@@ -1,0 +1,137 @@
+"""A Blender scene (its evaluated dependency graph) as a Mitsuba 3 XML file with PLY meshes
+in one folder: <folder>/<name>.xml, <folder>/meshes/*.ply (and textures/ for packed images).
+
+Every object instance of the graph is converted: meshes (and curves, text, surfaces, metaballs,
+through their evaluated meshes) as one PLY shape per material slot at the instance's world
+matrix, a mesh shared by several instances written once; lights as emitters; the scene camera
+and render settings as the sensor and integrator; the world as an environment emitter. The
+scene's <default>s spp, width, height and max_depth carry Cycles' samples, the resolution and
+the bounce limit (overridable with -D)."""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import camera, lights, materials, world
+from .meshes import mesh_parts
+from .ply import write_ply
+from .report import Report
+from .xml_writer import Element, plugin, scene_text
+
+GEOMETRY = {"MESH", "CURVE", "SURFACE", "META", "FONT"}
+SKIPPED = {"CAMERA", "EMPTY", "ARMATURE", "LATTICE", "SPEAKER", "LIGHT_PROBE"}
+
+
+@dataclass
+class Export:
+    """The written scene file and what its conversion could not carry over exactly."""
+    xml: Path
+    warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+
+def safe_name(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", name) or "unnamed"
+
+
+class _Writer:
+    def __init__(self, folder: Path, report: Report):
+        self.folder = folder
+        self.report = report
+        self.materials = materials.Materials(report, folder)
+        self.meshes: dict = {}      # evaluated mesh -> [(slot, file)]
+        self.names: set = set()
+        self.bsdf_ids: dict = {}
+        self.root = Element("scene", version="3.0.0")
+
+    def unique(self, stem: str) -> str:
+        name, i = stem, 1
+        while name in self.names:
+            i += 1
+            name = f"{stem}.{i}"
+        self.names.add(name)
+        return name
+
+    def mesh_files(self, obj) -> list:
+        """(slot, relative PLY path) of the object's evaluated mesh, written on first use."""
+        key = (obj.data.as_pointer() if obj.type == "MESH" else obj.as_pointer(), len(obj.material_slots))
+        if key in self.meshes:
+            return self.meshes[key]
+        mesh = obj.to_mesh()
+        try:
+            parts = mesh_parts(mesh, len(obj.material_slots))
+        finally:
+            obj.to_mesh_clear()
+        files = []
+        stem = self.unique(safe_name(obj.data.name if obj.data is not None else obj.name))
+        for part in parts:
+            rel = f"meshes/{stem}" + (f"_{part.slot}" if len(parts) > 1 or part.slot else "") + ".ply"
+            write_ply(self.folder / rel, part.positions, part.normals, part.uvs, part.triangles)
+            files.append((part.slot, rel))
+        self.meshes[key] = files
+        return files
+
+    def bsdf_ref(self, material) -> tuple[str, object]:
+        surface = self.materials.surface(material)
+        key = material.name if material is not None else None
+        if key not in self.bsdf_ids:
+            bid = "mat-" + safe_name(key) if key is not None else "mat-default"
+            surface.bsdf.attributes["id"] = bid
+            self.root.add(surface.bsdf)
+            self.bsdf_ids[key] = bid
+        return self.bsdf_ids[key], surface
+
+    def add_object(self, obj, matrix) -> None:
+        for slot, rel in self.mesh_files(obj):
+            material = obj.material_slots[slot].material if slot < len(obj.material_slots) else None
+            bid, surface = self.bsdf_ref(material)
+            s = plugin("shape", "ply").string("filename", rel).matrix("to_world", matrix)
+            s.add(Element("ref", id=bid))
+            if surface.emission is not None:
+                s.add(plugin("emitter", "area").rgb("radiance", surface.emission))
+                self.report.warn(f"material '{material.name}' emits from the side its normals face only "
+                                 f"(Cycles: both sides; the same for closed meshes)")
+            s.comment = safe_name(obj.name)
+            self.root.add(s)
+
+
+def _rows(matrix):
+    return tuple(tuple(float(matrix[i][j]) for j in range(4)) for i in range(4))
+
+
+def export_depsgraph(depsgraph, folder, name: str = "scene") -> Export:
+    """Write the scene of `depsgraph` (evaluated) to `folder`/`name`.xml and its meshes."""
+    folder = Path(folder)
+    (folder / "meshes").mkdir(parents=True, exist_ok=True)
+    report = Report()
+    scene = depsgraph.scene_eval
+    w = _Writer(folder, report)
+    spp = camera.samples(scene)
+    width, height = camera.resolution(scene)
+    for k, v in (("spp", spp), ("width", width), ("height", height), ("max_depth", camera.max_depth(scene))):
+        w.root.add(Element("default", name=k, value=v))
+    w.root.add(camera.integrator(scene, report))
+    w.root.add(camera.sensor(scene, report, spp))
+    for element in world.convert_world(scene.world, report):
+        w.root.add(element)
+    for inst in depsgraph.object_instances:
+        obj = inst.object
+        if obj.type in GEOMETRY:
+            w.add_object(obj, _rows(inst.matrix_world))
+        elif obj.type == "LIGHT":
+            for element in lights.convert_light(obj, _rows(inst.matrix_world), report):
+                w.root.add(element)
+        elif obj.type not in SKIPPED:
+            report.warn(f"object '{obj.name}' of type {obj.type} cannot be converted; left out")
+    if scene.cycles.use_adaptive_sampling if hasattr(scene, "cycles") else False:
+        report.note(f"Cycles' adaptive sampling is not converted: every pixel takes {spp} samples")
+    xml = folder / f"{safe_name(name)}.xml"
+    xml.write_text(scene_text(w.root, f"converted by mvpt from the Blender scene '{scene.name}'"), encoding="utf-8")
+    return Export(xml, report.warnings, report.notes)
+
+
+def export_current(folder, name: str = "scene") -> Export:
+    """Write the current Blender scene (bpy.context's) to `folder`."""
+    import bpy
+    return export_depsgraph(bpy.context.evaluated_depsgraph_get(), folder, name)
