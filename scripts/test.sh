@@ -6,12 +6,15 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 [ -x .venv/bin/python ] || { echo "run scripts/setup.sh first" >&2; exit 1; }
 # Test-only dependencies (Mitsuba 3 is the independent reference renderer; the OpenEXR
-# bindings read our multi-view EXRs independently; psutil finds Ray's worker processes),
-# pytest-xdist runs the tests on every core), then mvpt with its report and Ray extras and,
-# in the same build directory as scripts/setup.sh's build, the C++ unit tests.
+# bindings read our multi-view EXRs independently; psutil finds Ray's worker processes;
+# pytest-xdist runs the tests on every core), then mvpt with its report, Ray and Blender
+# extras (Blender's bpy, with Cycles, exists for Python 3.11 only: elsewhere its tests skip)
+# and, in the same build directory as scripts/setup.sh's build, the C++ unit tests.
 .venv/bin/pip install -q pytest pytest-xdist scipy "mitsuba==3.9.1" "OpenEXR>=3.3" psutil \
     "scikit-build-core>=0.10" "nanobind>=2.0"
-.venv/bin/pip install -q --no-build-isolation -C cmake.define.MVPT_BUILD_TESTS=ON ".[reports,ray]"
+extras="reports,ray"
+.venv/bin/python -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' && extras="$extras,blender"
+.venv/bin/pip install -q --no-build-isolation -C cmake.define.MVPT_BUILD_TESTS=ON ".[$extras]"
 # Headless Chromium (Debian) loads the HTML reports in tests/python/test_report.py; that
 # test fails under CI without it and skips elsewhere.
 if ! command -v chromium >/dev/null 2>&1; then

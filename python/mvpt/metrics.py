@@ -143,7 +143,7 @@ def reference_noise(ref: dict, variance: dict, eps: float = RELMSE_EPS) -> dict:
         out[k] = float(np.mean(v / (r * r + eps)))
         weights[k] = r.shape[0] * r.shape[1]
     total = sum(weights.values())
-    out["overall"] = sum(out[k] * weights[k] for k in ref) / total
+    out["overall"] = sum(out[k] * (weights[k] / total) for k in ref)  # (one view: exactly its own)
     return out
 
 

@@ -58,14 +58,10 @@ class RenderJob {
 public:
     RenderJob(std::shared_ptr<Scene> scene, RenderOptions opts)
         : m_scene(std::move(scene)), m_renderer(*m_scene, std::move(opts)) {}
-    ~RenderJob() {
-        m_cancel = true;
-        if (m_thread.joinable()) m_thread.join();
-    }
+    ~RenderJob() { m_cancel = true; } // (m_job, the last member, then joins the thread)
 
     void start() {
-        if (m_thread.joinable()) throw std::runtime_error("render job already started");
-        m_thread = std::thread([this] {
+        m_job.start([this] {
             try {
                 m_renderer.render(m_cancel, [this](const RenderProgress &p) {
                     std::lock_guard<std::mutex> lock(m_mutex);
@@ -79,31 +75,19 @@ public:
                 std::lock_guard<std::mutex> lock(m_mutex);
                 m_error = e.what();
             }
-            std::lock_guard<std::mutex> lock(m_mutex);
-            m_done = true;
-            m_cv.notify_all();
-        });
+        }, "render job");
     }
 
     /// Wait up to `timeout` seconds; true when finished.
-    bool wait(double timeout) {
-        std::unique_lock<std::mutex> lock(m_mutex);
-        m_cv.wait_for(lock, std::chrono::duration<double>(timeout), [this] { return m_done; });
-        if (m_done && m_thread.joinable()) {
-            lock.unlock();
-            m_thread.join();
-        }
-        return m_done;
-    }
+    bool wait(double timeout) { return m_job.wait(timeout); }
 
     void cancel() { m_cancel = true; }
 
     /// Instead of start(): merges the state files of disjoint ranges (Renderer::merge).
     void merge(const std::vector<std::string> &paths, bool develop) {
-        if (m_thread.joinable() || m_done) throw std::runtime_error("render job already started");
+        if (m_job.started()) throw std::runtime_error("render job already started");
         m_renderer.merge(paths, develop);
-        std::lock_guard<std::mutex> lock(m_mutex);
-        m_done = true;
+        m_job.finish();
     }
 
     nb::dict progress() {
@@ -201,8 +185,8 @@ public:
 
 private:
     void check_finished() {
+        if (!m_job.done()) throw std::runtime_error("render job has not finished");
         std::lock_guard<std::mutex> lock(m_mutex);
-        if (!m_done) throw std::runtime_error("render job has not finished");
         if (m_state_error) throw StateError(m_error);
         if (!m_error.empty()) throw std::runtime_error(m_error);
     }
@@ -211,13 +195,11 @@ private:
     Renderer m_renderer;
     std::atomic<bool> m_cancel{false};
     bool m_taken = false;
-    std::thread m_thread;
-    std::mutex m_mutex;
-    std::condition_variable m_cv;
-    bool m_done = false;
+    std::mutex m_mutex; ///< of the fields below, which the render's thread writes
     std::string m_error;
     bool m_state_error = false;
     RenderProgress m_progress;
+    mvpt_py::JobThread m_job;
 };
 
 using Vec2 = std::array<float, 2>;

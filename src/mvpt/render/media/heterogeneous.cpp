@@ -48,33 +48,21 @@ public:
         float t0, t1;
         if (m_empty || !clip(ray, t_surface, t0, t1)) return ms;
         Spectrum w(1.f);
-        float tau = -std::log1p(-u); // optical depth to the next tentative collision
-        int collisions = 0;
-        MajorantWalk walk(m_majorants, *m_sigma_t, m_scale, ray, t0, t1);
-        for (MajorantPiece piece; walk.next(piece);) {
-            if (!(piece.bound > 0.f)) continue;
-            for (float s = 0.f;;) {
-                const float room = (piece.length - s) * piece.bound;
-                if (!(tau < room)) {
-                    tau -= room;
-                    break;
-                }
-                s += tau / piece.bound;
-                if (++collisions > MaxFlightCollisions) return give_up(ms);
-                const float t = piece.point(s);
-                const Point3f p = ray.at(t);
-                const Spectrum sigma_t = extinction(p, piece.bound);
-                const float mean = sigma_t.mean();
-                if (!(piece.bound > mean) || rs.next_1d() * piece.bound < mean) {
-                    ms.scattered = true, ms.t = t;
-                    ms.weight = w * sigma_t * m_albedo->eval(p) * (1.f / mean);
-                    return ms;
-                }
-                w *= (Spectrum(piece.bound) - sigma_t) * (1.f / (piece.bound - mean));
-                tau = -std::log1p(-rs.next_1d());
+        const Walk end = walk(ray, t0, t1, u, rs, [&](const MajorantPiece &piece, float s) {
+            const float t = piece.point(s);
+            const Point3f p = ray.at(t);
+            const Spectrum sigma_t = extinction(p, piece.bound);
+            const float mean = sigma_t.mean();
+            if (!(piece.bound > mean) || rs.next_1d() * piece.bound < mean) {
+                ms.scattered = true, ms.t = t;
+                ms.weight = w * sigma_t * m_albedo->eval(p) * (1.f / mean);
+                return false;
             }
-        }
-        ms.weight = w;
+            w *= (Spectrum(piece.bound) - sigma_t) * (1.f / (piece.bound - mean));
+            return true;
+        });
+        if (end == Walk::GaveUp) ms.weight = Spectrum(0.f);
+        else if (end == Walk::Ended) ms.weight = w;
         return ms;
     }
 
@@ -82,28 +70,11 @@ public:
         float t0, t1;
         if (m_empty || !clip(ray, t, t0, t1)) return Spectrum(1.f);
         Spectrum tr(1.f);
-        float tau = -std::log1p(-rs.next_1d());
-        int collisions = 0;
-        MajorantWalk walk(m_majorants, *m_sigma_t, m_scale, ray, t0, t1);
-        for (MajorantPiece piece; walk.next(piece);) {
-            if (!(piece.bound > 0.f)) continue;
-            for (float s = 0.f;;) {
-                const float room = (piece.length - s) * piece.bound;
-                if (!(tau < room)) {
-                    tau -= room;
-                    break;
-                }
-                s += tau / piece.bound;
-                if (++collisions > MaxFlightCollisions) {
-                    m_given_up.fetch_add(1, std::memory_order_relaxed);
-                    return Spectrum(0.f);
-                }
-                tr *= Spectrum(1.f) - extinction(ray.at(piece.point(s)), piece.bound) * (1.f / piece.bound);
-                if (!roulette(tr, rs)) return Spectrum(0.f);
-                tau = -std::log1p(-rs.next_1d());
-            }
-        }
-        return tr;
+        const Walk end = walk(ray, t0, t1, rs.next_1d(), rs, [&](const MajorantPiece &piece, float s) {
+            tr *= Spectrum(1.f) - extinction(ray.at(piece.point(s)), piece.bound) * (1.f / piece.bound);
+            return roulette(tr, rs);
+        });
+        return end == Walk::Ended ? tr : Spectrum(0.f);
     }
 
     uint64_t flights_given_up() const override { return m_given_up.load(std::memory_order_relaxed); }
@@ -140,10 +111,35 @@ private:
         return true;
     }
 
-    MediumSample &give_up(MediumSample &ms) const {
-        m_given_up.fetch_add(1, std::memory_order_relaxed);
-        ms.weight = Spectrum(0.f);
-        return ms;
+    enum class Walk { Ended, Stopped, GaveUp };
+
+    /// The tentative collisions along `ray` over [t0, t1): optical depths -ln(1 - u) (the
+    /// first from u0, the next from `rs` after each collision) spent piece by piece against the
+    /// local majorants; `collide(piece, s)` at each, at distance s into its piece, false to
+    /// stop there. A walk past MaxFlightCollisions gives up, counted (flights_given_up).
+    template <typename Collide>
+    Walk walk(const Ray &ray, float t0, float t1, float u0, RandomStream &rs, Collide &&collide) const {
+        float tau = -std::log1p(-u0); // optical depth to the next tentative collision
+        int collisions = 0;
+        MajorantWalk pieces(m_majorants, *m_sigma_t, m_scale, ray, t0, t1);
+        for (MajorantPiece piece; pieces.next(piece);) {
+            if (!(piece.bound > 0.f)) continue;
+            for (float s = 0.f;;) {
+                const float room = (piece.length - s) * piece.bound;
+                if (!(tau < room)) {
+                    tau -= room;
+                    break;
+                }
+                s += tau / piece.bound;
+                if (++collisions > MaxFlightCollisions) {
+                    m_given_up.fetch_add(1, std::memory_order_relaxed);
+                    return Walk::GaveUp;
+                }
+                if (!collide(piece, s)) return Walk::Stopped;
+                tau = -std::log1p(-rs.next_1d());
+            }
+        }
+        return Walk::Ended;
     }
 
     std::shared_ptr<Volume> m_sigma_t, m_albedo;
