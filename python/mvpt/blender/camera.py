@@ -33,7 +33,7 @@ def resolution(scene) -> tuple[int, int]:
     return max(1, int(r.resolution_x * scale)), max(1, int(r.resolution_y * scale))
 
 
-def _fov(cam, width: int, height: int) -> tuple[float, str]:
+def _fov(cam) -> tuple[float, str]:
     fit = cam.sensor_fit
     if fit == "VERTICAL":
         return 2 * math.degrees(math.atan(cam.sensor_height / (2 * cam.lens))), "y"
@@ -63,7 +63,7 @@ def sensor(scene, report: Report, spp: int) -> Element:
         report.warn(f"{where}: a pixel aspect ratio other than 1 is not converted")
     dof = cam.dof.use_dof and cam.dof.aperture_fstop > 0
     s = plugin("sensor", "thinlens" if dof else "perspective", "camera")
-    fov, axis = _fov(cam, width, height)
+    fov, axis = _fov(cam)
     s.float("fov", fov).string("fov_axis", axis)
     s.float("near_clip", cam.clip_start).float("far_clip", cam.clip_end)
     ppx, ppy = _shift(cam, width, height)
