@@ -74,6 +74,9 @@ class MethodRun:
     command: list = field(default_factory=list)
     #: relMSE with the reference's own noise subtracted, per view and "overall" (empty: unknown)
     corrected: dict = field(default_factory=dict)
+    #: the error a display shows (each view blended with its neighbours along its row,
+    #: metrics.display_relmse): {"relmse", "relmse_corrected"}; empty for one view
+    display: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -89,6 +92,8 @@ class BenchResult:
     reference_noise: dict = field(default_factory=dict)
     #: what a reader must know before trusting the numbers (a reference too noisy to judge, ...)
     warnings: list = field(default_factory=list)
+    #: the relMSE the reference's noise adds to the display-blended error (None: unknown)
+    display_noise: float | None = None
 
     def as_json(self) -> dict:
         c = self.config
@@ -99,11 +104,12 @@ class BenchResult:
                        "defines": c.defines, "seed": c.seed, "threads": c.threads, "views": c.views,
                        "curve": list(c.curve)},
             "reference": {"source": self.reference.source, "command": self.reference_command,
-                          "noise_relmse": self.reference_noise},
+                          "noise_relmse": self.reference_noise, "display_noise_relmse": self.display_noise},
             "environment": self.environment,
             "warnings": self.warnings,
             "methods": {m: {"directory": r.directory, "command": r.command, "errors": r.errors.as_dict(),
-                            "relmse_corrected": r.corrected, "curve": r.curve, "stats": r.run.stats}
+                            "relmse_corrected": r.corrected, "display": r.display, "curve": r.curve,
+                            "stats": r.run.stats}
                         for m, r in self.methods.items()},
         }
 
@@ -242,12 +248,26 @@ def run_bench(cfg: BenchConfig, log=print) -> BenchResult:
         corrected = {k: errs.views[k].relmse - noise[k] for k in errs.views} if noise else {}
         if noise:
             corrected["overall"] = errs.overall.relmse - noise["overall"]
+        display = _display_error(test, ref, reference, result)
         result.methods[method] = MethodRun(method=method, run=run, errors=errs, curve=points, directory=str(mdir),
                                            command=_render_command(cfg, mdir, method, time=cfg.time),
-                                           corrected=corrected)
+                                           corrected=corrected, display=display)
     result.reference_noise = noise
     result.warnings = reference_warnings(result)
     return result
+
+
+def _display_error(test: dict, ref: dict, reference: Run, result: BenchResult) -> dict:
+    """The relMSE a display shows (metrics.display_relmse: each view blended with its neighbours
+    along its row), raw and with the reference's blended noise subtracted; sets
+    result.display_noise. Empty for one view, which a display shows as it is."""
+    if len(ref) < 2:
+        return {}
+    ids = _reference_ids(test, reference.images)
+    variance = {k: reference.variance[rk] for k, rk in zip(test, ids) if rk in reference.variance}
+    raw, noise = metrics.display_relmse(test, ref, variance if len(variance) == len(ref) else None)
+    result.display_noise = noise
+    return {"relmse": raw, "relmse_corrected": raw - noise if noise is not None else None}
 
 
 def _reference_ids(test: dict, ref: dict) -> list:

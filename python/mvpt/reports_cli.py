@@ -113,7 +113,11 @@ def _bench(args) -> int:
         for m, r in result.methods.items():
             o = r.errors.overall
             corrected = f" ({r.corrected['overall']:.4g} without the reference's noise)" if r.corrected else ""
-            print(f"{m}: relMSE {o.relmse:.4g}{corrected}, FLIP {o.flip:.4g}, RMSE {o.rmse:.4g}")
+            d = r.display
+            shown = (f"; as a display shows the views {d['relmse']:.4g}"
+                     + (f" ({d['relmse_corrected']:.4g})" if d.get("relmse_corrected") is not None else "")
+                     if d else "")
+            print(f"{m}: relMSE {o.relmse:.4g}{corrected}, FLIP {o.flip:.4g}, RMSE {o.rmse:.4g}{shown}")
         print(f"wrote {path}")
     for w in result.warnings:
         print(f"mvpt: warning: {w}", file=sys.stderr)

@@ -197,3 +197,27 @@ def test_reference_noise_is_subtracted_and_judged(report):
     assert any("too noisy to judge" in w for w in data["warnings"])
     html = (report["out"] / "index.html").read_text()
     assert "class=warning" in html and "too noisy to judge" in html
+
+
+def test_display_error_is_reported_beside_the_per_view_one(report):
+    """The error a display shows (each view blended with its neighbours along its row) is in
+    bench.json and on the page, raw and with the reference's blended noise subtracted, and
+    matches a recomputation from the written runs and the reference's variance."""
+    from mvpt import metrics
+    from mvpt.runs import load_run
+
+    data = json.loads((report["out"] / "bench.json").read_text())
+    ref = load_run(report["out"] / "reference")
+    raw_ref_noise = data["reference"]["display_noise_relmse"]
+    assert raw_ref_noise > 0
+    for m in METHODS:
+        run = load_run(report["out"] / m)
+        raw, noise = metrics.display_relmse(run.images, ref.images, ref.variance)
+        shown = data["methods"][m]["display"]
+        assert shown["relmse"] == pytest.approx(raw, rel=1e-9)
+        assert shown["relmse_corrected"] == pytest.approx(raw - noise, rel=1e-9)
+        assert noise == pytest.approx(raw_ref_noise, rel=1e-9)
+        # Two views of 16x16 blended 3/4 : 1/4 are not the views themselves: the numbers differ.
+        assert shown["relmse"] != pytest.approx(data["methods"][m]["errors"]["overall"]["relmse"], rel=1e-3)
+    html = (report["out"] / "index.html").read_text()
+    assert "as a display shows the views" in html
