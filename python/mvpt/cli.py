@@ -105,6 +105,10 @@ def _render(scene_path: Path, args, stem: str) -> int:
         _error("--ray renders XML scenes: convert the .blend first (mvpt render scene.blend --xml-dir DIR), "
                "then render DIR's XML file")
         return EXIT_USAGE
+    if not blend and getattr(args, "frames", None) is not None:
+        _error("--frames converts a range of a .blend scene's frames; an XML scene's shot is its views "
+               "(or a `path` rig: --rig path:keys.json,frames=N)")
+        return EXIT_USAGE
     try:
         scene = _load_blend(scene_path, args, defines) if blend else \
             api.load_scene(scene_path, args.rig, defines, every_view_rendered=not args.views,
@@ -153,14 +157,35 @@ def _render(scene_path: Path, args, stem: str) -> int:
         return _render_here(scene, scene_path, args, stem, views, bar, defines)
 
 
+def _frames(text: str) -> tuple:
+    """--frames A:B, Blender's frame numbers, an inclusive range."""
+    first, sep, last = text.partition(":")
+    try:
+        a, b = int(first), int(last)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected A:B, two frame numbers (an inclusive range), got '{text}'") from None
+    if not sep or b < a:
+        raise argparse.ArgumentTypeError(f"expected A:B with A <= B (an inclusive range of frames), got '{text}'")
+    return a, b
+
+
 def _load_blend(scene_path: Path, args, defines: dict):
     """A .blend scene, converted (into --xml-dir, kept, or a temporary folder); each conversion
     warning printed as one line."""
+    import atexit
+    import shutil
+    import tempfile
     import warnings
     from .blender.load import load_blend
+    folder = getattr(args, "xml_dir", None)
+    if folder is None:
+        # The render's state names the scene's files by their contents, so the converted scene
+        # stays until the process ends.
+        folder = tempfile.mkdtemp(prefix="mvpt-blend-")
+        atexit.register(shutil.rmtree, folder, True)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        scene = load_blend(scene_path, folder=getattr(args, "xml_dir", None), rig=args.rig, **defines)
+        scene = load_blend(scene_path, folder=folder, rig=args.rig, frames=getattr(args, "frames", None), **defines)
     for w in caught:
         print(f"mvpt: warning: {w.message}", file=sys.stderr)
     if getattr(args, "xml_dir", None) is not None and not args.quiet:
@@ -369,6 +394,9 @@ def _command(argv) -> int:
     p_render.add_argument("--xml-dir", type=Path, default=None, metavar="DIR",
                           help="for a .blend scene: write the converted Mitsuba 3 scene (XML and PLY meshes) "
                                "into DIR and keep it (default: a temporary folder)")
+    p_render.add_argument("--frames", type=_frames, default=None, metavar="A:B",
+                          help="for a .blend scene: render Blender's frames A to B (inclusive) as a shot, one "
+                               "view per frame with the scene's motion blur (default: its current frame alone)")
     p_render.add_argument("--resume", metavar="OUT", default=None,
                           help="continue the interrupted render whose state is in the output directory OUT "
                                "(or the state file OUT), with its scene and settings; the images equal those of "

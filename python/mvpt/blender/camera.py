@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from .report import Report
-from .xml_writer import Element, plugin
+from .xml_writer import Element, animation, plugin
 
 HALF_TURN_Y = ((-1, 0, 0, 0), (0, 1, 0, 0), (0, 0, -1, 0), (0, 0, 0, 1))
 
@@ -49,8 +49,10 @@ def _shift(cam, width: int, height: int) -> tuple[float, float]:
     return cam.shift_x * side / width, -cam.shift_y * side / height
 
 
-def sensor(scene, report: Report, spp: int) -> Element:
-    """The <sensor> of the scene's camera, with its film and sampler."""
+def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None, poses=None) -> Element:
+    """The <sensor> of the scene's camera, with its film and sampler: at its current pose, or,
+    for a frame of a shot, open over `shutter` (open, close) in seconds with the camera's
+    world matrices `poses` [(time, rows)] as its keyframes (one: a still pose)."""
     obj = scene.camera
     width, height = resolution(scene)
     if obj is None or obj.type != "CAMERA":
@@ -62,7 +64,7 @@ def sensor(scene, report: Report, spp: int) -> Element:
     if scene.render.pixel_aspect_x != scene.render.pixel_aspect_y:
         report.warn(f"{where}: a pixel aspect ratio other than 1 is not converted")
     dof = cam.dof.use_dof and cam.dof.aperture_fstop > 0
-    s = plugin("sensor", "thinlens" if dof else "perspective", "camera")
+    s = plugin("sensor", "thinlens" if dof else "perspective", ident)
     fov, axis = _fov(cam)
     s.float("fov", fov).string("fov_axis", axis)
     s.float("near_clip", cam.clip_start).float("far_clip", cam.clip_end)
@@ -71,7 +73,12 @@ def sensor(scene, report: Report, spp: int) -> Element:
         s.float("principal_point_offset_x", ppx).float("principal_point_offset_y", ppy)
     if dof:
         _thin_lens(s, obj, cam, report, where)
-    s.matrix("to_world", _matmul(_rigid(obj.matrix_world), HALF_TURN_Y))
+    if shutter is not None:
+        s.float("shutter_open", shutter[0]).float("shutter_close", shutter[1])
+    if poses is not None and len(poses) > 1:
+        s.add(animation("to_world", [(t, _matmul(_rigid(m), HALF_TURN_Y)) for t, m in poses]))
+    else:
+        s.matrix("to_world", _matmul(_rigid(poses[0][1] if poses else obj.matrix_world), HALF_TURN_Y))
     sampler = s.add(plugin("sampler", "independent"))
     sampler.add(Element("integer", name="sample_count", value="$spp"))
     sampler.integer("seed", scene.cycles.seed if hasattr(scene, "cycles") else 0)

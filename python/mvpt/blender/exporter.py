@@ -13,11 +13,11 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import camera, lights, materials, world
+from . import animation as shots, camera, lights, materials, world
 from .meshes import mesh_parts
 from .ply import write_ply
 from .report import Report
-from .xml_writer import Element, plugin, scene_text
+from .xml_writer import Element, animation, plugin, scene_text
 
 GEOMETRY = {"MESH", "CURVE", "SURFACE", "META", "FONT"}
 SKIPPED = {"CAMERA", "EMPTY", "ARMATURE", "LATTICE", "SPEAKER", "LIGHT_PROBE"}
@@ -82,11 +82,16 @@ class _Writer:
             self.bsdf_ids[key] = bid
         return self.bsdf_ids[key], surface
 
-    def add_object(self, obj, matrix) -> None:
+    def add_object(self, obj, matrix, keys=None) -> None:
+        """The object's shapes at `matrix`, or moving through `keys` [(time, rows)]."""
         for slot, rel in self.mesh_files(obj):
             material = obj.material_slots[slot].material if slot < len(obj.material_slots) else None
             bid, surface = self.bsdf_ref(material)
-            s = plugin("shape", "ply").string("filename", rel).matrix("to_world", matrix)
+            s = plugin("shape", "ply").string("filename", rel)
+            if keys:
+                s.add(animation("to_world", keys))
+            else:
+                s.matrix("to_world", matrix)
             s.add(Element("ref", id=bid))
             if surface.emission is not None:
                 s.add(plugin("emitter", "area").rgb("radiance", surface.emission))
@@ -100,30 +105,48 @@ def _rows(matrix):
     return tuple(tuple(float(matrix[i][j]) for j in range(4)) for i in range(4))
 
 
-def export_depsgraph(depsgraph, folder, name: str = "scene") -> Export:
-    """Write the scene of `depsgraph` (evaluated) to `folder`/`name`.xml and its meshes."""
+def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None) -> Export:
+    """Write the scene of `depsgraph` (evaluated) to `folder`/`name`.xml and its meshes: at its
+    current frame, or the frames (first, last) of Blender's numbering as a shot (one view per
+    frame, docs/blender.md, "Animation"), its geometry, materials and lights those of the first."""
     folder = Path(folder)
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     report = Report()
     scene = depsgraph.scene_eval
+    shot = None
+    if frames is not None:
+        shot = shots.shot_range(scene.original, frames, report)
+        shots.sample_poses(scene.original, shot, _rows)
+        depsgraph = _current_depsgraph()
+        scene = depsgraph.scene_eval
     w = _Writer(folder, report)
     spp = camera.samples(scene)
     width, height = camera.resolution(scene)
     for k, v in (("spp", spp), ("width", width), ("height", height), ("max_depth", camera.max_depth(scene))):
         w.root.add(Element("default", name=k, value=v))
     w.root.add(camera.integrator(scene, report))
-    w.root.add(camera.sensor(scene, report, spp))
+    if shot is None:
+        w.root.add(camera.sensor(scene, report, spp))
+    else:
+        for sensor in _shot_sensors(scene, shot, report, spp):
+            w.root.add(sensor)
     for element in world.convert_world(scene.world, report):
         w.root.add(element)
     for inst in depsgraph.object_instances:
         obj = inst.object
+        keys = _object_keys(shot, inst, report) if shot is not None else None
         if obj.type in GEOMETRY:
-            w.add_object(obj, _rows(inst.matrix_world))
+            w.add_object(obj, _rows(inst.matrix_world), keys)
         elif obj.type == "LIGHT":
+            if keys:
+                report.warn(f"light '{obj.name}' moves over the frames: it is converted at its pose of frame "
+                            f"{shot.frames[0]}")
             for element in lights.convert_light(obj, _rows(inst.matrix_world), report):
                 w.root.add(element)
         elif obj.type not in SKIPPED:
             report.warn(f"object '{obj.name}' of type {obj.type} cannot be converted; left out")
+    if shot is not None:
+        _check_deformation(depsgraph, shot, report)
     if scene.cycles.use_adaptive_sampling if hasattr(scene, "cycles") else False:
         report.note(f"Cycles' adaptive sampling is not converted: every pixel takes {spp} samples")
     xml = folder / f"{safe_name(name)}.xml"
@@ -131,7 +154,73 @@ def export_depsgraph(depsgraph, folder, name: str = "scene") -> Export:
     return Export(xml, report.warnings, report.notes)
 
 
-def export_current(folder, name: str = "scene") -> Export:
-    """Write the current Blender scene (bpy.context's) to `folder`."""
+def export_current(folder, name: str = "scene", frames=None) -> Export:
+    """Write the current Blender scene (bpy.context's) to `folder`: its current frame, or the
+    frames (first, last) as a shot."""
+    return export_depsgraph(_current_depsgraph(), folder, name, frames)
+
+
+def _current_depsgraph():
     import bpy
-    return export_depsgraph(bpy.context.evaluated_depsgraph_get(), folder, name)
+    return bpy.context.evaluated_depsgraph_get()
+
+
+def _shot_sensors(scene, shot, report: Report, spp: int) -> list:
+    """One sensor per frame of the shot, `frame%04d` (Blender's frame number), open over its
+    shutter with the camera's poses on it."""
+    out = []
+    for f in shot.frames:
+        on = shot.within(f)
+        if shot.length > 0:
+            poses = [(shot.time(shot.instants[i]), shot.camera[i]) for i in on]
+            shutter = shot.shutter(f)
+        else:
+            poses = [(shot.time(f), shot.camera[on[0]])]
+            shutter = (shot.time(f), shot.time(f))
+        out.append(camera.sensor(scene, report, spp, ident=f"frame{f:04d}", shutter=shutter, poses=poses))
+    return out
+
+
+def _object_keys(shot, inst, report: Report):
+    """The instance's keyframes [(time, rows)] over the shot's instants, or None when it does
+    not move (or is not present at every instant: then its pose at the first frame, warned)."""
+    poses = shot.objects.get(shots.instance_key(inst))
+    if poses is None or len(poses) != len(shot.instants):
+        report.warn(f"object '{inst.object.name}' is not present at every frame: converted at its pose of frame "
+                    f"{shot.frames[0]}")
+        return None
+    if not shots.moves(poses):
+        return None
+    return [(shot.time(x), m) for x, m in zip(shot.instants, poses)]
+
+
+def _check_deformation(depsgraph, shot, report: Report) -> None:
+    """A warning for each mesh whose evaluated vertices differ between the first and the last
+    frame (armatures, shape keys, animated modifiers): its mesh of the first frame is used."""
+    import bpy
+    import numpy as np
+    scene = depsgraph.scene_eval.original
+
+    def vertices(graph) -> dict:
+        out = {}
+        for obj in graph.objects:
+            if obj.type != "MESH":
+                continue
+            mesh = obj.to_mesh()
+            try:
+                co = np.empty(3 * len(mesh.vertices), dtype=np.float32)
+                mesh.vertices.foreach_get("co", co)
+                out[obj.name] = co
+            finally:
+                obj.to_mesh_clear()
+        return out
+
+    first = vertices(depsgraph)
+    scene.frame_set(shot.frames[-1])
+    last = vertices(bpy.context.evaluated_depsgraph_get())
+    scene.frame_set(shot.frames[0])
+    for name, co in first.items():
+        other = last.get(name)
+        if other is not None and (other.shape != co.shape or not np.array_equal(other, co)):
+            report.warn(f"object '{name}' changes shape over the frames (a deformation): its mesh of frame "
+                        f"{shot.frames[0]} is used at every frame")

@@ -59,14 +59,18 @@ def open_blend(path) -> Path:
     return path
 
 
-def export_blend(path, folder):
+def export_blend(path, folder, frames=None):
     """Convert the .blend file `path` into `folder` (Mitsuba 3 XML + PLY meshes): an Export
-    with the XML's path, warnings and notes."""
+    with the XML's path, warnings and notes. frames: (first, last), Blender's frame numbers,
+    for a shot of one view per frame (default: the current frame)."""
     from .exporter import export_current
     path = open_blend(path)
     if not bpy_scene_has_camera():
         raise BlendError(f"{path}: its scene has no camera to render from")
-    return export_current(folder, name=path.stem)
+    try:
+        return export_current(folder, name=path.stem, frames=frames)
+    except ValueError as e:
+        raise BlendError(f"{path}: {e}") from None
 
 
 def bpy_scene_has_camera() -> bool:
@@ -75,16 +79,17 @@ def bpy_scene_has_camera() -> bool:
     return camera is not None and camera.type == "CAMERA"
 
 
-def load_blend(path, folder=None, rig=None, **defines):
+def load_blend(path, folder=None, rig=None, frames=None, **defines):
     """An mvpt Scene from a .blend file: its current scene converted to Mitsuba 3 XML in
-    `folder` (kept, to edit or render again), or in a temporary folder removed once loaded.
+    `folder` (kept, to edit or render again), or in a temporary folder removed once loaded;
+    `frames` (first, last) converts that range of Blender's frames as a shot, one view per frame.
     Each conversion warning is issued as a BlendWarning. Keyword arguments override the
     scene's <default>s (spp, width, height, max_depth), as in mvpt.load_file."""
     from .. import api
     temporary = folder is None
     target = Path(tempfile.mkdtemp(prefix="mvpt-blend-")) if temporary else Path(folder)
     try:
-        result = export_blend(path, target)
+        result = export_blend(path, target, frames)
         for text in result.warnings:
             warnings.warn(text, BlendWarning, stacklevel=2)
         return api.load_file(result.xml, rig=rig, **defines)

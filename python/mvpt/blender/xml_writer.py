@@ -46,8 +46,7 @@ class Element:
 
     def matrix(self, name: str, m) -> "Element":
         """A to_world transform from a 4x4 matrix (rows of four numbers)."""
-        t = self.add(Element("transform", name=name))
-        t.add(Element("matrix", value=" ".join(number(m[i][j]) for i in range(4) for j in range(4))))
+        self.add(Element("transform", name=name)).add(matrix_element(m))
         return self
 
     def text(self, indent: int = 0) -> str:
@@ -58,6 +57,19 @@ class Element:
             return f"{head}{pad}<{self.tag}{attrs}/>\n"
         body = "".join(c.text(indent + 1) for c in self.children)
         return f"{head}{pad}<{self.tag}{attrs}>\n{body}{pad}</{self.tag}>\n"
+
+
+def animation(name: str, keys) -> Element:
+    """An animated transform (Mitsuba 3's <animation>): keyframes [(time, 4x4 rows)]."""
+    a = Element("animation", name=name)
+    for t, m in keys:
+        a.add(Element("transform", time=number(t))).add(matrix_element(m))
+    return a
+
+
+def matrix_element(m) -> Element:
+    """<matrix> of a 4x4 matrix given as rows."""
+    return Element("matrix", value=" ".join(number(m[i][j]) for i in range(4) for j in range(4)))
 
 
 def plugin(kind: str, type_: str, id_: str = "") -> Element:
