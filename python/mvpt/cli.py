@@ -406,6 +406,10 @@ def _command(argv) -> int:
     _add_render_options(p_demo)
     reports_cli.add_commands(sub)
     state_cli.add_merge_command(sub)
+    p_addon = sub.add_parser("blender-addon", help="write the Blender add-on (a zip to install in Blender's "
+                             "preferences) that renders with mvpt")
+    p_addon.add_argument("-o", "--output", type=Path, default=Path("mvpt_blender.zip"),
+                         help="the zip to write (default: mvpt_blender.zip)")
     try:
         args = parser.parse_args(argv)
     except SystemExit as e:
@@ -429,6 +433,13 @@ def _command(argv) -> int:
         return reports_cli.run(args)
     if args.command == "merge":
         return state_cli.merge(args)
+    if args.command == "blender-addon":
+        from .blender.addon import addon_zip_command
+        try:
+            return addon_zip_command(args.output)
+        except OSError as e:
+            _error(f"{args.output}: {e.strerror or e}")
+            return EXIT_ERROR
     with resources.as_file(resources.files("mvpt") / "data" / "demo.xml") as demo:
         return _render(demo, args, "demo")
 
