@@ -13,9 +13,10 @@ from .report import Report
 from .xml_writer import Element, plugin
 
 # Mitsuba's envmap frame (u = 0 along local -Z, u = 1/4 along +X, up +Y) to Blender's world,
-# whose equirectangular u = 0 lies along +X, u = 1/4 along -Y, up +Z: columns are the images of
-# Mitsuba's local X, Y, Z.
-ENVMAP_FRAME = ((0, 0, -1, 0), (-1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 0, 1))
+# whose equirectangular u = 0.5 - atan2(y, x) / 2 pi (Cycles' direction_to_equirectangular)
+# lies along -X at u = 0, +Y at u = 1/4, +X at the image's middle, up +Z: columns are the images
+# of Mitsuba's local X, Y, Z.
+ENVMAP_FRAME = ((0, 0, 1, 0), (1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 0, 1))
 
 
 def _matmul(a, b):
