@@ -41,18 +41,54 @@ def _fov(cam) -> tuple[float, str]:
     return fov, ("x" if fit == "HORIZONTAL" else "larger")
 
 
-def _shift(cam, width: int, height: int) -> tuple[float, float]:
-    """Blender's shift (fractions of the larger side; +x moves the view right, +y up) as
-    Mitsuba's principal point offsets (fractions of width and height, added to the film
-    position, whose y runs down the image)."""
+def _shift(cam, width: int, height: int, extra_x: float = 0.0) -> tuple[float, float]:
+    """Blender's shift (fractions of the larger side; +x moves the view right, +y up), plus
+    `extra_x` (a stereo eye's), as Mitsuba's principal point offsets (fractions of width and
+    height, added to the film position, whose y runs down the image)."""
     side = max(width, height)
-    return cam.shift_x * side / width, -cam.shift_y * side / height
+    return (cam.shift_x + extra_x) * side / width, -cam.shift_y * side / height
 
 
-def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None, poses=None) -> Element:
+def stereo_eyes(scene, report: Report) -> list:
+    """The eyes of Blender's stereoscopy (Output > Views > Stereo 3D), each (view name, its pose
+    in the camera's frame as 4x4 rows, its extra horizontal shift): the eyes sit on the camera's
+    x axis the interocular distance apart (around the pivot: both half-way, or one at the camera),
+    and converge at the convergence distance by a shift (Off-Axis, Blender's default: shift
+    (interocular / sensor width) (lens / convergence distance) per unit of offset), by turning
+    towards it (Toe-in), or not at all (Parallel). Empty without stereoscopy."""
+    r = scene.render
+    if not r.use_multiview:
+        return []
+    if r.views_format != "STEREO_3D":
+        report.warn("multi-view rendering with cameras per view ('Multi-View') is not converted: the scene "
+                    "camera alone is rendered")
+        return []
+    cam = scene.camera.data
+    stereo = cam.stereo
+    e, c = stereo.interocular_distance, max(stereo.convergence_distance, 1e-6)
+    eyes = []
+    for name, left in (("left", True), ("right", False)):
+        view = r.views.get(name)
+        if view is None or not view.use:
+            continue
+        pivot_eye = (stereo.pivot == "LEFT" and left) or (stereo.pivot == "RIGHT" and not left)
+        fac = 0.0 if pivot_eye else 0.5 if stereo.pivot == "CENTER" else 1.0
+        signed = fac if left else -fac
+        x = -e * signed  # the left eye on the camera's -x side
+        shift = (e / cam.sensor_width) * (cam.lens / c) * signed if stereo.convergence_mode == "OFFAXIS" else 0.0
+        pose = [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+        if stereo.convergence_mode == "TOE":
+            a = -math.atan(e * signed / c)  # the left eye turns right (about +y, towards +x)
+            pose[0][0], pose[0][2], pose[2][0], pose[2][2] = math.cos(a), math.sin(a), -math.sin(a), math.cos(a)
+        eyes.append((name, tuple(map(tuple, pose)), shift))
+    return eyes
+
+
+def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None, poses=None, eye=None) -> Element:
     """The <sensor> of the scene's camera, with its film and sampler: at its current pose, or,
     for a frame of a shot, open over `shutter` (open, close) in seconds with the camera's
-    world matrices `poses` [(time, rows)] as its keyframes (one: a still pose)."""
+    world matrices `poses` [(time, rows)] as its keyframes (one: a still pose); `eye`, a
+    stereo eye of stereo_eyes, moves and shifts it as that eye."""
     obj = scene.camera
     width, height = resolution(scene)
     if obj is None or obj.type != "CAMERA":
@@ -68,17 +104,18 @@ def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None,
     fov, axis = _fov(cam)
     s.float("fov", fov).string("fov_axis", axis)
     s.float("near_clip", cam.clip_start).float("far_clip", cam.clip_end)
-    ppx, ppy = _shift(cam, width, height)
+    ppx, ppy = _shift(cam, width, height, eye[2] if eye else 0.0)
     if ppx or ppy:
         s.float("principal_point_offset_x", ppx).float("principal_point_offset_y", ppy)
     if dof:
         _thin_lens(s, obj, cam, report, where)
     if shutter is not None:
         s.float("shutter_open", shutter[0]).float("shutter_close", shutter[1])
+    local = _matmul(eye[1], HALF_TURN_Y) if eye else HALF_TURN_Y
     if poses is not None and len(poses) > 1:
-        s.add(animation("to_world", [(t, _matmul(_rigid(m), HALF_TURN_Y)) for t, m in poses]))
+        s.add(animation("to_world", [(t, _matmul(_rigid(m), local)) for t, m in poses]))
     else:
-        s.matrix("to_world", _matmul(_rigid(poses[0][1] if poses else obj.matrix_world), HALF_TURN_Y))
+        s.matrix("to_world", _matmul(_rigid(poses[0][1] if poses else obj.matrix_world), local))
     sampler = s.add(plugin("sampler", "independent"))
     sampler.add(Element("integer", name="sample_count", value="$spp"))
     sampler.integer("seed", scene.cycles.seed if hasattr(scene, "cycles") else 0)

@@ -125,10 +125,12 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None) -> Exp
     for k, v in (("spp", spp), ("width", width), ("height", height), ("max_depth", camera.max_depth(scene))):
         w.root.add(Element("default", name=k, value=v))
     w.root.add(camera.integrator(scene, report))
+    eyes = camera.stereo_eyes(scene, report) if scene.camera is not None else []
     if shot is None:
-        w.root.add(camera.sensor(scene, report, spp))
+        for eye in eyes or [None]:
+            w.root.add(camera.sensor(scene, report, spp, ident=eye[0] if eye else "camera", eye=eye))
     else:
-        for sensor in _shot_sensors(scene, shot, report, spp):
+        for sensor in _shot_sensors(scene, shot, report, spp, eyes):
             w.root.add(sensor)
     for element in world.convert_world(scene.world, report):
         w.root.add(element)
@@ -165,11 +167,12 @@ def _current_depsgraph():
     return bpy.context.evaluated_depsgraph_get()
 
 
-def _shot_sensors(scene, shot, report: Report, spp: int) -> list:
+def _shot_sensors(scene, shot, report: Report, spp: int, eyes=()) -> list:
     """One sensor per frame of the shot, `frame%04d` (Blender's frame number), open over its
-    shutter with the camera's poses on it."""
+    shutter with the camera's poses on it; with stereo `eyes`, one per eye and frame,
+    `frame%04d_left` and `_right`."""
     out = []
-    for f in shot.frames:
+    for f, eye in ((f, eye) for f in shot.frames for eye in (eyes or [None])):
         on = shot.within(f)
         if shot.length > 0:
             poses = [(shot.time(shot.instants[i]), shot.camera[i]) for i in on]
@@ -177,7 +180,8 @@ def _shot_sensors(scene, shot, report: Report, spp: int) -> list:
         else:
             poses = [(shot.time(f), shot.camera[on[0]])]
             shutter = (shot.time(f), shot.time(f))
-        out.append(camera.sensor(scene, report, spp, ident=f"frame{f:04d}", shutter=shutter, poses=poses))
+        ident = f"frame{f:04d}" + (f"_{eye[0]}" if eye else "")
+        out.append(camera.sensor(scene, report, spp, ident=ident, shutter=shutter, poses=poses, eye=eye))
     return out
 
 
