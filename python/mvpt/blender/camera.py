@@ -84,6 +84,25 @@ def stereo_eyes(scene, report: Report) -> list:
     return eyes
 
 
+def quilt_eyes(cam, views: int, cone_deg: float, distance: float) -> list:
+    """The views of a Looking Glass quilt of the camera `cam` (its data), as stereo_eyes gives
+    them: `views` cameras on the camera's x axis whose directions from the focal point, at
+    `distance` ahead, span the view cone `cone_deg` evenly (view 0 the leftmost, at -cone/2,
+    as the quilt's first tile), each shifted so that the focal plane is the same in every view
+    (Looking Glass's convention: the camera's focus distance is the plane that appears on the
+    display's surface)."""
+    if views < 2:
+        return [("view00", tuple(tuple(float(i == j) for j in range(4)) for i in range(4)), 0.0)]
+    eyes = []
+    for i in range(views):
+        angle = math.radians(cone_deg) * (i / (views - 1) - 0.5)
+        x = distance * math.tan(angle)
+        shift = -(x / distance) * (cam.lens / cam.sensor_width)  # the focal point back to the middle
+        pose = ((1.0, 0.0, 0.0, x), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+        eyes.append((f"view{i:02d}", pose, shift))
+    return eyes
+
+
 def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None, poses=None, eye=None) -> Element:
     """The <sensor> of the scene's camera, with its film and sampler: at its current pose, or,
     for a frame of a shot, open over `shutter` (open, close) in seconds with the camera's

@@ -105,10 +105,11 @@ def _rows(matrix):
     return tuple(tuple(float(matrix[i][j]) for j in range(4)) for i in range(4))
 
 
-def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None) -> Export:
+def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=None) -> Export:
     """Write the scene of `depsgraph` (evaluated) to `folder`/`name`.xml and its meshes: at its
     current frame, or the frames (first, last) of Blender's numbering as a shot (one view per
-    frame, docs/blender.md, "Animation"), its geometry, materials and lights those of the first."""
+    frame, docs/blender.md, "Animation"), its geometry, materials and lights those of the first.
+    `eyes` (camera.quilt_eyes) replaces the camera (or its stereo eyes) by those views."""
     folder = Path(folder)
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     report = Report()
@@ -125,7 +126,8 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None) -> Exp
     for k, v in (("spp", spp), ("width", width), ("height", height), ("max_depth", camera.max_depth(scene))):
         w.root.add(Element("default", name=k, value=v))
     w.root.add(camera.integrator(scene, report))
-    eyes = camera.stereo_eyes(scene, report) if scene.camera is not None else []
+    if eyes is None:
+        eyes = camera.stereo_eyes(scene, report) if scene.camera is not None else []
     if shot is None:
         for eye in eyes or [None]:
             w.root.add(camera.sensor(scene, report, spp, ident=eye[0] if eye else "camera", eye=eye))
@@ -156,10 +158,10 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None) -> Exp
     return Export(xml, report.warnings, report.notes)
 
 
-def export_current(folder, name: str = "scene", frames=None) -> Export:
+def export_current(folder, name: str = "scene", frames=None, eyes=None) -> Export:
     """Write the current Blender scene (bpy.context's) to `folder`: its current frame, or the
-    frames (first, last) as a shot."""
-    return export_depsgraph(_current_depsgraph(), folder, name, frames)
+    frames (first, last) as a shot; `eyes` (camera.quilt_eyes) as its views."""
+    return export_depsgraph(_current_depsgraph(), folder, name, frames, eyes)
 
 
 def _current_depsgraph():
