@@ -100,3 +100,19 @@ def test_the_zip_installs_the_same_engine(tmp_path):
     finally:
         module.unregister()
     assert not hasattr(bpy.types.Scene, "mvpt")
+
+
+def test_f12_renders_a_looking_glass_quilt(engine, tmp_path):
+    scene = _scene(tmp_path)
+    scene.mvpt.mode = "QUILT"
+    scene.mvpt.views, scene.mvpt.cone = 6, 35.0
+    scene.camera.data.dof.focus_distance = 4.2
+    shown = _f12(scene)
+    written = sorted(p.name for p in (tmp_path / "views").iterdir())
+    assert [p for p in written if p.endswith(".exr")] == [f"untitled_view{i:02d}.exr" for i in range(6)]
+    assert any("_qs3x2a1" in p and p.endswith(".png") for p in written), written
+    # The image editor shows view 0, the leftmost.
+    from mvpt.runs import load_run
+    views = load_run(tmp_path / "views").images
+    assert np.array_equal(shown, np.asarray(views["view00"], dtype=np.float32)[..., :3])
+    assert not np.array_equal(shown, np.asarray(views["view05"], dtype=np.float32)[..., :3])

@@ -3,8 +3,9 @@ converts the evaluated scene (mvpt.blender's exporter), renders it with multi-vi
 or path tracing, shows the camera's view (the first view) in Blender's image editor and writes
 every view, and for a rig the Looking Glass quilt, to the scene's mvpt output folder.
 
-What it renders (`scene.mvpt.mode`): the scene camera; a rig around it (`scene.mvpt.rig`, the
-CLI's --rig: linear:n=45,baseline=..., grid:..., the views of a quilt); or the scene's frame
+What it renders (`scene.mvpt.mode`): the scene camera; a Looking Glass quilt (`views` over a
+view `cone`, focused at the camera's focus distance: camera.quilt_eyes); a rig around it
+(`scene.mvpt.rig`, the CLI's --rig: linear:n=45,baseline=..., grid:...); or the scene's frame
 range as a shot (one view per frame). Progress shows in Blender's status bar; Esc cancels (the
 passes finished are kept). `register()` installs it in the running Blender (bpy as a module
 included); `write_addon_zip` writes the zip that Blender's preferences install.
@@ -68,11 +69,17 @@ def _classes():
     class MvptSettings(bpy.types.PropertyGroup):
         mode: bpy.props.EnumProperty(name="Render", default="CAMERA", items=[
             ("CAMERA", "Camera", "the scene camera's view"),
-            ("RIG", "Rig (quilt)", "the views of a rig around the scene camera, and their quilt"),
+            ("QUILT", "Looking Glass quilt", "the views of a quilt over a view cone, focused at the camera's focus "
+                                             "distance, and the quilt"),
+            ("RIG", "Rig", "the views of an mvpt rig around the scene camera, and their quilt"),
             ("SHOT", "Shot", "the scene's frame range, one view per frame")])
         method: bpy.props.EnumProperty(name="Method", default="mvpt", items=[
             ("mvpt", "Multi-view path tracing", "share paths between the views"),
             ("pt", "Path tracing", "every view on its own")])
+        views: bpy.props.IntProperty(name="Views", default=45, min=2, max=1000,
+                                     description="the quilt's views (Looking Glass Portrait: 48)")
+        cone: bpy.props.FloatProperty(name="View cone", default=40.0, min=1.0, max=120.0,
+                                      description="degrees spanned by the quilt's views (Looking Glass Portrait: 40)")
         rig: bpy.props.StringProperty(name="Rig", default="linear:n=45,baseline=0.5",
                                       description="mvpt's rig specification (mvpt render --rig)")
         spp: bpy.props.IntProperty(name="Samples", default=0, min=0,
@@ -104,8 +111,9 @@ def _classes():
 
         def draw(self, context):
             settings = context.scene.mvpt
-            for name in ("mode", "method", "rig", "spp", "time", "seed", "output"):
-                if name != "rig" or settings.mode == "RIG":
+            shown = {"rig": "RIG", "views": "QUILT", "cone": "QUILT"}
+            for name in ("mode", "method", "views", "cone", "rig", "spp", "time", "seed", "output"):
+                if shown.get(name, settings.mode) == settings.mode:
                     self.layout.prop(settings, name)
 
     return MvptSettings, MvptRenderEngine, MVPT_PT_settings
@@ -142,12 +150,16 @@ def render_scene(engine, depsgraph) -> None:
     from .. import api
     from ..output import write_outputs
     from ..quilt import write_quilt
+    from . import camera
     from .exporter import export_depsgraph
     scene = depsgraph.scene
     settings = scene.mvpt
     frames = (scene.frame_start, scene.frame_end) if settings.mode == "SHOT" else None
+    eyes = None
+    if settings.mode == "QUILT":
+        eyes = camera.quilt_eyes(scene.camera.data, settings.views, settings.cone, camera.focus_distance(scene.camera))
     with tempfile.TemporaryDirectory(prefix="mvpt-blend-") as folder:
-        exported = export_depsgraph(depsgraph, folder, "scene", frames=frames)
+        exported = export_depsgraph(depsgraph, folder, "scene", frames=frames, eyes=eyes)
         for text in exported.warnings:
             engine.report({"WARNING"}, text)
         loaded = api.load_file(exported.xml, rig=settings.rig if settings.mode == "RIG" else None)
@@ -166,7 +178,7 @@ def render_scene(engine, depsgraph) -> None:
     stem = Path(bpy.data.filepath).stem or "untitled"
     if out is not None:
         write_outputs(result, out, stem, settings={"blender": bpy.data.filepath, "mode": settings.mode})
-        if settings.mode == "RIG":
+        if settings.mode in ("RIG", "QUILT"):
             write_quilt([result.images[v] for v in result.view_ids], out, stem)
     first = np.asarray(result.images[result.view_ids[0]], dtype=np.float32)
     height, width = first.shape[:2]

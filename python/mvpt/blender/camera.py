@@ -155,13 +155,20 @@ def _rigid(matrix):
     return m
 
 
+def focus_distance(obj) -> float:
+    """The camera object's focus distance: its focus object's distance along the view axis, or
+    its Focus Distance."""
+    dof = obj.data.dof
+    if dof.focus_object is None:
+        return dof.focus_distance
+    to_target = dof.focus_object.matrix_world.translation - obj.matrix_world.translation
+    forward = -obj.matrix_world.col[2].xyz.normalized()
+    return max(to_target.dot(forward), 1e-4)
+
+
 def _thin_lens(s: Element, obj, cam, report: Report, where: str) -> None:
     dof = cam.dof
-    distance = dof.focus_distance
-    if dof.focus_object is not None:
-        to_target = dof.focus_object.matrix_world.translation - obj.matrix_world.translation
-        forward = -obj.matrix_world.col[2].xyz.normalized()
-        distance = max(to_target.dot(forward), 1e-4)
+    distance = focus_distance(obj)
     if dof.aperture_blades > 0:
         report.warn(f"{where}: its {dof.aperture_blades}-bladed aperture is rendered round")
     if dof.aperture_ratio != 1:
