@@ -61,8 +61,53 @@ def test_instances_share_a_mesh_file(tmp_path):
     b.location = (1, 0, 0)
     exported = export_current(tmp_path)
     text = exported.xml.read_text()
-    assert text.count('value="meshes/Cube.ply"') == 2
+    # One shapegroup of the mesh, in memory once, and an instance of it per object.
+    assert text.count('value="meshes/Cube.ply"') == 1
+    assert text.count('type="shapegroup"') == 1 and text.count('type="instance"') == 2
     assert len(list((tmp_path / "meshes").iterdir())) == 1
+    assert len(mvpt.load_file(exported.xml).views) == 1
+
+
+def test_instances_render_as_separate_copies(tmp_path):
+    """The instanced scene and the same scene with a copy of the mesh per object render alike
+    (the per-block test of test_blender_cycles.py, mvpt against mvpt); an emitting shared mesh
+    is written as separate shapes (no emitters in shapegroups)."""
+    from blender_scenes import agreement, table_scene
+    table_scene()
+    add_light("POINT", (1.0, -0.5, 2.5), energy=150.0, shadow_soft_size=0.0)
+    cube = bpy.data.objects["Cube"]
+    for x in (-1.0, -0.4):
+        other = bpy.data.objects.new(f"copy{x}", cube.data)
+        bpy.context.scene.collection.objects.link(other)
+        other.location = (x, 0.6, 0.4)
+        other.rotation_euler = (0.0, 0.0, 0.5)
+
+    def images(folder):
+        exported = export_current(folder)
+        scene = mvpt.load_file(exported.xml)
+        return exported.xml.read_text(), np.stack([mvpt.render(scene, spp=8, seed=500 + i, method="pt").images["camera"]
+                                                   for i in range(12)]).astype(np.float64)
+    text, shared = images(tmp_path / "shared")
+    assert text.count('type="instance"') == 3
+    for obj in bpy.data.objects:
+        if obj.name.startswith("copy"):
+            obj.data = obj.data.copy()
+    text, copies = images(tmp_path / "copies")
+    assert 'type="instance"' not in text
+    a = agreement(shared, copies)
+    assert abs(a["z"]) < 4.0 and a["max_block_z"] < 4.5, a
+    # An emitting mesh used twice stays two shapes.
+    glow = bpy.data.materials.new("glow")
+    nodes = glow.node_tree.nodes
+    nodes.clear()
+    emission = nodes.new("ShaderNodeEmission")
+    glow.node_tree.links.new(emission.outputs[0], nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    lamp = add_mesh("plane", glow, size=0.2, location=(0, 0, 2))
+    twin = bpy.data.objects.new("twin", lamp.data)
+    bpy.context.scene.collection.objects.link(twin)
+    twin.location = (0.5, 0, 2)
+    text = export_current(tmp_path / "glow").xml.read_text()
+    assert text.count('type="area"') == 2
 
 
 def test_unknown_node_warns_once_with_fallback(tmp_path):

@@ -41,6 +41,7 @@ class _Writer:
         self.report = report
         self.materials = materials.Materials(report, folder)
         self.meshes: dict = {}      # evaluated mesh -> [(slot, file)]
+        self.groups: dict = {}      # group_key -> shapegroup id (None: its shapes emit)
         self.names: set = set()
         self.bsdf_ids: dict = {}
         self.root = Element("scene", version="3.0.0")
@@ -53,9 +54,19 @@ class _Writer:
         self.names.add(name)
         return name
 
+    @staticmethod
+    def mesh_key(obj) -> tuple:
+        """What identifies an object's evaluated mesh file: its mesh data (for meshes) and slots."""
+        return (obj.data.as_pointer() if obj.type == "MESH" else obj.as_pointer(), len(obj.material_slots))
+
+    @staticmethod
+    def group_key(obj) -> tuple:
+        """What a shapegroup of the object's shapes is shared by: its mesh and its materials."""
+        return _Writer.mesh_key(obj) + tuple(s.material.name if s.material else "" for s in obj.material_slots)
+
     def mesh_files(self, obj) -> list:
         """(slot, relative PLY path) of the object's evaluated mesh, written on first use."""
-        key = (obj.data.as_pointer() if obj.type == "MESH" else obj.as_pointer(), len(obj.material_slots))
+        key = self.mesh_key(obj)
         if key in self.meshes:
             return self.meshes[key]
         mesh = obj.to_mesh()
@@ -82,23 +93,65 @@ class _Writer:
             self.bsdf_ids[key] = bid
         return self.bsdf_ids[key], surface
 
-    def add_object(self, obj, matrix, keys=None) -> None:
-        """The object's shapes at `matrix`, or moving through `keys` [(time, rows)]."""
+    def shapes(self, obj) -> list:
+        """The object's shape elements (one per material slot, no transform yet), each with its
+        material and that material's emitted radiance (None: none)."""
+        out = []
         for slot, rel in self.mesh_files(obj):
             material = obj.material_slots[slot].material if slot < len(obj.material_slots) else None
             bid, surface = self.bsdf_ref(material)
             s = plugin("shape", "ply").string("filename", rel)
-            if keys:
-                s.add(animation("to_world", keys))
-            else:
-                s.matrix("to_world", matrix)
             s.add(Element("ref", id=bid))
-            if surface.emission is not None:
-                s.add(plugin("emitter", "area").rgb("radiance", surface.emission))
+            out.append((s, material, surface.emission))
+        return out
+
+    def add_instance(self, obj, matrix, keys=None) -> bool:
+        """The object as an instance of a shapegroup of its shapes (written on first use), at
+        `matrix` or moving through `keys`: one copy in memory for every object of the mesh and
+        materials. False (nothing written) when a shape emits (mvpt, as Mitsuba, has no
+        emitters in shapegroups)."""
+        key = self.group_key(obj)
+        if key not in self.groups:
+            shapes = self.shapes(obj)
+            if any(emission is not None for _, _, emission in shapes):
+                self.groups[key] = None
+            else:
+                gid = self.unique("group-" + safe_name(obj.data.name if obj.data is not None else obj.name))
+                group = self.root.add(plugin("shape", "shapegroup", gid))
+                for shape, _, _ in shapes:
+                    group.add(shape)
+                self.groups[key] = gid
+        gid = self.groups[key]
+        if gid is None:
+            return False
+        s = plugin("shape", "instance")
+        s.add(Element("ref", id=gid))
+        _place(s, matrix, keys)
+        s.comment = safe_name(obj.name)
+        self.root.add(s)
+        return True
+
+    def add_object(self, obj, matrix, keys=None, shared=False) -> None:
+        """The object's shapes at `matrix`, or moving through `keys` [(time, rows)]; as an instance
+        of a shapegroup when `shared` (its mesh and materials used by several objects)."""
+        if shared and self.add_instance(obj, matrix, keys):
+            return
+        for s, material, emission in self.shapes(obj):
+            _place(s, matrix, keys)
+            if emission is not None:
+                s.add(plugin("emitter", "area").rgb("radiance", emission))
                 self.report.warn(f"material '{material.name}' emits from the side its normals face only "
                                  f"(Cycles: both sides; the same for closed meshes)")
             s.comment = safe_name(obj.name)
             self.root.add(s)
+
+
+def _place(shape: Element, matrix, keys) -> None:
+    """A shape's to_world: the matrix, or the animation through `keys` [(time, rows)]."""
+    if keys:
+        shape.add(animation("to_world", keys))
+    else:
+        shape.matrix("to_world", matrix)
 
 
 def _rows(matrix):
@@ -136,11 +189,16 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=N
             w.root.add(sensor)
     for element in world.convert_world(scene.world, report):
         w.root.add(element)
+    uses: dict = {}
+    for inst in depsgraph.object_instances:
+        if inst.object.type in GEOMETRY:
+            key = w.group_key(inst.object)
+            uses[key] = uses.get(key, 0) + 1
     for inst in depsgraph.object_instances:
         obj = inst.object
         keys = _object_keys(shot, inst, report) if shot is not None else None
         if obj.type in GEOMETRY:
-            w.add_object(obj, _rows(inst.matrix_world), keys)
+            w.add_object(obj, _rows(inst.matrix_world), keys, shared=uses[w.group_key(obj)] > 1)
         elif obj.type == "LIGHT":
             if keys:
                 report.warn(f"light '{obj.name}' moves over the frames: it is converted at its pose of frame "
