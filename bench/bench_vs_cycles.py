@@ -125,11 +125,6 @@ def build_scene(width: int, height: int, folder: Path):
     return scene
 
 
-def relmse(images: dict, ref: dict) -> float:
-    from mvpt import metrics
-    return float(np.mean([metrics.relmse(images[v], ref[v]) for v in ref]))
-
-
 def cycles_views(scene, eyes, samples: int, time_limit: float, seed: int, folder: Path) -> tuple[dict, float]:
     """One Cycles render per view (camera moved and shifted); the images and the wall time."""
     import bpy
@@ -204,7 +199,7 @@ def main(argv=None) -> int:
                 mvpt_rate = r.stats["samples_per_second"]
         print(f"\nCycles' setup {setup:.2f} s per view, time limit {limit:.2f} s per view; references took "
               f"{time.perf_counter() - t0:.0f} s in all")
-        base = {k: (relmse(images, ref), metrics.display_relmse(images, ref)[0])
+        base = {k: (metrics.errors(images, ref, with_flip=False).overall.relmse, metrics.display_relmse(images, ref)[0])
                 for k, (images, _, ref) in results.items()}
         c_view, c_display = base["Cycles per view"]
         c_time = results["Cycles per view"][1]

@@ -74,14 +74,18 @@ def stereo_eyes(scene, report: Report) -> list:
         pivot_eye = (stereo.pivot == "LEFT" and left) or (stereo.pivot == "RIGHT" and not left)
         fac = 0.0 if pivot_eye else 0.5 if stereo.pivot == "CENTER" else 1.0
         signed = fac if left else -fac
-        x = -e * signed  # the left eye on the camera's -x side
         shift = (e / cam.sensor_width) * (cam.lens / c) * signed if stereo.convergence_mode == "OFFAXIS" else 0.0
-        pose = [[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
-        if stereo.convergence_mode == "TOE":
-            a = -math.atan(e * signed / c)  # the left eye turns right (about +y, towards +x)
-            pose[0][0], pose[0][2], pose[2][0], pose[2][2] = math.cos(a), math.sin(a), -math.sin(a), math.cos(a)
-        eyes.append((name, tuple(map(tuple, pose)), shift))
+        # The left eye on the camera's -x side; toe-in turns it right (about +y, towards +x).
+        turn = -math.atan(e * signed / c) if stereo.convergence_mode == "TOE" else 0.0
+        eyes.append((name, _eye_pose(-e * signed, turn), shift))
     return eyes
+
+
+def _eye_pose(x: float, turn: float = 0.0) -> tuple:
+    """A view's pose in the camera's frame (4x4 rows): `x` along the camera's x axis, turned by
+    `turn` radians about its y axis."""
+    c, s = math.cos(turn), math.sin(turn)
+    return ((c, 0.0, s, x), (0.0, 1.0, 0.0, 0.0), (-s, 0.0, c, 0.0), (0.0, 0.0, 0.0, 1.0))
 
 
 def quilt_eyes(cam, views: int, cone_deg: float, distance: float) -> list:
@@ -91,15 +95,12 @@ def quilt_eyes(cam, views: int, cone_deg: float, distance: float) -> list:
     as the quilt's first tile), each shifted so that the focal plane is the same in every view
     (Looking Glass's convention: the camera's focus distance is the plane that appears on the
     display's surface)."""
-    if views < 2:
-        return [("view00", tuple(tuple(float(i == j) for j in range(4)) for i in range(4)), 0.0)]
     eyes = []
     for i in range(views):
-        angle = math.radians(cone_deg) * (i / (views - 1) - 0.5)
+        angle = math.radians(cone_deg) * (i / (views - 1) - 0.5) if views > 1 else 0.0
         x = distance * math.tan(angle)
         shift = -(x / distance) * (cam.lens / cam.sensor_width)  # the focal point back to the middle
-        pose = ((1.0, 0.0, 0.0, x), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-        eyes.append((f"view{i:02d}", pose, shift))
+        eyes.append((f"view{i:02d}", _eye_pose(x), shift))
     return eyes
 
 
