@@ -130,11 +130,9 @@ def test_merge_refuses_an_interrupted_range(tmp_path):
     scene = mvpt.load_string(slow_scene(2, res=16))
     (a,) = _ranges(scene, tmp_path, "mvpt", [(0, 4)])
     b = tmp_path / "b.mvpt-state"
-    calls = []
 
-    def stop_soon(progress):
-        calls.append(progress)
-        if len(calls) == 10:
+    def stop_soon(progress):  # once a pass is done, whatever the machine's speed
+        if progress["pass"] >= 1:
             raise KeyboardInterrupt
 
     cut = mvpt.render(scene, seed=1, method="mvpt", passes=(4, 396), state=b, progress=stop_soon, poll=0.001)
