@@ -16,7 +16,8 @@ for displays and shots on the HDRI table-top of bench/suite; `--suite broad` run
 eleven more of the classes users render (wide-cone rigs of 25 and 100 views with HDRI and
 glass, thin-lens views, shots with overlapping and short shutters, closed glossy rooms through
 rows and grids, real scenes of ../shared/scenes through grids) and ends with one line per case,
-worst first (`--summary FILE` writes them as JSON).
+worst first (`--summary FILE` writes them as JSON), with what `--method auto` picks there and
+what that costs against the better of the two methods.
 
 For each scene: a reference by independent path tracing (`--ref-spp` samples per pixel,
 rendered once and cached under --cache as .npz), then `--rounds` rounds that render the
@@ -48,7 +49,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np
 
 import mvpt
-from mvpt import metrics
+from mvpt import api, metrics
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_SCENES = [str(ROOT / "scenes" / "cornell-glossy-9.xml"), str(ROOT / "scenes" / "lightfield-5x5.xml")]
@@ -147,6 +148,7 @@ def run_case(spec: str, defines: dict, args) -> dict:
           f"{args.time:g} s per method, {args.rounds} rounds", flush=True)
     ref, ref_noise = reference(scene_path, rig, defines, args.ref_spp, args.threads, args.cache)
     scene = mvpt.load_file(scene_path, rig=rig, **defines)
+    auto = api.choose_method(scene, [], 1000, args.threads)  # what --method auto picks (the first round's seed)
     views = list(ref)
     err = {"pt": [], "mvpt": []}
     stats = {"pt": [], "mvpt": []}
@@ -194,22 +196,34 @@ def run_case(spec: str, defines: dict, args) -> dict:
         print(f"WARNING: the reference's own noise is {'more than' if not own > 0 else f'{ref_all / own:.0%} of'} "
               f"mvpt's error: too noisy to judge the gain (raise --ref-spp)")
     d_ratio = med["pt"]["display"] / med["mvpt"]["display"]
-    return {"case": label, "views": len(views), "pt_over_mvpt": corrected["overall"],
+    print(f"--method auto: {auto['method']} ({auto['reason']})")
+    return {"auto": auto["method"], "predicted": auto["predicted_gain"], "case": label, "views": len(views), "pt_over_mvpt": corrected["overall"],
             "raw": med["pt"]["overall"] / med["mvpt"]["overall"], "display": corrected["display"],
             "display_raw": d_ratio, "reference_noise_share": ref_all / med["mvpt"]["overall"],
             "cost_ratio": pt_rate / mv_rate, "mean_sharing": mv["mean_sharing"] if mv else 1.0,
             "splits": [s.get("splits") for s in stats["mvpt"]], "methods": [s.get("method") for s in stats["mvpt"]]}
 
 
+def auto_share(line: dict, key: str) -> float:
+    """The better method's relMSE over that of the one --method auto picked (1: it picked the
+    better), from a summary line's pt / mvpt under `key`."""
+    gain = line[key]
+    return min(1.0, gain) if line["auto"] == "mvpt" else min(1.0, 1.0 / gain) if gain > 0 else 1.0
+
+
 def print_summary(lines: list) -> None:
-    """One line per case, worst (lowest pt / mvpt) first."""
+    """One line per case, worst (lowest pt / mvpt) first, with what --method auto picks."""
     print("\n## Summary, worst first (pt / mvpt: relMSE ratio, the reference's noise subtracted; raw in "
-          "parentheses)\n")
-    print("| case | views | pt / mvpt | as a display shows it | native sample's cost (pt samples) | mean abs(S) |")
-    print("|---|---|---|---|---|---|")
+          "parentheses; auto: its pick, its pilot's predicted pt / mvpt, and the better method's relMSE over "
+          "its pick's, per view and as a display shows it)\n")
+    print("| case | views | pt / mvpt | as a display shows it | native sample's cost (pt samples) | mean abs(S) "
+          "| auto (predicted) | better / auto |")
+    print("|---|---|---|---|---|---|---|---|")
     for s in sorted(lines, key=lambda s: s["pt_over_mvpt"]):
+        predicted = f"{s['predicted']:.2f}" if s["predicted"] else "-"
         print(f"| {s['case']} | {s['views']} | {s['pt_over_mvpt']:.2f} ({s['raw']:.2f}) | {s['display']:.2f} "
-              f"({s['display_raw']:.2f}) | {s['cost_ratio']:.2f} | {s['mean_sharing']:.1f} |")
+              f"({s['display_raw']:.2f}) | {s['cost_ratio']:.2f} | {s['mean_sharing']:.1f} | {s['auto']} "
+              f"({predicted}) | {auto_share(s, 'pt_over_mvpt'):.2f}, {auto_share(s, 'display'):.2f} |")
 
 
 def main(argv=None) -> int:

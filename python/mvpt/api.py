@@ -7,6 +7,7 @@ import math
 import os
 import signal
 import threading
+from time import monotonic as _monotonic
 from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
@@ -198,7 +199,9 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
 
     method: "pt" (independent path tracing of every view), "mvpt" (multi-view path tracing,
     sharing paths between the views; its settings come from an `mvpath` integrator in the
-    scene, or its defaults) or "scene" (whatever the scene's integrator is). With "mvpt",
+    scene, or its defaults), "auto" (mvpt where its pilot predicts a gain over pt at equal time,
+    else pt: choose_method; stats["auto"] says which and why, stats["method"] is what ran; a
+    time budget includes the pilot) or "scene" (whatever the scene's integrator is). With "mvpt",
     sample_count holds native samples and `contributions` what each pixel received; spp is
     the mean number of native samples per pixel.
 
@@ -252,8 +255,8 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         raise ValueError(f"poll must be > 0 seconds, got {poll}")
     if seed is not None and not 0 <= int(seed) < 2**32:
         raise ValueError(f"seed must lie in [0, 2^32), got {seed}")
-    if method not in ("scene", "pt", "mvpt"):
-        raise ValueError(f"method must be 'pt', 'mvpt' or 'scene', got {method!r}")
+    if method not in ("scene", "pt", "mvpt", "auto"):
+        raise ValueError(f"method must be 'pt', 'mvpt', 'auto' or 'scene', got {method!r}")
     for path, what in ((state, "the state path"), (resume, "the resume path")):
         if path is not None:
             _text(os.fspath(path), what)
@@ -265,17 +268,24 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
             raise ValueError(f"passes must be (first >= 0, count >= 1) within 2^31, got {tuple(passes)}")
         passes = [first, count]
     index = resolve_views(scene, views)
+    auto = None
+    run_method, run_time = method, float(time)
+    if method == "auto":  # (a function of the settings: a resumed render and a range choose the same)
+        auto = choose_method(scene, index, seed, threads, splits_option, poll)
+        run_method = auto["method"]
+        if run_time > 0.0:  # the pilot's seconds are the budget's too
+            run_time = max(run_time - auto["seconds"], MinRunSeconds)
     header = None
-    if state is not None or resume is not None:
+    if state is not None or resume is not None:  # (a state names the method that ran: it merges)
         ids = [v["id"] for v in scene.views]
-        settings = dict(method=method, spp=0 if passes else int(spp), time=float(time),
+        settings = dict(method=run_method, spp=0 if passes else int(spp), time=float(time),
                         seed=None if seed is None else int(seed), views=[ids[i] for i in index] or ids, passes=passes,
                         splits=splits)
         header = state_file.make_header(scene, settings, state_extra)
     if resume is not None:
         state_file.check_resumable(resume, header)
-    job = _core.RenderJob(scene, spp=int(spp), time=float(time), seed=None if seed is None else int(seed),
-                          threads=int(threads), views=index, method=method,
+    job = _core.RenderJob(scene, spp=int(spp), time=run_time, seed=None if seed is None else int(seed),
+                          threads=int(threads), views=index, method=run_method,
                           state_path=os.fspath(state) if state is not None else "",
                           state_header=json.dumps(header) if state is not None else "",
                           checkpoint_interval=float(checkpoint), state_at_end=bool(state_at_end),
@@ -300,11 +310,62 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
                 pass
     result = _result(scene, job, index, dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads),
                                              method=method, passes=passes, splits=splits))
+    if auto is not None:
+        result.stats["auto"] = auto
     if interrupted is not None:
         result.stats["cancelled"] = True
         if not isinstance(interrupted, KeyboardInterrupt):
             raise interrupted
     return result
+
+
+# method="auto" (docs/multiview-path-tracing.md, "Choosing the method"): multi-view path tracing
+# where its pilot predicts at least this gain over path tracing at equal time, else path tracing.
+AutoGain = 1.0
+# A time budget that the pilot spent whole still renders (at least one pass runs).
+MinRunSeconds = 1e-3
+
+
+def choose_method(scene: _core.Scene, index: list, seed, threads: int, splits_option: int = -1,
+                  poll: float = 0.1) -> dict:
+    """What method="auto" renders `scene`'s views `index` with: multi-view path tracing's pilot
+    alone (its native samples and two path-traced samples at a fixed set of pixels, from
+    seeds of its own) predicts pt / mvpt at equal time; mvpt where that is at least AutoGain
+    (or where the pilot cannot tell), else pt. A function of the scene, the views, the seed
+    and the splits: every range and resume of a render chooses the same. Returns {"method",
+    "predicted_gain" (None without a prediction), "reason", "seconds" (the pilot's)}."""
+    t0 = _monotonic()
+    views = len(index) or len(scene.views)
+    if views < 2:
+        return {"method": "pt", "predicted_gain": None, "seconds": 0.0,
+                "reason": "one view: multi-view path tracing has nothing to share"}
+    job = _core.RenderJob(scene, spp=1, seed=None if seed is None else int(seed), threads=int(threads), views=index,
+                          method="mvpt", splits=splits_option, pilot_only=True)
+    job.start()
+    try:
+        while not job.wait(poll):
+            pass
+    except BaseException:
+        with _interrupts_ignored():
+            job.cancel()
+            while not job.wait(poll):
+                pass
+        raise
+    raw = job.stats()
+    seconds = _monotonic() - t0
+    if raw["method"] != "mvpt":  # nothing can be shared in time (the renderer's own rule)
+        return {"method": "pt", "predicted_gain": None, "seconds": seconds,
+                "reason": raw["notes"][-1] if raw["notes"] else "nothing to share"}
+    gain = float(raw["predicted_gain"])
+    if not gain > 0.0:
+        return {"method": "mvpt", "predicted_gain": None, "seconds": seconds,
+                "reason": "the pilot saw too few pixels to predict the gain: multi-view path tracing"}
+    if gain >= AutoGain:
+        return {"method": "mvpt", "predicted_gain": gain, "seconds": seconds,
+                "reason": f"the pilot predicts {gain:.2f}x path tracing's efficiency"}
+    return {"method": "pt", "predicted_gain": gain, "seconds": seconds,
+            "reason": f"the pilot predicts multi-view path tracing at {gain:.2f}x path tracing's efficiency: "
+                      "sharing does not pay here"}
 
 
 def _splits_option(splits) -> int:
@@ -454,6 +515,6 @@ def _stats(scene, raw: dict, results: list, index: list, settings: dict) -> dict
         "state_error": raw["state_error"] or None,
         "views": views,
     } | ({"estimator": raw["estimator"], "splits": raw["splits"], "delta_splits": raw["delta_splits"],
-          "multiview": dict(raw["multiview"])}
+          "predicted_gain": raw["predicted_gain"], "multiview": dict(raw["multiview"])}
          if raw["method"] == "mvpt" else {}) \
       | ({"split_pilot": dict(raw["split_pilot"])} if "split_pilot" in raw else {})

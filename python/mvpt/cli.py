@@ -127,6 +127,8 @@ def _render(scene_path: Path, args, stem: str) -> int:
         _error("--passes renders COUNT passes of every view; drop --spp")
         return EXIT_USAGE
     chosen = [scene.views[i] for i in views] if views else scene.views
+    if args.method is None:  # several views of a path-traced scene: what pays (docs/multiview-path-tracing.md)
+        args.method = "auto" if len(chosen) > 1 and scene.integrator in ("path", "volpath") else "scene"
     problem = displays.check_displays_for(args, [(v["width"], v["height"]) for v in chosen])
     if problem:
         _error(problem)
@@ -222,6 +224,9 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
+    if result.stats.get("auto") and not args.quiet:
+        auto = result.stats["auto"]
+        print(f"method auto: {auto['method']} ({auto['reason']})", flush=True)
     state_error = result.stats.get("state_error")
     for warning in result.stats.get("warnings", []):
         if not (state_error and warning.startswith(state_error)):  # said once, as the error below
@@ -281,6 +286,9 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
         stop_signals.interruptible = False
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
+    if result.stats.get("auto") and not args.quiet:
+        auto = result.stats["auto"]
+        print(f"method auto: {auto['method']} ({auto['reason']})", flush=True)
     settings = {"scene": str(scene_path), "defines": dict(args.define or []), "output": str(args.output),
                 "ray": args.ray, "workers": result.stats["distributed"]["workers"]}
     paths = write_all(result, args, stem, settings)
@@ -319,9 +327,11 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                         "to the time left)")
     p.add_argument("--seed", type=_seed, default=None, help="random seed (default: each sampler's seed)")
     p.add_argument("--threads", type=cli_common.threads, default=0, help="worker threads (default: all cores)")
-    p.add_argument("--method", choices=("pt", "mvpt"), default="scene",
-                   help="pt: independent path tracing of every view; mvpt: multi-view path tracing "
-                        "(default: the scene's integrator, 'mvpath' meaning mvpt)")
+    p.add_argument("--method", choices=("pt", "mvpt", "auto", "scene"), default=None,
+                   help="pt: independent path tracing of every view; mvpt: multi-view path tracing; auto: "
+                        "mvpt where its pilot predicts a gain over pt at equal time, else pt (it says which "
+                        "and why); scene: the scene's integrator, 'mvpath' meaning mvpt (default: auto for "
+                        "several views of a 'path' or 'volpath' scene, else scene)")
     p.add_argument("--splits", type=_splits, default=None, metavar="N|auto",
                    help="mvpt: light samples and bounces per shared first vertex, 1 to 64, or auto (chosen "
                         "per render); default: the scene's mvpath setting, else 2")

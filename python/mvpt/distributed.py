@@ -125,7 +125,8 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
     py_modules), for clusters whose nodes lack mvpt. time: a wall-clock budget for the whole render
     (ranges started before it ends stop at it). The result is that of api.merge of the ranges'
     states, in their order; stats["distributed"] has the tasks, their seconds and the bytes that
-    crossed the network. splits: as api.render's (every range chooses the same under "auto")."""
+    crossed the network. splits: as api.render's (every range chooses the same under "auto").
+    method: as api.render's; "auto" is chosen once, here (stats["auto"])."""
     ray = _ray()
     if not ray.is_initialized():
         check_address(address)
@@ -135,6 +136,9 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
     ids = [v["id"] for v in scene.views]
     view_ids = [ids[i] for i in index] or ids
     total = int(spp) or max(v["spp"] for v in scene.views)
+    # method="auto" is chosen here, once, from the pilot (the ranges then render one method).
+    auto = api.choose_method(scene, index, seed, 0, api._splits_option(splits)) if method == "auto" else None
+    method = auto["method"] if auto else method
     started_here = not ray.is_initialized()
     if wheel is not None and not (Path(wheel).is_file() and str(wheel).endswith(".whl")):
         raise ValueError(f"wheel: '{api.shown(os.fspath(wheel))}' is not a wheel file (.whl); make one with "
@@ -157,8 +161,11 @@ def render(scene_path: str | os.PathLike, spp: int = 0, time: float = 0.0, seed:
         task = ray.remote(num_cpus=cpus, max_retries=int(max_retries), retry_exceptions=False)(render_range)
         settings = dict(seed=seed, method=method, views=view_ids, splits=splits)
         ranges = plan_ranges(total, workers * max(1, int(tasks_per_worker)))
-        return _run(ray, task, pack_ref, len(pack or b""), scene, scene_file, rig or "", defines, shared,
-                    settings, ranges, workers, cpus, float(time), progress, keep_state)
+        result = _run(ray, task, pack_ref, len(pack or b""), scene, scene_file, rig or "", defines, shared,
+                      settings, ranges, workers, cpus, float(time), progress, keep_state)
+        if auto is not None:
+            result.stats["auto"] = auto
+        return result
     finally:
         if started_here:
             ray.shutdown()

@@ -160,6 +160,7 @@ public:
             d["estimator"] = s.estimator;
             d["splits"] = s.splits;
             d["delta_splits"] = s.delta_splits;
+            d["predicted_gain"] = s.predicted_gain;
             if (s.split_pilot[3] > 0.0) {
                 nb::dict pilot;
                 pilot["a"] = s.split_pilot[0];
@@ -314,12 +315,12 @@ void bind_render(nb::module_ &m) {
         .def("__init__", [](RenderJob *self, std::shared_ptr<Scene> scene, int spp, double time, std::optional<uint32_t> seed,
                             int threads, std::vector<int> views, const std::string &method, const std::string &state_path,
                             const std::string &state_header, double checkpoint_interval, bool state_at_end,
-                            const std::string &resume_path, int first_pass, int pass_count, int splits) {
+                            const std::string &resume_path, int first_pass, int pass_count, int splits, bool pilot_only) {
             RenderOptions o;
             o.spp = spp; o.time_budget = time; o.seed = seed; o.threads = threads; o.views = std::move(views);
             o.state_path = state_path; o.state_header = state_header; o.checkpoint_interval = checkpoint_interval;
             o.state_at_end = state_at_end; o.resume_path = resume_path;
-            o.first_pass = first_pass; o.pass_count = pass_count; o.splits = splits;
+            o.first_pass = first_pass; o.pass_count = pass_count; o.splits = splits; o.pilot_only = pilot_only;
             if (method == "scene") o.method = RenderMethod::Scene;
             else if (method == "pt") o.method = RenderMethod::PathTracing;
             else if (method == "mvpt") o.method = RenderMethod::MultiView;
@@ -327,7 +328,8 @@ void bind_render(nb::module_ &m) {
             new (self) RenderJob(std::move(scene), std::move(o));
         }, "scene"_a, "spp"_a = 0, "time"_a = 0.0, "seed"_a = nb::none(), "threads"_a = 0, "views"_a = std::vector<int>{},
            "method"_a = "scene", "state_path"_a = "", "state_header"_a = "", "checkpoint_interval"_a = 0.0,
-           "state_at_end"_a = false, "resume_path"_a = "", "first_pass"_a = 0, "pass_count"_a = 0, "splits"_a = -1)
+           "state_at_end"_a = false, "resume_path"_a = "", "first_pass"_a = 0, "pass_count"_a = 0, "splits"_a = -1,
+           "pilot_only"_a = false)
         .def("start", &RenderJob::start)
         .def("wait", &RenderJob::wait, "timeout"_a, nb::call_guard<nb::gil_scoped_release>())
         .def("cancel", &RenderJob::cancel)

@@ -139,3 +139,25 @@ TEST(MvSplitChoice, StatisticsSeparateSpecularPathsFromSplits) {
     costly.c0 += 10.0;
     EXPECT_GT(choose_delta_splits(costly, choose_splits(costly)), 1);
 }
+
+TEST(MvSplitChoice, PredictedGainIsPathTracingsVarianceOverAPassAtItsCost) {
+    // Shared samples (|S| = 9: a pixel's pass gathers nine views' samples, each bringing the
+    // variance of its own share) against path-traced pairs of variance 20 at each pixel: the
+    // pilot predicts var_pt / (9 (var_y + var_s / B) (c0 + B c1)). With eps far above the
+    // squared means every pixel weighs 1/eps (a shared one 9 / eps).
+    const int pixels = 40000;
+    const double eps = 1e6, var_pt = 20.0;
+    MvSplitProbe probe = synthetic_pilot(pixels, 0.5, 4.0, false, 21);
+    EXPECT_EQ(predicted_gain(split_statistics({probe}, eps), 2, 1), 0.0); // no path-traced pairs: no prediction
+    std::mt19937_64 rng(22);
+    std::normal_distribution<double> pt(0.0, std::sqrt(var_pt));
+    for (int p = 0; p < pixels; ++p) probe.path_traced.push_back({6.0 + pt(rng), 6.0 + pt(rng)});
+    const SplitStatistics st = split_statistics({probe}, eps);
+    EXPECT_EQ(st.shared.pixels, uint64_t(pixels));
+    EXPECT_EQ(st.pt_pixels, uint64_t(pixels));
+    EXPECT_NEAR(st.pt_v * eps, var_pt, 0.05 * var_pt);
+    for (int b : {1, 2, 8}) {
+        const double expected = var_pt / (9.0 * (0.5 + 4.0 / b) * (st.c0 + b * st.c1));
+        EXPECT_NEAR(predicted_gain(st, b, 1), expected, 0.05 * expected) << b;
+    }
+}

@@ -87,7 +87,7 @@ def test_render_end_to_end(tmp_path):
     """The real entry point in a subprocess: files per view, JSON, summary, -D over a <default>."""
     path = _two_view_scene(tmp_path)
     out = tmp_path / "out"
-    proc = subprocess.run(CLI + ["render", str(path), "-D", "res=32", "--spp", "4", "-o", str(out)],
+    proc = subprocess.run(CLI + ["render", str(path), "-D", "res=32", "--spp", "4", "--method", "pt", "-o", str(out)],
                           capture_output=True, text=True, timeout=120, env=ENV)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""  # piped: no progress bar
@@ -127,8 +127,9 @@ def test_render_end_to_end(tmp_path):
 
 def test_aovs(tmp_path):
     path = _two_view_scene(tmp_path)
-    assert cli.main(["render", str(path), "--spp", "3", "-o", str(tmp_path / "plain"), "-q"]) == 0
-    assert cli.main(["render", str(path), "--spp", "3", "-o", str(tmp_path / "aov"), "--aovs", "-q"]) == 0
+    pt = ["--method", "pt"]  # (path tracing's AOVs; multi-view path tracing's below)
+    assert cli.main(["render", str(path), "--spp", "3", *pt, "-o", str(tmp_path / "plain"), "-q"]) == 0
+    assert cli.main(["render", str(path), "--spp", "3", *pt, "-o", str(tmp_path / "aov"), "--aovs", "-q"]) == 0
     plain = _exr_channels(tmp_path / "plain" / "scene_left.exr")
     assert sorted(plain) == ["B", "G", "R"]
     ch = _exr_channels(tmp_path / "aov" / "scene_left.exr")
@@ -139,6 +140,14 @@ def test_aovs(tmp_path):
         assert np.array_equal(ch[f"variance.{c}"], expected.variance["left"][..., i])
         assert np.array_equal(ch[c], expected.images["left"][..., i])
     assert ch["variance.R"].max() > 0
+    # Multi-view path tracing adds the contributions each pixel received.
+    assert cli.main(["render", str(path), "--spp", "3", "--method", "mvpt", "-o", str(tmp_path / "mv"), "--aovs",
+                     "-q"]) == 0
+    mv = _exr_channels(tmp_path / "mv" / "scene_left.exr")
+    assert sorted(mv) == ["B", "G", "R", "contributions.Y", "sample_count.Y", "variance.B", "variance.G", "variance.R"]
+    expected = mvpt.render(mvpt.load_file(path), spp=3, method="mvpt")
+    assert np.array_equal(mv["contributions.Y"], expected.contributions["left"])
+    assert (mv["contributions.Y"] >= mv["sample_count.Y"]).all() and (mv["sample_count.Y"] == 3).all()
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])

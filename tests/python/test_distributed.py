@@ -65,10 +65,13 @@ def _same(a, b):
         assert np.array_equal(a.sample_count[v], b.sample_count[v]), v
 
 
-@pytest.mark.parametrize("method,shared", [("pt", False), ("mvpt", False), ("mvpt", True)])
+@pytest.mark.parametrize("method,shared", [("pt", False), ("mvpt", False), ("mvpt", True), ("auto", False)])
 def test_distributed_equals_local_ranges(cluster, scene_file, tmp_path, method, shared):
+    # ("auto": chosen once on the driver; each local range chooses the same for itself.)
     assert len(ray.nodes()) == 2
     r = distributed.render(scene_file, spp=32, seed=5, method=method, workers=2, tasks_per_worker=2, shared=shared)
+    if method == "auto":
+        assert r.stats["auto"]["method"] == r.stats["method"] in ("pt", "mvpt"), r.stats["auto"]
     d = r.stats["distributed"]
     assert d["tasks"] == 4 and (d["scene_pack_bytes"] == 0) == shared and d["state_bytes_returned"] > 0
     _same(r, _local(scene_file, tmp_path, method, distributed.plan_ranges(32, 4), seed=5))

@@ -73,7 +73,9 @@ def _classes():
                                              "distance, and the quilt"),
             ("RIG", "Rig", "the views of an mvpt rig around the scene camera, and their quilt"),
             ("SHOT", "Shot", "the scene's frame range, one view per frame")])
-        method: bpy.props.EnumProperty(name="Method", default="mvpt", items=[
+        method: bpy.props.EnumProperty(name="Method", default="auto", items=[
+            ("auto", "Automatic", "multi-view path tracing where its pilot predicts a gain over path tracing at "
+                                  "equal time, else path tracing"),
             ("mvpt", "Multi-view path tracing", "share paths between the views"),
             ("pt", "Path tracing", "every view on its own")])
         views: bpy.props.IntProperty(name="Views", default=45, min=2, max=1000,
@@ -171,6 +173,8 @@ def render_scene(engine, depsgraph) -> None:
                 raise KeyboardInterrupt  # api.render stops and keeps the passes finished
         result = api.render(loaded, spp=settings.spp, time=settings.time, seed=settings.seed,
                             method=settings.method, progress=progress, poll=0.1)
+    if result.stats.get("auto"):
+        engine.report({"INFO"}, f"mvpt: method auto: {result.stats['auto']['method']} ({result.stats['auto']['reason']})")
     if result.stats.get("passes", 0) == 0:
         engine.report({"WARNING"}, "mvpt: cancelled before the first pass finished")
         return

@@ -163,6 +163,10 @@ private:
     /// splatted. A function of the scene and the settings alone: every range, resume and
     /// thread count of a render chooses the same. Ctrl-C (`cancel`) skips its tasks not begun.
     void pilot_splits(const std::atomic<bool> &cancel);
+    /// Two path-traced samples at each of the pilot's pixels of cells [begin, end) of view
+    /// `slot` (sample indices of their own), into `probe` (predicted_gain).
+    void path_traced_pilot(const MvContext &pilot, int slot, std::pair<int, int> cells, int begin, int end,
+                           MvSplitProbe &probe) const;
     /// Under a time budget with splits chosen per render, after the render's first pass (of
     /// `last_pass` seconds, `fit` of them left): the splits chosen again from its measured
     /// length (§7, "Choosing the number of splits"); returns how many passes of the new splits
@@ -257,7 +261,7 @@ Renderer::MultiviewPasses::MultiviewPasses(Renderer &r, tbb::task_arena &arena, 
         [&] { m_pass_film = std::make_unique<MvPassFilm>(m_footprints, m_cfg.estimator == MvEstimator::Weighted); });
     // Paths of specular first vertices are split only where the scene has such surfaces.
     if (m_cfg.delta_splits == 0 && !has_specular_surfaces(r.m_scene)) m_cfg.delta_splits = r.m_mv.cfg.delta_splits = 1;
-    if (m_cfg.splits == 0 || m_cfg.delta_splits == 0) pilot_splits(cancel);
+    if (m_cfg.splits == 0 || m_cfg.delta_splits == 0 || o.pilot_only) pilot_splits(cancel);
     r.m_stats.splits = m_cfg.splits;
     r.m_stats.delta_splits = m_cfg.delta_splits;
 }
@@ -281,6 +285,28 @@ void Renderer::MultiviewPasses::pilot_samples(int slot, std::pair<int, int> cell
         const uint64_t h = hash_ints(key, uint64_t(i), uint64_t(j));
         const int x = x0 + int(uint32_t(h) % uint32_t(x1 - x0)), y = y0 + int(uint32_t(h >> 32) % uint32_t(y1 - y0));
         for (uint32_t index = 0; index < 2; ++index) prim.push(x + w.margin + w.x0, y + w.margin + w.y0, index);
+    }
+}
+
+void Renderer::MultiviewPasses::path_traced_pilot(const MvContext &pilot, int slot, std::pair<int, int> cells, int begin,
+                                                  int end, MvSplitProbe &probe) const {
+    MvPrimaries prim;
+    pilot_samples(slot, cells, begin, end, prim);
+    for (uint32_t &index : prim.sample_index) index += 2; // (the native pilot's are 0 and 1)
+    mv_trace_primaries(pilot, slot, prim);
+    const MvView &l = pilot.views[size_t(slot)];
+    const Integrator &tracer = pilot.volpath ? static_cast<const Integrator &>(*pilot.volpath)
+                                             : static_cast<const Integrator &>(*pilot.path);
+    RayCounters counters;
+    for (size_t i = 0; i + 1 < prim.size(); i += 2) {
+        std::array<double, 2> pair{};
+        for (size_t j = 0; j < 2; ++j) {
+            Sampler sampler(l.camera->sampler_kind, pilot.seeds[size_t(slot)]);
+            prim.camera.start(sampler, i + j, l.scene_index, prim.px[i + j], prim.py[i + j], prim.sample_index[i + j], 0);
+            const Spectrum L = tracer.li(*pilot.scene, prim.rays[i + j], sampler, counters);
+            pair[j] = std::isfinite(L.mean()) ? double(L.mean()) : 0.0;
+        }
+        probe.path_traced.push_back(pair);
     }
 }
 
@@ -332,13 +358,19 @@ void Renderer::MultiviewPasses::pilot_splits(const std::atomic<bool> &cancel) {
         });
     });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    arena().execute([&] {
+        tbb::parallel_for(size_t(0), tasks.size(), [&](size_t t) {
+            if (!cancel.load()) path_traced_pilot(pilot, tasks[t].slot, tasks[t].cells, tasks[t].begin, tasks[t].end, probes[t]);
+        });
+    });
     double writes = 0.0;
     for (const SplatFootprint &f : m_footprints) writes += f.mean_writes() / double(views);
     SplitStatistics st = split_statistics(probes, m_cfg.adaptive_eps, writes);
     m_r.m_stats.split_pilot = {st.a, st.r, st.c0, st.c1};
     // The paths of specular first vertices for the splits chosen without a budget (or given).
-    const int k = m_cfg.delta_splits > 0 ? m_cfg.delta_splits
-                                         : choose_delta_splits(st, m_cfg.splits > 0 ? m_cfg.splits : choose_splits(st));
+    const int b0 = m_cfg.splits > 0 ? m_cfg.splits : choose_splits(st);
+    const int k = m_cfg.delta_splits > 0 ? m_cfg.delta_splits : choose_delta_splits(st, b0);
+    m_r.m_stats.predicted_gain = predicted_gain(st, b0, k);
     const double pilot_cost = st.c0 + PilotSplits * (st.c1 + st.d1); // (the pilot's own paths)
     // From here on they are a fixed part of a native sample's variance and cost.
     st.a += std::max(st.r_d, 0.0) / k, st.c0 += k * st.d1, st.r_d = st.d1 = 0.0;
@@ -649,7 +681,7 @@ void Renderer::MultiviewPasses::finish() {
 
 void Renderer::render_multiview(tbb::task_arena &arena, const std::atomic<bool> &cancel, const ProgressFn &progress) {
     MultiviewPasses schedule(*this, arena, cancel);
-    run_passes(schedule, cancel, progress);
+    if (!m_opts.pilot_only) run_passes(schedule, cancel, progress);
     schedule.finish();
 }
 

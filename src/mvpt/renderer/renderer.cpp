@@ -163,7 +163,7 @@ void Renderer::render(const std::atomic<bool> &cancel, const ProgressFn &progres
     } else {
         if (!m_opts.resume_path.empty()) read_state(m_opts.resume_path);
         PathPasses schedule(*this, arena);
-        run_passes(schedule, cancel, progress);
+        if (!m_opts.pilot_only) run_passes(schedule, cancel, progress);
         m_stats.counters = schedule.counters();
         schedule.finish();
         arena.execute([&] {

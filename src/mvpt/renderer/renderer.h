@@ -65,6 +65,9 @@ struct RenderOptions {
     /// Multi-view: the splits of the shared vertex instead of the scene's `mvpath` setting (-1:
     /// the scene's; 0: chosen per render; 1-64).
     int splits = -1;
+    /// Multi-view: run the method's pilot and no pass (the statistics hold its choices and
+    /// predicted_gain; the images are black): what `method="auto"` decides from.
+    bool pilot_only = false;
 };
 
 /// Result of one view: crop-window-sized images, row-major, y down.
@@ -124,6 +127,9 @@ struct RenderStats {
     int delta_splits = 0; ///< multi-view: paths per specular first vertex (MvConfig::delta_splits)
     /// Multi-view with splits chosen per render: the pilot's a, r, c0 and c1 (SplitStatistics), else zeros.
     std::array<double, 4> split_pilot{};
+    /// Multi-view: path tracing's relMSE over this method's at equal time, as the pilot predicts
+    /// it (predicted_gain; 0: no prediction).
+    double predicted_gain = 0.0;
     /// Things the user should know about the run (e.g. a filter replaced by a box).
     std::vector<std::string> notes;
     /// Things that make the images useless (a scene that cannot produce light).

@@ -49,12 +49,28 @@ std::pair<double, double> estimate(const MvPilotSample &s) {
     return {s.e + mean, var / (PilotSplits - 1)};
 }
 
+/// A pixel's pair of samples (`total`: their spread, `r`: their splits' or paths' variance, `m`:
+/// their mean) into the class both belong to, if they do.
+void add_to_class(SplitStatistics &st, const MvPilotSample &x1, const MvPilotSample &x2, double total, double r,
+                  double m, double eps) {
+    SplitStatistics::PixelClass *c = nullptr;
+    double scale = 1.0, sharing = 0.5 * double(x1.sharing + x2.sharing);
+    if (x1.delta && x2.delta) c = &st.specular;
+    else if (!x1.delta && !x2.delta && !x1.sharing && !x2.sharing) c = &st.environment, r = 0.0;
+    else if (x1.sharing && x2.sharing) c = &st.shared, scale = sharing, m *= sharing;
+    if (!c) return;
+    const double weight = scale / (m * m + eps);
+    c->a += weight * (total - r / PilotSplits);
+    c->r += weight * r;
+    ++c->pixels;
+}
+
 } // namespace
 
 SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps, double writes) {
     SplitStatistics st;
     const double per_view = KappaShift + KappaWrite * std::max(writes - 1.0, 0.0);
-    uint64_t samples = 0;
+    uint64_t samples = 0, shared = 0;
     for (const MvSplitProbe &probe : probes) {
         const std::vector<MvPilotSample> s = merged(probe.samples);
         for (const MvPilotSample &x : s) {
@@ -62,6 +78,8 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
             st.c0 += x.sharing ? 1.0 + per_view * (ns - 1.0) : x.delta ? 0.0 : 1.0;
             st.c1 += x.sharing ? SplitPath + KappaLobe * ns : 0.0;
             st.d1 += x.delta ? 1.0 : 0.0; // (each of its K paths, the first with its camera ray, one path)
+            if (x.sharing)
+                st.shared_c0 += 1.0 + per_view * (ns - 1.0), st.shared_c1 += SplitPath + KappaLobe * ns, ++shared;
             ++samples;
         }
         // Pairs of samples of one pixel: (X1 - X2)^2 / 2 estimates the variance of one, a + r / PilotSplits.
@@ -76,10 +94,19 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
             st.a += weight * (total - r / PilotSplits);
             st.r += weight * (r - r_d);
             st.r_d += weight * r_d;
+            add_to_class(st, s[i], s[i + 1], total, r, m, eps);
             ++st.pixels, ++i;
         }
     }
     if (samples) st.c0 /= double(samples), st.c1 /= double(samples), st.d1 /= double(samples);
+    if (shared) st.shared_c0 /= double(shared), st.shared_c1 /= double(shared);
+    for (const MvSplitProbe &probe : probes)
+        for (const auto &[x1, x2] : probe.path_traced) {
+            const double m = 0.5 * (x1 + x2);
+            st.pt_v += 0.5 * (x1 - x2) * (x1 - x2) / (m * m + eps);
+            ++st.pt_pixels;
+        }
+    if (st.pt_pixels) st.pt_v /= double(st.pt_pixels);
     return st;
 }
 
@@ -112,6 +139,19 @@ int choose_splits(const SplitStatistics &s, int most) {
     for (int b = 1; b <= last; ++b)
         if (cost(b) <= SplitTolerance * best) return b;
     return last;
+}
+
+double predicted_gain(const SplitStatistics &s, int splits, int delta_splits) {
+    const uint64_t pixels = s.shared.pixels + s.specular.pixels + s.environment.pixels;
+    if (pixels < 16 || s.pt_pixels < 16) return 0.0;
+    const double b = std::max(splits, 1), k = std::max(delta_splits, 1);
+    auto pass = [](const SplitStatistics::PixelClass &c, double ways) {
+        return std::max(c.a, 0.0) + std::max(c.r, 0.0) / ways;
+    };
+    const double v_mv = (pass(s.shared, b) + pass(s.specular, k) + std::max(s.environment.a, 0.0)) / double(pixels);
+    const double c_mv = s.c0 + b * s.c1 + k * s.d1;
+    const double gain = s.pt_v / (v_mv * c_mv);
+    return std::isfinite(gain) && gain > 0.0 ? gain : 0.0;
 }
 
 int splits_fitting(const SplitStatistics &s, double unit, double left, double passes) {

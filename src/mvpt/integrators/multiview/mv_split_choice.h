@@ -7,6 +7,7 @@
 
 #include "../../render/splat_film.h"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -35,6 +36,8 @@ struct MvPilotSample {
 /// unshared paths add to it instead of splatting); both samples of a pixel in one probe.
 struct MvSplitProbe {
     std::vector<MvPilotSample> samples;
+    /// Two path-traced samples' luminance at each of the probe's pixels (predicted_gain).
+    std::vector<std::array<double, 2>> path_traced;
 };
 
 /// What the choice is made from, summed over the pilot's pixels, each weighted by 1 / (m^2 +
@@ -50,6 +53,21 @@ struct SplitStatistics {
     /// mean cost per native sample (one path-traced sample each); their a is in a. A native
     /// sample's variance is a + r / B + r_d / K, its cost c0 + B c1 + K d1.
     double r_d = 0.0, d1 = 0.0;
+    /// The same by class, for the unshared camera samples (mv_unshared.h): sums over the pixels
+    /// whose two samples are both of the class, a and r as above (r: one path's variance of a
+    /// specular first vertex, one split's of a shared one). A shared sample's terms are those
+    /// of its pixel's pass estimate, to which |S| views' samples bring as much: times |S|,
+    /// relative to the pixel's value, |S| times the sample's own share.
+    struct PixelClass {
+        double a = 0.0, r = 0.0;
+        uint64_t pixels = 0;
+    };
+    PixelClass specular, environment, shared;
+    /// The mean model costs c0, c1 of the shared native samples alone.
+    double shared_c0 = 0.0, shared_c1 = 0.0;
+    /// The relative variance of one path-traced sample, the mean over the pilot's pixels.
+    double pt_v = 0.0;
+    uint64_t pt_pixels = 0;
 };
 
 /// The pilot's statistics from the records of every view (pairs of samples at each pixel);
@@ -69,6 +87,14 @@ int choose_splits(const SplitStatistics &s, int most = MaxChosenSplits);
 /// purely specular first vertex that makes (a + r / B + r_d / K) (c0 + B c1 + K d1) least; 1
 /// without such samples.
 int choose_delta_splits(const SplitStatistics &s, int splits);
+
+/// Path tracing's relMSE over multi-view path tracing's at equal time as the pilot predicts it
+/// (docs/multiview-path-tracing.md, "Choosing the method"): the mean relative variance of a
+/// pixel's pass (each class of pixels as SplitStatistics::PixelClass has it, with B splits and
+/// K paths of a specular first vertex) times the model cost of a pass per pixel
+/// (c0 + B c1 + K d1), against one path-traced sample's variance at the cost of one; 0 when
+/// the pilot cannot tell (too few pixels of each kind).
+double predicted_gain(const SplitStatistics &s, int splits, int delta_splits);
 
 /// Under a time budget: the most splits B in [1, MaxChosenSplits] for which `passes` passes, each
 /// lasting `unit` (s.c0 + B s.c1) seconds, fit in `left` seconds; 1 when none does. (The paths of
