@@ -6,14 +6,19 @@ import argparse
 import re
 from pathlib import Path
 
-from . import contact_sheet, movie, quilt
+from . import contact_sheet, looking_glass, movie, quilt
 from .output import _safe, multiview_exr_path, write_multiview_exr
 
 
 def _grid(text: str) -> tuple:
+    """--quilt's layout: COLUMNSxROWS, or a Looking Glass device's (looking_glass.DEVICES)."""
+    if (text or "").strip() in looking_glass.DEVICES:
+        d = looking_glass.DEVICES[text.strip()]
+        return d.columns, d.rows
     m = re.fullmatch(r"\s*(\d+)\s*x\s*(\d+)\s*", text or "")
     if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
-        raise argparse.ArgumentTypeError(f"expected COLUMNSxROWS such as 8x6, got '{text}'")
+        raise argparse.ArgumentTypeError(f"expected COLUMNSxROWS such as 8x6 or a Looking Glass device "
+                                         f"({', '.join(looking_glass.DEVICES)}), got '{text}'")
     return int(m.group(1)), int(m.group(2))
 
 
@@ -55,9 +60,9 @@ def add_display_options(p: argparse.ArgumentParser) -> None:
                    help="also write <stem>.exr: one part per view, part name and 'view' attribute = view id")
     g.add_argument("--stereo", action="store_true",
                    help="name the two views of the multi-view EXR 'left' (first) and 'right'")
-    g.add_argument("--quilt", nargs="?", const="auto", default=None, metavar="COLSxROWS",
+    g.add_argument("--quilt", nargs="?", const="auto", default=None, metavar="COLSxROWS|DEVICE",
                    help="write a Looking Glass quilt <stem>_qs{cols}x{rows}a{aspect}.png (view 0 bottom-left; "
-                        "default layout near-square)")
+                        "default layout near-square; a device's layout: " + ", ".join(looking_glass.DEVICES) + ")")
     g.add_argument("--contact-sheet", action="store_true", help="write <stem>_contact.png: labelled thumbnails")
     g.add_argument("--gif", action="store_true", help="write <stem>.gif with the views as frames, in scene order")
     g.add_argument("--mp4", action="store_true", help="write <stem>.mp4 (H.264) with the views as frames")

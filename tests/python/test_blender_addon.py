@@ -116,3 +116,22 @@ def test_f12_renders_a_looking_glass_quilt(engine, tmp_path):
     views = load_run(tmp_path / "views").images
     assert np.array_equal(shown, np.asarray(views["view00"], dtype=np.float32)[..., :3])
     assert not np.array_equal(shown, np.asarray(views["view05"], dtype=np.float32)[..., :3])
+
+
+def test_f12_renders_a_device_quilt(engine, tmp_path):
+    # Looking Glass Portrait at 5 % of its view size: 48 views of 21x28 in its 8x6 layout; the
+    # image editor shows view 0 at Blender's own render size (400x400 at 5 %: 20x20).
+    scene = _scene(tmp_path)
+    scene.mvpt.mode, scene.mvpt.device, scene.mvpt.spp = "QUILT", "portrait", 1
+    scene.render.resolution_x = scene.render.resolution_y = 400
+    scene.render.resolution_percentage = 5
+    scene.camera.data.dof.focus_distance = 4.2
+    shown = _f12(scene)
+    assert shown.shape == (20, 20, 3)
+    written = sorted(p.name for p in (tmp_path / "views").iterdir())
+    assert sum(p.endswith(".exr") for p in written) == 48
+    assert [p for p in written if "_qs" in p] == ["untitled_qs8x6a0.75.png"], written
+    from mvpt.runs import load_run
+    view0 = np.asarray(load_run(tmp_path / "views").images["view00"], dtype=np.float32)[..., :3]
+    assert view0.shape == (28, 21, 3)
+    assert np.array_equal(shown, addon.shown_view(view0, (20, 20)))

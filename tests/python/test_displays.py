@@ -108,3 +108,23 @@ def test_mp4_decodes_to_the_frames(tmp_path):
     for i, f in enumerate(frames):
         # H.264 with 4:2:0 chroma is lossy; the centre of a constant frame stays close
         assert np.abs(f[5, 9].astype(int) - srgb8(views[i])[5, 9].astype(int)).max() <= 12, f"frame {i}"
+
+
+def test_looking_glass_devices_give_their_quilts_layout_and_view_size(tmp_path):
+    from mvpt import cli, looking_glass
+    portrait = looking_glass.device("portrait")
+    assert (portrait.columns, portrait.rows, portrait.views) == (8, 6, 48)
+    assert portrait.view_size() == (420, 560) and portrait.view_size(0.25) == (105, 140)
+    for d in looking_glass.DEVICES.values():  # every view at the aspect its quilt's name carries
+        w, h = d.view_size()
+        assert abs(w / h - d.aspect) < 0.5 / h + 1e-9 and d.views >= 48, d
+    with pytest.raises(ValueError, match="unknown Looking Glass device 'portait': expected one of portrait, go"):
+        looking_glass.device("portait")
+    # --quilt DEVICE: the device's layout, the views' own aspect in the name; a device with fewer
+    # tiles than views is the usage error of a layout with too few tiles.
+    from small_scenes import scene, views as row
+    path = tmp_path / "row.xml"
+    path.write_text(scene(row(6, res=8, spp=1)))
+    assert cli.main(["render", str(path), "--method", "pt", "--quilt", "portrait", "-o", str(tmp_path / "o"), "-q"]) == 0
+    assert [p.name for p in (tmp_path / "o").glob("*_qs*")] == ["row_qs8x6a1.png"]
+    assert cli.main(["render", str(path), "--quilt", "portait", "-o", str(tmp_path / "bad"), "-q"]) == 2

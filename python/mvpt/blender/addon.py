@@ -65,6 +65,7 @@ def write_addon_zip(path) -> Path:
 def _classes():
     """The engine, its settings and its panel (bpy imported here: this module loads without it)."""
     import bpy
+    from ..looking_glass import DEVICES
 
     class MvptSettings(bpy.types.PropertyGroup):
         mode: bpy.props.EnumProperty(name="Render", default="CAMERA", items=[
@@ -78,8 +79,13 @@ def _classes():
                                   "equal time, else path tracing"),
             ("mvpt", "Multi-view path tracing", "share paths between the views"),
             ("pt", "Path tracing", "every view on its own")])
+        device: bpy.props.EnumProperty(name="Device", default="CUSTOM", items=[
+            ("CUSTOM", "Custom", "Views below, a near-square quilt, the render resolution per view")] + [
+            (key, d.label, f"{d.views} views in a {d.columns}x{d.rows} quilt of views of aspect {d.aspect:g}, "
+                           f"the device's view size times the render's resolution %")
+            for key, d in DEVICES.items()])
         views: bpy.props.IntProperty(name="Views", default=45, min=2, max=1000,
-                                     description="the quilt's views (Looking Glass Portrait: 48)")
+                                     description="the quilt's views with a Custom device (Looking Glass Portrait: 48)")
         cone: bpy.props.FloatProperty(name="View cone", default=40.0, min=1.0, max=120.0,
                                       description="degrees spanned by the quilt's views (Looking Glass Portrait: 40)")
         rig: bpy.props.StringProperty(name="Rig", default="linear:n=45,baseline=0.5",
@@ -113,10 +119,12 @@ def _classes():
 
         def draw(self, context):
             settings = context.scene.mvpt
-            shown = {"rig": "RIG", "views": "QUILT", "cone": "QUILT"}
-            for name in ("mode", "method", "views", "cone", "rig", "spp", "time", "seed", "output"):
+            shown = {"rig": "RIG", "device": "QUILT", "views": "QUILT", "cone": "QUILT"}
+            for name in ("mode", "method", "device", "views", "cone", "rig", "spp", "time", "seed", "output"):
                 if shown.get(name, settings.mode) == settings.mode:
-                    self.layout.prop(settings, name)
+                    row = self.layout.row()
+                    row.enabled = name != "views" or settings.device == "CUSTOM"
+                    row.prop(settings, name)
 
     return MvptSettings, MvptRenderEngine, MVPT_PT_settings
 
@@ -146,6 +154,34 @@ def unregister() -> None:
     _registered.clear()
 
 
+def quilt_views(scene) -> tuple:
+    """The views of the add-on's quilt of `scene`: (camera.quilt_eyes, their size (None: the
+    render resolution), the quilt's (columns, rows) (None, None: near-square)). A Looking Glass
+    device (looking_glass.DEVICES) sets the views, their size (its own times the render's
+    resolution percentage) and the layout; Custom takes `Views`."""
+    from ..looking_glass import device
+    from . import camera
+    settings = scene.mvpt
+    d = device(settings.device) if settings.device != "CUSTOM" else None
+    views = d.views if d else settings.views
+    eyes = camera.quilt_eyes(scene.camera.data, views, settings.cone, camera.focus_distance(scene.camera))
+    if d is None:
+        return eyes, None, (None, None)
+    return eyes, d.view_size(scene.render.resolution_percentage / 100.0), (d.columns, d.rows)
+
+
+def shown_view(image: np.ndarray, size: tuple) -> np.ndarray:
+    """`image` (H, W, C) at Blender's render size `size` (width, height), where a device's view
+    size differs from it: the nearest pixel of each (the views written are the renders)."""
+    width, height = size
+    h, w = image.shape[:2]
+    if (w, h) == (width, height):
+        return image
+    rows = np.minimum((np.arange(height) + 0.5) * h / height, h - 1).astype(int)
+    cols = np.minimum((np.arange(width) + 0.5) * w / width, w - 1).astype(int)
+    return image[rows][:, cols]
+
+
 def render_scene(engine, depsgraph) -> None:
     """The engine's render: convert, render with progress and cancel, show and write the views."""
     import bpy
@@ -157,11 +193,9 @@ def render_scene(engine, depsgraph) -> None:
     scene = depsgraph.scene
     settings = scene.mvpt
     frames = (scene.frame_start, scene.frame_end) if settings.mode == "SHOT" else None
-    eyes = None
-    if settings.mode == "QUILT":
-        eyes = camera.quilt_eyes(scene.camera.data, settings.views, settings.cone, camera.focus_distance(scene.camera))
+    eyes, size, layout = quilt_views(scene) if settings.mode == "QUILT" else (None, None, (None, None))
     with tempfile.TemporaryDirectory(prefix="mvpt-blend-") as folder:
-        exported = export_depsgraph(depsgraph, folder, "scene", frames=frames, eyes=eyes)
+        exported = export_depsgraph(depsgraph, folder, "scene", frames=frames, eyes=eyes, size=size)
         for text in exported.warnings:
             engine.report({"WARNING"}, text)
         loaded = api.load_file(exported.xml, rig=settings.rig if settings.mode == "RIG" else None)
@@ -183,8 +217,8 @@ def render_scene(engine, depsgraph) -> None:
     if out is not None:
         write_outputs(result, out, stem, settings={"blender": bpy.data.filepath, "mode": settings.mode})
         if settings.mode in ("RIG", "QUILT"):
-            write_quilt([result.images[v] for v in result.view_ids], out, stem)
-    first = np.asarray(result.images[result.view_ids[0]], dtype=np.float32)
+            write_quilt([result.images[v] for v in result.view_ids], out, stem, *layout)
+    first = shown_view(np.asarray(result.images[result.view_ids[0]], dtype=np.float32), camera.resolution(scene))
     height, width = first.shape[:2]
     rgba = np.concatenate([first[::-1, :, :3], np.ones((height, width, 1), np.float32)], axis=2)
     shown = engine.begin_result(0, 0, width, height)

@@ -104,13 +104,15 @@ def quilt_eyes(cam, views: int, cone_deg: float, distance: float) -> list:
     return eyes
 
 
-def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None, poses=None, eye=None) -> Element:
+def sensor(scene, report: Report, spp: int, ident: str = "camera", shutter=None, poses=None, eye=None,
+           size=None) -> Element:
     """The <sensor> of the scene's camera, with its film and sampler: at its current pose, or,
     for a frame of a shot, open over `shutter` (open, close) in seconds with the camera's
     world matrices `poses` [(time, rows)] as its keyframes (one: a still pose); `eye`, a
-    stereo eye of stereo_eyes, moves and shifts it as that eye."""
+    stereo eye of stereo_eyes, moves and shifts it as that eye; `size` (width, height) renders
+    it at that size instead of the scene's resolution, as Blender would."""
     obj = scene.camera
-    width, height = resolution(scene)
+    width, height = size or resolution(scene)
     if obj is None or obj.type != "CAMERA":
         raise ValueError("the scene has no camera")
     cam = obj.data

@@ -158,11 +158,12 @@ def _rows(matrix):
     return tuple(tuple(float(matrix[i][j]) for j in range(4)) for i in range(4))
 
 
-def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=None) -> Export:
+def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=None, size=None) -> Export:
     """Write the scene of `depsgraph` (evaluated) to `folder`/`name`.xml and its meshes: at its
     current frame, or the frames (first, last) of Blender's numbering as a shot (one view per
     frame, docs/blender.md, "Animation"), its geometry, materials and lights those of the first.
-    `eyes` (camera.quilt_eyes) replaces the camera (or its stereo eyes) by those views."""
+    `eyes` (camera.quilt_eyes) replaces the camera (or its stereo eyes) by those views; `size`
+    (width, height) is every view's instead of the render resolution (a Looking Glass device's)."""
     folder = Path(folder)
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     report = Report()
@@ -175,7 +176,7 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=N
         scene = depsgraph.scene_eval
     w = _Writer(folder, report)
     spp = camera.samples(scene)
-    width, height = camera.resolution(scene)
+    width, height = size or camera.resolution(scene)
     for k, v in (("spp", spp), ("width", width), ("height", height), ("max_depth", camera.max_depth(scene))):
         w.root.add(Element("default", name=k, value=v))
     w.root.add(camera.integrator(scene, report))
@@ -183,9 +184,9 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=N
         eyes = camera.stereo_eyes(scene, report) if scene.camera is not None else []
     if shot is None:
         for eye in eyes or [None]:
-            w.root.add(camera.sensor(scene, report, spp, ident=eye[0] if eye else "camera", eye=eye))
+            w.root.add(camera.sensor(scene, report, spp, ident=eye[0] if eye else "camera", eye=eye, size=size))
     else:
-        for sensor in _shot_sensors(scene, shot, report, spp, eyes):
+        for sensor in _shot_sensors(scene, shot, report, spp, eyes, size):
             w.root.add(sensor)
     for element in world.convert_world(scene.world, report):
         w.root.add(element)
@@ -216,10 +217,10 @@ def export_depsgraph(depsgraph, folder, name: str = "scene", frames=None, eyes=N
     return Export(xml, report.warnings, report.notes)
 
 
-def export_current(folder, name: str = "scene", frames=None, eyes=None) -> Export:
+def export_current(folder, name: str = "scene", frames=None, eyes=None, size=None) -> Export:
     """Write the current Blender scene (bpy.context's) to `folder`: its current frame, or the
-    frames (first, last) as a shot; `eyes` (camera.quilt_eyes) as its views."""
-    return export_depsgraph(_current_depsgraph(), folder, name, frames, eyes)
+    frames (first, last) as a shot; `eyes` (camera.quilt_eyes) as its views, of `size`."""
+    return export_depsgraph(_current_depsgraph(), folder, name, frames, eyes, size)
 
 
 def _current_depsgraph():
@@ -227,7 +228,7 @@ def _current_depsgraph():
     return bpy.context.evaluated_depsgraph_get()
 
 
-def _shot_sensors(scene, shot, report: Report, spp: int, eyes=()) -> list:
+def _shot_sensors(scene, shot, report: Report, spp: int, eyes=(), size=None) -> list:
     """One sensor per frame of the shot, `frame%04d` (Blender's frame number), open over its
     shutter with the camera's poses on it; with stereo `eyes`, one per eye and frame,
     `frame%04d_left` and `_right`."""
@@ -241,7 +242,7 @@ def _shot_sensors(scene, shot, report: Report, spp: int, eyes=()) -> list:
             poses = [(shot.time(f), shot.camera[on[0]])]
             shutter = (shot.time(f), shot.time(f))
         ident = f"frame{f:04d}" + (f"_{eye[0]}" if eye else "")
-        out.append(camera.sensor(scene, report, spp, ident=ident, shutter=shutter, poses=poses, eye=eye))
+        out.append(camera.sensor(scene, report, spp, ident=ident, shutter=shutter, poses=poses, eye=eye, size=size))
     return out
 
 
