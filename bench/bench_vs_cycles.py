@@ -2,6 +2,7 @@
 
     python bench/bench_vs_cycles.py                       # 45 views of 48x64, 20 s per method
     python bench/bench_vs_cycles.py --views 9 --time 5    # a quick run
+    python bench/bench_vs_cycles.py --shot 24             # a 24-frame camera move instead of a quilt
 
 Builds a table-top in bpy (a wood-textured floor, a gold and a rough plastic sphere, a glass
 sphere, an HDRI world and a small area light; the assets of ../shared/scenes, or generated
@@ -17,6 +18,10 @@ ones without it) and a quilt of --views views over a --cone view cone focused on
   equal time as relMSE x time);
 - **mvpt `pt`** and **mvpt `mvpt`**: the scene converted once (mvpt.blender) with the same views,
   rendered together for --time.
+
+With --shot FRAMES the views are the frames of a camera move across the table instead (24 fps,
+motion blur off, nothing else moving): Cycles renders the frames one by one, as an animation is
+rendered, and mvpt the frame range as one shot (`export_current(frames=...)`, one view per frame).
 
 Each is scored against its own long reference (--ref-spp samples per pixel of the same renderer:
 the two model the Principled BSDF differently, docs/blender.md), by the relMSE of the views
@@ -125,19 +130,50 @@ def build_scene(width: int, height: int, folder: Path):
     return scene
 
 
-def cycles_views(scene, eyes, samples: int, time_limit: float, seed: int, folder: Path) -> tuple[dict, float]:
-    """One Cycles render per view (camera moved and shifted); the images and the wall time."""
-    import bpy
+def quilt_setups(scene, eyes) -> list:
+    """(view name, a function that sets the scene's camera to that view) per quilt view."""
+    from mathutils import Matrix
     cam = scene.camera
     base, shift = cam.matrix_world.copy(), cam.data.shift_x
+
+    def setup(pose, dx):
+        def apply():
+            cam.matrix_world = base @ Matrix(pose)
+            cam.data.shift_x = shift + dx
+        return apply
+    return [(name, setup(pose, dx)) for name, pose, dx in eyes]
+
+
+def shot_setups(scene, frames: int) -> list:
+    """(view name, a function that sets the scene to that frame) per frame of a `frames`-frame
+    camera move (frame 1 on; mvpt names a shot's views frame0001, ...)."""
+    return [(f"frame{f:04d}", (lambda f=f: scene.frame_set(f))) for f in range(1, frames + 1)]
+
+
+def animate_camera(scene, frames: int) -> None:
+    """A dolly of the camera across the table over frames 1..`frames` (24 fps, no motion blur:
+    every frame an instant), nothing else moving."""
+    cam = scene.camera
+    scene.frame_start, scene.frame_end, scene.render.fps = 1, frames, 24
+    scene.render.use_motion_blur = False
+    start = cam.location.copy()
+    for f, dx in ((1, -0.6), (frames, 0.6)):
+        cam.location = (start.x + dx, start.y, start.z)
+        cam.keyframe_insert("location", frame=f)
+    scene.frame_set(1)
+
+
+def cycles_views(scene, setups, samples: int, time_limit: float, seed: int, folder: Path) -> tuple[dict, float]:
+    """One Cycles render per view (quilt_setups, shot_setups); the images and the wall time."""
+    import bpy
+    cam = scene.camera
+    base, shift, frame = cam.matrix_world.copy(), cam.data.shift_x, scene.frame_current
     scene.cycles.samples, scene.cycles.time_limit = samples, time_limit
     out = {}
     seconds = 0.0
     try:
-        for i, (name, pose, dx) in enumerate(eyes):
-            from mathutils import Matrix
-            cam.matrix_world = base @ Matrix(pose)
-            cam.data.shift_x = shift + dx
+        for i, (name, apply) in enumerate(setups):
+            apply()
             scene.cycles.seed = seed * 1000 + i
             scene.render.filepath = str(folder / f"{name}.exr")
             t0 = time.perf_counter()  # (the render and its file, as a user's quilt render writes them)
@@ -148,6 +184,7 @@ def cycles_views(scene, eyes, samples: int, time_limit: float, seed: int, folder
             out[name] = np.array(image.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1, :, :3]
             bpy.data.images.remove(image)
     finally:
+        scene.frame_set(frame)
         cam.matrix_world, cam.data.shift_x = base, shift
     return out, seconds
 
@@ -161,6 +198,9 @@ def main(argv=None) -> int:
     ap.add_argument("--time", type=float, default=20.0, help="seconds per method, setup included")
     ap.add_argument("--ref-spp", type=int, default=512)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--shot", type=int, default=0, metavar="FRAMES",
+                    help="instead of a quilt, a camera move of FRAMES frames across the table (Cycles renders "
+                         "frame by frame; mvpt the frame range as one shot)")
     args = ap.parse_args(argv)
     try:
         import bpy  # noqa: F401
@@ -173,24 +213,32 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         scene = build_scene(args.width, args.height, folder)
-        eyes = camera.quilt_eyes(scene.camera.data, args.views, args.cone, scene.camera.data.dof.focus_distance)
-        exported = export_current(folder / "xml", eyes=eyes)
+        if args.shot:
+            animate_camera(scene, args.shot)
+            setups = shot_setups(scene, args.shot)
+            exported = export_current(folder / "xml", frames=(1, args.shot))
+            what = f"a {args.shot}-frame camera move"
+        else:
+            eyes = camera.quilt_eyes(scene.camera.data, args.views, args.cone, scene.camera.data.dof.focus_distance)
+            setups = quilt_setups(scene, eyes)
+            exported = export_current(folder / "xml", eyes=eyes)
+            what = f"{args.views} views over {args.cone:g} degrees"
         loaded = mvpt.load_file(exported.xml)
-        print(f"{args.views} views of {args.width}x{args.height} over {args.cone:g} degrees, {args.time:g} s per method",
-              flush=True)
+        views = len(setups)
+        print(f"{what}, {args.width}x{args.height}, {args.time:g} s per method", flush=True)
         # References, each renderer its own.
         t0 = time.perf_counter()
-        cy_ref, cy_ref_time = cycles_views(scene, eyes, args.ref_spp, 0.0, 999, folder / "ref")
+        cy_ref, cy_ref_time = cycles_views(scene, setups, args.ref_spp, 0.0, 999, folder / "ref")
         print(f"Cycles reference: {args.ref_spp} spp in {cy_ref_time:.0f} s", flush=True)
         mv_ref = mvpt.render(loaded, spp=args.ref_spp, seed=999, method="pt")
         print(f"mvpt reference: {args.ref_spp} spp in {mv_ref.stats['seconds']:.0f} s", flush=True)
-        pixels = args.views * args.width * args.height
+        pixels = views * args.width * args.height
         cycles_rate = pixels * args.ref_spp / cy_ref_time
-        # Cycles' setup per view: a one-sample render of the quilt.
-        _, one = cycles_views(scene, eyes, 1, 0.0, 998, folder / "one")
-        setup = one / args.views
-        limit = max(MIN_LIMIT, args.time / args.views - setup)
-        cy, cy_time = cycles_views(scene, eyes, 1 << 16, limit, args.seed, folder / "eq")
+        # Cycles' setup per view: a one-sample render of the views.
+        _, one = cycles_views(scene, setups, 1, 0.0, 998, folder / "one")
+        setup = one / views
+        limit = max(MIN_LIMIT, args.time / views - setup)
+        cy, cy_time = cycles_views(scene, setups, 1 << 16, limit, args.seed, folder / "eq")
         results = {"Cycles per view": (cy, cy_time, cy_ref)}
         for method in ("pt", "mvpt"):
             r = mvpt.render(loaded, time=args.time, seed=args.seed, method=method)
