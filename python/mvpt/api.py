@@ -339,19 +339,13 @@ def choose_method(scene: _core.Scene, index: list, seed, threads: int, splits_op
     if views < 2:
         return {"method": "pt", "predicted_gain": None, "seconds": 0.0,
                 "reason": "one view: multi-view path tracing has nothing to share"}
-    job = _core.RenderJob(scene, spp=1, seed=None if seed is None else int(seed), threads=int(threads), views=index,
-                          method="mvpt", splits=splits_option, pilot_only=True)
-    job.start()
     try:
-        while not job.wait(poll):
-            pass
-    except BaseException:
-        with _interrupts_ignored():
-            job.cancel()
-            while not job.wait(poll):
-                pass
-        raise
-    raw = job.stats()
+        raw = _pilot_stats(scene, index, seed, threads, splits_option, poll)
+    except RuntimeError as e:  # multi-view path tracing's films refused: path tracing's may fit
+        if "need about" not in str(e):
+            raise
+        return {"method": "pt", "predicted_gain": None, "seconds": _monotonic() - t0,
+                "reason": f"multi-view path tracing cannot run here ({e})"}
     seconds = _monotonic() - t0
     if raw["method"] != "mvpt":  # nothing can be shared in time (the renderer's own rule)
         return {"method": "pt", "predicted_gain": None, "seconds": seconds,
@@ -366,6 +360,23 @@ def choose_method(scene: _core.Scene, index: list, seed, threads: int, splits_op
     return {"method": "pt", "predicted_gain": gain, "seconds": seconds,
             "reason": f"the pilot predicts multi-view path tracing at {gain:.2f}x path tracing's efficiency: "
                       "sharing does not pay here"}
+
+
+def _pilot_stats(scene, index: list, seed, threads: int, splits_option: int, poll: float) -> dict:
+    """The raw statistics of multi-view path tracing's pilot alone (RenderOptions::pilot_only)."""
+    job = _core.RenderJob(scene, spp=1, seed=None if seed is None else int(seed), threads=int(threads), views=index,
+                          method="mvpt", splits=splits_option, pilot_only=True)
+    job.start()
+    try:
+        while not job.wait(poll):
+            pass
+    except BaseException:
+        with _interrupts_ignored():
+            job.cancel()
+            while not job.wait(poll):
+                pass
+        raise
+    return job.stats()
 
 
 def _splits_option(splits) -> int:

@@ -102,3 +102,47 @@ def test_auto_is_refused_where_methods_are_checked():
     s = mvpt.load_file(SCENES / "cornell_phong9.xml", res=16)
     with pytest.raises(ValueError, match="'auto'"):
         mvpt.render(s, spp=1, method="autoo")
+
+
+PROBE = r"""
+import gc, resource, sys
+import mvpt
+from mvpt import _core
+sys.path.insert(0, sys.argv[1])
+from small_scenes import scene, views
+s = mvpt.load_string(scene(views(40, res=320, spp=1)))
+def vm_size():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmSize:"):
+            return int(line.split()[1]) * 1024
+def least(method):  # the fewest MiB of address space above now in which the method's films fit
+    base = vm_size()
+    for extra in range(32, 8192, 32):
+        resource.setrlimit(resource.RLIMIT_AS, (base + extra * 2**20, resource.RLIM_INFINITY))
+        try:
+            job = _core.RenderJob(s, spp=1, method=method, threads=1)  # (the films are checked here)
+        except RuntimeError as e:
+            assert "need about" in str(e), e
+            continue
+        del job
+        gc.collect()
+        resource.setrlimit(resource.RLIMIT_AS, (resource.RLIM_INFINITY, resource.RLIM_INFINITY))
+        return extra
+pt, mv = least("pt"), least("mvpt")
+assert pt + 128 < mv, (pt, mv)
+resource.setrlimit(resource.RLIMIT_AS, (vm_size() + (pt + mv) // 2 * 2**20, resource.RLIM_INFINITY))
+r = mvpt.render(s, spp=1, method="auto", threads=1)
+print(r.stats["method"], "|", r.stats["auto"]["reason"])
+"""
+
+
+def test_auto_path_traces_where_multi_view_films_do_not_fit(tmp_path):
+    # Under an address-space limit that path tracing's films fit and multi-view path tracing's
+    # do not, auto path traces and says why (the pilot's own films are refused first).
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, "-c", PROBE, str(Path(__file__).parent)], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr
+    method, reason = run.stdout.strip().split(" | ")
+    assert method == "pt" and "multi-view path tracing cannot run here" in reason and "need about" in reason, run.stdout
