@@ -135,10 +135,7 @@ def _loaded(job, stop) -> _core.Scene:
             if stop is not None and stop():
                 raise KeyboardInterrupt
     except BaseException:
-        with _interrupts_ignored():
-            job.cancel()
-            while not job.wait(0.05):
-                pass
+        _cancel(job, 0.05)
         raise
     return job.scene()
 
@@ -301,13 +298,10 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         if progress is not None:
             progress(job.progress())  # the final state
     except BaseException as e:  # KeyboardInterrupt included: stop cleanly, keep the passes done
-        # A second Ctrl-C (people press it twice) must not abandon the passes already done: the
-        # render stops within a fraction of a second anyway.
-        with _interrupts_ignored():
-            interrupted = e
-            job.cancel()
-            while not job.wait(poll):
-                pass
+        # A second Ctrl-C must not abandon the passes already done: the render stops within a
+        # fraction of a second anyway.
+        interrupted = e
+        _cancel(job, poll)
     result = _result(scene, job, index, dict(spp=int(spp), time=float(time), seed=seed, threads=int(threads),
                                              method=method, passes=passes, splits=splits))
     if auto is not None:
@@ -371,12 +365,18 @@ def _pilot_stats(scene, index: list, seed, threads: int, splits_option: int, pol
         while not job.wait(poll):
             pass
     except BaseException:
-        with _interrupts_ignored():
-            job.cancel()
-            while not job.wait(poll):
-                pass
+        _cancel(job, poll)
         raise
     return job.stats()
+
+
+def _cancel(job, poll: float) -> None:
+    """Cancel a running job and wait for it to stop; a second Ctrl-C (people press it twice)
+    does not abandon it."""
+    with _interrupts_ignored():
+        job.cancel()
+        while not job.wait(poll):
+            pass
 
 
 def _splits_option(splits) -> int:

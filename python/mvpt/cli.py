@@ -224,9 +224,7 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
-    if result.stats.get("auto") and not args.quiet:
-        auto = result.stats["auto"]
-        print(f"method auto: {auto['method']} ({auto['reason']})", flush=True)
+    _say_auto(result, args)
     state_error = result.stats.get("state_error")
     for warning in result.stats.get("warnings", []):
         if not (state_error and warning.startswith(state_error)):  # said once, as the error below
@@ -266,6 +264,13 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
     return stop_signals.final_code(EXIT_OK)
 
 
+def _say_auto(result, args) -> None:
+    """The line that says what --method auto chose and why (not with -q)."""
+    auto = result.stats.get("auto")
+    if auto and not args.quiet:
+        print(f"method auto: {auto['method']} ({auto['reason']})", flush=True)
+
+
 def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
     """`mvpt render --ray [ADDRESS] --workers N` (docs/distributed.md)."""
     from . import distributed
@@ -286,9 +291,7 @@ def _render_on_ray(scene_path: Path, args, stem: str, views, bar) -> int:
         stop_signals.interruptible = False
     cancelled = bool(result.stats.get("cancelled"))
     bar.finish(done=not cancelled)
-    if result.stats.get("auto") and not args.quiet:
-        auto = result.stats["auto"]
-        print(f"method auto: {auto['method']} ({auto['reason']})", flush=True)
+    _say_auto(result, args)
     settings = {"scene": str(scene_path), "defines": dict(args.define or []), "output": str(args.output),
                 "ray": args.ray, "workers": result.stats["distributed"]["workers"]}
     paths = write_all(result, args, stem, settings)

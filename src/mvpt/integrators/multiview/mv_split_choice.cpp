@@ -70,7 +70,7 @@ void add_to_class(SplitStatistics &st, const MvPilotSample &x1, const MvPilotSam
 SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double eps, double writes) {
     SplitStatistics st;
     const double per_view = KappaShift + KappaWrite * std::max(writes - 1.0, 0.0);
-    uint64_t samples = 0, shared = 0;
+    uint64_t samples = 0;
     for (const MvSplitProbe &probe : probes) {
         const std::vector<MvPilotSample> s = merged(probe.samples);
         for (const MvPilotSample &x : s) {
@@ -78,8 +78,6 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
             st.c0 += x.sharing ? 1.0 + per_view * (ns - 1.0) : x.delta ? 0.0 : 1.0;
             st.c1 += x.sharing ? SplitPath + KappaLobe * ns : 0.0;
             st.d1 += x.delta ? 1.0 : 0.0; // (each of its K paths, the first with its camera ray, one path)
-            if (x.sharing)
-                st.shared_c0 += 1.0 + per_view * (ns - 1.0), st.shared_c1 += SplitPath + KappaLobe * ns, ++shared;
             ++samples;
         }
         // Pairs of samples of one pixel: (X1 - X2)^2 / 2 estimates the variance of one, a + r / PilotSplits.
@@ -99,7 +97,6 @@ SplitStatistics split_statistics(const std::vector<MvSplitProbe> &probes, double
         }
     }
     if (samples) st.c0 /= double(samples), st.c1 /= double(samples), st.d1 /= double(samples);
-    if (shared) st.shared_c0 /= double(shared), st.shared_c1 /= double(shared);
     for (const MvSplitProbe &probe : probes)
         for (const auto &[x1, x2] : probe.path_traced) {
             const double m = 0.5 * (x1 + x2);

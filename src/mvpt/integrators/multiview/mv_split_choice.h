@@ -53,18 +53,16 @@ struct SplitStatistics {
     /// mean cost per native sample (one path-traced sample each); their a is in a. A native
     /// sample's variance is a + r / B + r_d / K, its cost c0 + B c1 + K d1.
     double r_d = 0.0, d1 = 0.0;
-    /// The same by class, for the unshared camera samples (mv_unshared.h): sums over the pixels
-    /// whose two samples are both of the class, a and r as above (r: one path's variance of a
-    /// specular first vertex, one split's of a shared one). A shared sample's terms are those
-    /// of its pixel's pass estimate, to which |S| views' samples bring as much: times |S|,
-    /// relative to the pixel's value, |S| times the sample's own share.
+    /// The same by class, for predicted_gain: sums over the pixels whose two samples are both
+    /// of the class, a and r as above (r: one path's variance of a specular first vertex, one
+    /// split's of a shared one). A shared sample's terms are those of its pixel's pass
+    /// estimate, to which |S| views' samples bring as much: times |S|, relative to the pixel's
+    /// value, |S| times the sample's own share.
     struct PixelClass {
         double a = 0.0, r = 0.0;
         uint64_t pixels = 0;
     };
     PixelClass specular, environment, shared;
-    /// The mean model costs c0, c1 of the shared native samples alone.
-    double shared_c0 = 0.0, shared_c1 = 0.0;
     /// The relative variance of one path-traced sample, the mean over the pilot's pixels.
     double pt_v = 0.0;
     uint64_t pt_pixels = 0;
