@@ -191,7 +191,7 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
            method: str = "scene", state: Optional[str | os.PathLike] = None, checkpoint: float = 0.0,
            resume: Optional[str | os.PathLike] = None, state_at_end: bool = True,
            state_extra: Optional[dict] = None, passes: Optional[Sequence[int]] = None,
-           splits: Optional[int | str] = None) -> RenderResult:
+           splits: Optional[int | str] = None, backend: Optional[str] = None) -> RenderResult:
     """Render all views (or `views`: ids or indices) of `scene`.
 
     method: "pt" (independent path tracing of every view), "mvpt" (multi-view path tracing,
@@ -235,8 +235,17 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
 
     splits: with "mvpt", the splits of the shared vertex instead of the scene's `mvpath`
     setting (whose default is "auto"): 1 to 64, or "auto" (chosen per render; stats["splits"]
-    says which)."""
+    says which).
+
+    backend: None (this library's renderer) or "mitsuba[:VARIANT]": Dr.Jit on Mitsuba 3
+    (docs/mitsuba-backend.md), cuda_ad_rgb where a GPU is present, else llvm_ad_rgb; it
+    renders "pt" and "mvpt" ("scene" and "auto": mvpt for several views, else pt) with spp,
+    time, seed, views and progress, and refuses states, ranges and splits."""
     _scene(scene, "render")
+    if backend is not None:
+        return _render_on_mitsuba(scene, backend, spp=spp, time=time, seed=seed, views=views, progress=progress,
+                                  method=method, refused=dict(state=state, resume=resume, passes=passes, splits=splits,
+                                                              checkpoint=checkpoint or None))
     if state is not None:  # checked before the render, which would otherwise be lost at its end
         state = _path(state, "state")
         folder = os.path.dirname(os.path.abspath(state))
@@ -311,6 +320,23 @@ def render(scene: _core.Scene, spp: int = 0, time: float = 0.0, seed: Optional[i
         if not isinstance(interrupted, KeyboardInterrupt):
             raise interrupted
     return result
+
+
+def _render_on_mitsuba(scene, backend: str, method: str, refused: dict, **kwargs) -> RenderResult:
+    """render(..., backend="mitsuba[:VARIANT]") (docs/mitsuba-backend.md)."""
+    name, _, variant = str(backend).partition(":")
+    if name != "mitsuba":
+        raise ValueError(f"backend must be 'mitsuba' or 'mitsuba:VARIANT', got {backend!r}")
+    for what, value in refused.items():
+        if value is not None:
+            raise ValueError(f"the mitsuba backend has no {what} (docs/mitsuba-backend.md)")
+    if method not in ("scene", "pt", "mvpt", "auto"):
+        raise ValueError(f"method must be 'pt', 'mvpt', 'auto' or 'scene', got {method!r}")
+    if method in ("scene", "auto"):
+        several = len(resolve_views(scene, kwargs["views"]) or scene.views) > 1
+        method = "mvpt" if several and (method == "auto" or scene.integrator == "mvpath") else "pt"
+    from . import mitsuba_backend
+    return mitsuba_backend.render(scene, method=method, variant=variant or None, **kwargs)
 
 
 # method="auto" (docs/multiview-path-tracing.md, "Choosing the method"): multi-view path tracing

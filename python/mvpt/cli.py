@@ -155,6 +155,9 @@ def _render(scene_path: Path, args, stem: str) -> int:
     bar = ProgressBar(enabled=False if args.quiet else None)
     with lock:
         if getattr(args, "ray", None) is not None:
+            if args.backend:
+                _error("--backend renders on this machine: it has no --ray")
+                return EXIT_ERROR
             return _render_on_ray(scene_path, args, stem, views, bar)
         return _render_here(scene, scene_path, args, stem, views, bar, defines)
 
@@ -215,11 +218,17 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
         bar(p)
 
     try:
-        result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
-                            views=views, progress=progress, method=args.method, state=None if foreign else state,
-                            checkpoint=args.checkpoint, resume=resume, state_at_end=keep_state,
-                            state_extra={"command": state_cli.command_record(scene_path, args, stem)},
-                            passes=args.passes, splits=args.splits)
+        if args.backend:  # (no state: a render on Mitsuba is not resumed)
+            result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, views=views, progress=progress,
+                                method=args.method, backend=args.backend, passes=args.passes, splits=args.splits,
+                                resume=resume, checkpoint=args.checkpoint)
+            foreign = True
+        else:
+            result = api.render(scene, spp=args.spp, time=args.time, seed=args.seed, threads=args.threads,
+                                views=views, progress=progress, method=args.method, state=None if foreign else state,
+                                checkpoint=args.checkpoint, resume=resume, state_at_end=keep_state,
+                                state_extra={"command": state_cli.command_record(scene_path, args, stem)},
+                                passes=args.passes, splits=args.splits)
     except (RuntimeError, MemoryError, ValueError, OSError) as e:
         return _failed(bar, e)
     cancelled = bool(result.stats.get("cancelled"))
@@ -252,7 +261,10 @@ def _render_here(scene, scene_path: Path, args, stem: str, views, bar: "Progress
                f"to {args.output}{older}")
         return stop_signals.exit_code() if cancelled else EXIT_ERROR
     if cancelled:
-        if foreign:
+        if args.backend:
+            print("mvpt: interrupted; wrote the passes finished so far (the mitsuba backend keeps no state)",
+                  file=sys.stderr)
+        elif foreign:
             print(f"mvpt: interrupted; wrote the passes finished so far, without a state to resume from "
                   f"({state} is another render's)", file=sys.stderr)
         else:
@@ -335,6 +347,9 @@ def _add_render_options(p: argparse.ArgumentParser) -> None:
                         "mvpt where its pilot predicts a gain over pt at equal time, else pt (it says which "
                         "and why); scene: the scene's integrator, 'mvpath' meaning mvpt (default: auto for "
                         "several views of a 'path' or 'volpath' scene, else scene)")
+    p.add_argument("--backend", default=None, metavar="mitsuba[:VARIANT]",
+                   help="render with Dr.Jit on Mitsuba 3 (docs/mitsuba-backend.md): cuda_ad_rgb where a GPU "
+                        "is present, else llvm_ad_rgb; methods pt and mvpt, no states or ranges")
     p.add_argument("--splits", type=_splits, default=None, metavar="N|auto",
                    help="mvpt: light samples and bounces per shared first vertex, 1 to 64, or auto (chosen "
                         "per render); default: the scene's mvpath setting, else 2")

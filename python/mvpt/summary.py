@@ -32,8 +32,13 @@ def print_summary(result, stream=None) -> None:
                      f"{m[0]:.4f}", f"{m[1]:.4f}", f"{m[2]:.4f}", f"{v['nonfinite_samples']:,}"])
     stream.write(table(rows, ["view", "size", "spp", "samples", "mean R", "mean G", "mean B", "non-finite"],
                         "<>>>>>>>"))
-    r = s["rays"]
     state = "cancelled after" if s.get("cancelled") else "done in"
+    if s.get("backend"):  # (Dr.Jit on Mitsuba counts no rays)
+        stream.write(f"{state} {s['passes']} passes, {s['wall_time']:.2f} s on Mitsuba's {s['variant']}, method "
+                     f"{s['method']}; samples: {s['samples']:,} ({si(s['samples_per_second'])}/s)"
+                     + (f", mean |S| {s['multiview']['mean_sharing']:.2f}" if s["method"] == "mvpt" else "") + "\n")
+        return
+    r = s["rays"]
     stream.write(f"{state} {s['passes']} passes, {s['wall_time']:.2f} s (longest pass {s['max_pass_seconds']:.3f} s), "
                  f"{s['threads']} threads, integrator '{s['integrator']}', method {s.get('method', 'pt')}\n")
     stream.write(f"samples: {s['samples']:,} ({si(s['samples_per_second'])}/s)   "

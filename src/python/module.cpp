@@ -5,6 +5,11 @@
 #include "mvpt/renderer/render_state.h"
 #include "mvpt/renderer/renderer.h"
 #include "mvpt/loader/load_scene.h"
+#include "mvpt/integrators/multiview/mv_candidates.h"
+#include "mvpt/integrators/multiview/mvpath.h"
+#include "mvpt/integrators/path/path.h"
+#include "mvpt/integrators/path/volpath.h"
+#include "mvpt/render/camera_projection.h"
 #include "load_job.h"
 #include "signals_at_exit.h"
 
@@ -229,6 +234,41 @@ nb::list view_info(const Scene &s) {
     return l;
 }
 
+/// One view's camera as plain data for backends that trace outside this library
+/// (python/mvpt/mitsuba_backend): the 32 scalars of its projection in `flatten`'s order
+/// (render/camera_projection.h; None for a camera that moves), its crop window, the margin
+/// of its sample window and its reconstruction filter (radius and 1-D table; box: no table).
+nb::dict camera_model(const Scene &s, size_t view) {
+    const Camera &c = camera_at(s, view);
+    nb::dict d;
+    if (const CameraProjection *p = c.static_projection()) {
+        float v[ProjectionFields];
+        flatten(*p, v);
+        d["projection"] = std::vector<float>(v, v + ProjectionFields);
+    } else {
+        d["projection"] = nb::none();
+    }
+    d["crop"] = nb::make_tuple(c.film.crop_x, c.film.crop_y, c.film.crop_width, c.film.crop_height);
+    d["margin"] = SampleWindow(c.film).margin;
+    const auto *tab = dynamic_cast<const TabulatedFilter *>(c.film.filter.get());
+    const bool box = !c.film.filter || c.film.filter->is_box();
+    d["filter_radius"] = box ? 0.5f : c.film.filter->radius();
+    d["filter_table"] = box || !tab ? std::vector<float>{} : tab->table();
+    d["seed"] = c.seed;
+    return d;
+}
+
+/// max_depth, rr_depth and hide_emitters of the scene's path, volpath or mvpath integrator.
+nb::dict path_settings(const Scene &s) {
+    PathConfig cfg;
+    if (auto *p = dynamic_cast<const PathIntegrator *>(&s.integrator())) cfg = p->config();
+    else if (auto *m = dynamic_cast<const MultiViewPathIntegrator *>(&s.integrator())) cfg = m->path().config();
+    else if (auto *v = dynamic_cast<const VolPathIntegrator *>(&s.integrator())) cfg = v->config();
+    nb::dict d;
+    d["max_depth"] = cfg.max_depth, d["rr_depth"] = cfg.rr_depth, d["hide_emitters"] = cfg.hide_emitters;
+    return d;
+}
+
 /// SceneError (a ValueError) carries the location as attributes: file, line, column, message.
 void bind_errors(nb::module_ &m) {
     // (A plain PyObject*, deliberately never released: no destructor runs after interpreter shutdown.)
@@ -265,6 +305,11 @@ void bind_scene(nb::module_ &m) {
         .def_prop_ro("warnings", &Scene::warnings, "What the scene lost while it was read (a mesh's degenerate triangles).")
         .def_prop_ro("defines", &Scene::defines, "The <default> overrides the scene was loaded with.")
         .def_prop_ro("rig", &Scene::rig, "The rig option the scene was loaded with (empty: none).")
+        .def("camera_model", &camera_model, "view"_a,
+             "The view's camera as data: projection (32 scalars or None), crop, margin, filter radius and table.")
+        .def_prop_ro("path_settings", &path_settings, "max_depth, rr_depth and hide_emitters of the integrator.")
+        .def_prop_ro("has_media", &Scene::has_media, "True when a participating medium is in the scene.")
+        .def_prop_ro("has_moving_shapes", &Scene::is_animated, "True when some shape moves.")
         // Camera projection API (design doc §2-§4), for tests and tools: view is a scene index.
         .def("camera_generate_ray", [](const Scene &s, size_t view, Vec2 film, Vec2 lens, float time) {
             Ray r = camera_at(s, view).generate_ray({film[0], film[1]}, {lens[0], lens[1]}, time);

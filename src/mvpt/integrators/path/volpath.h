@@ -37,6 +37,7 @@ enum class VolPathPart {
 class VolPathIntegrator final : public Integrator {
 public:
     explicit VolPathIntegrator(const PathConfig &cfg) : m_cfg(cfg), m_surfaces(cfg) {}
+    const PathConfig &config() const { return m_cfg; }
     /// A scene without media is traced by the path tracer (`surfaces`): the same image in
     /// expectation, as in Mitsuba, at its wavefront's speed.
     Spectrum li(const Scene &scene, const Ray &ray, Sampler &sampler, RayCounters &counters) const override;
