@@ -27,10 +27,14 @@ SEEDS = 16
 def backend():
     mi = pytest.importorskip("mitsuba", reason="the Mitsuba backend needs mitsuba==3.9.1 (pip install mitsuba)")
     from mvpt import mitsuba_backend
+    before = mi.variant()
     try:
         mitsuba_backend.pick_variant(mi, "llvm_ad_rgb")
     except ValueError as e:
         pytest.skip(f"Mitsuba's llvm_ad_rgb does not run here (Debian's libllvm19 is needed): {e}")
+    finally:  # (the variant is global: other tests' modules set theirs once, at import)
+        if before is not None:
+            mi.set_variant(before)
     return mitsuba_backend
 
 
@@ -104,6 +108,14 @@ def test_what_it_cannot_render_is_refused(backend):
         mvpt.render(scene, spp=1, views=VIEWS, backend="mitsuba:llvm_ad_rgb", state="x.mvpt-state")
     with pytest.raises(ValueError, match="backend must be"):
         mvpt.render(scene, spp=1, views=VIEWS, backend="pbrt")
+
+
+def test_the_callers_variant_is_kept(backend):
+    """Mitsuba's variant is global state: a render leaves the caller's as it was."""
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    _render(backend, mvpt.load_file(SCENE), 1, 0)
+    assert mi.variant() == "scalar_rgb"
 
 
 def test_command_line(backend, tmp_path):

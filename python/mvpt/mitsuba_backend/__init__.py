@@ -73,8 +73,17 @@ def render(scene, spp: int = 0, time: float = 0.0, seed=None, views=None, progre
     wall-clock budget in seconds (0: none; a pass starts only if it should end within it);
     chunk: native samples per launch (0: as many as keep PairsPerChunk pairs). Ctrl-C keeps
     the finished passes (stats["cancelled"]). Returns an mvpt.RenderResult."""
-    from ..api import RenderResult, resolve_views
     import mitsuba as mi
+    before = mi.variant()
+    try:  # (Mitsuba's variant is global: the caller's is left as it was)
+        return _render(mi, scene, spp, time, seed, views, progress, method, variant, chunk)
+    finally:
+        if before is not None and mi.variant() != before:
+            mi.set_variant(before)
+
+
+def _render(mi, scene, spp, time, seed, views, progress, method, variant, chunk):
+    from ..api import RenderResult, resolve_views
     import drjit as dr
     if method not in ("mvpt", "pt"):
         raise ValueError(f"the mitsuba backend renders method 'mvpt' or 'pt', not {method!r}")
